@@ -1,0 +1,48 @@
+//! Forward + inverse pairs of the planned 3D real transform.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use ndarray::Array3;
+use vesicle::grid::AxisKind;
+use vesicle::spectral::transform::Transform;
+
+/// Time one forward + inverse pair on a smooth-ish deterministic field.
+fn bench_pair(c: &mut Criterion, name: &str, shape: [usize; 3], kinds: [AxisKind; 3]) {
+    let mut group = c.benchmark_group("transform");
+    if shape.iter().product::<usize>() >= 128 * 128 * 128 {
+        group.sample_size(10);
+    }
+    let field = Array3::from_shape_fn(shape, |(i, j, k)| ((i * 7 + j * 3 + k) % 17) as f64 - 8.0);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool");
+        let mut t = Transform::new(shape, kinds, threads);
+        let mut spectrum = Array3::zeros(t.spectral_shape());
+        let mut back = Array3::zeros(shape);
+        group.bench_function(BenchmarkId::new(name, format!("t{threads}")), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    t.forward(&field, &mut spectrum);
+                    t.inverse(&mut spectrum, &mut back);
+                })
+            })
+        });
+    }
+    group.finish();
+}
+
+fn transforms(c: &mut Criterion) {
+    use AxisKind::{Mirror, Periodic};
+    bench_pair(c, "periodic_64", [64; 3], [Periodic; 3]);
+    bench_pair(c, "periodic_128", [128; 3], [Periodic; 3]);
+    bench_pair(c, "mirror_32_of_64", [32; 3], [Mirror; 3]);
+}
+
+criterion_group! {
+    name = benches;
+    // Plots need system fonts that build machines may lack.
+    config = Criterion::default().without_plots();
+    targets = transforms
+}
+criterion_main!(benches);

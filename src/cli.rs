@@ -1,0 +1,187 @@
+//! Command-line interface: `vesicle run | check | compare | study`.
+//!
+//! Exit codes: 0 success, 2 invalid input (the message names the field), 3 a run that blew up
+//! or broke a constraint (its last good state and summary are written), 1 anything else.
+
+use crate::config::{self, Scene};
+use crate::error::Error;
+use crate::run::{self, RunOptions};
+use clap::{Parser, Subcommand};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+const RUN_EXAMPLE: &str = "Examples:
+  vesicle run runs/ellipse2d.json --out out/ellipse2d
+  vesicle run runs/prolate3d.json --out out/p --set method=fd --set dt=4e-4 --set max_steps=500
+  vesicle run runs/sphere3d.json --out out/s --set area.method=lagrangian --set area.alpha=0.002";
+
+/// Phase-field simulation of lipid vesicle shapes (Campelo & Hernández-Machado model).
+#[derive(Parser, Debug)]
+#[command(name = "vesicle", version, after_help = RUN_EXAMPLE)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Scene file and overrides shared by the subcommands.
+#[derive(clap::Args, Debug)]
+struct SceneArgs {
+    /// Scene (run) file, JSON.
+    scene: PathBuf,
+    /// Override a scene field: `key=value`, dotted keys for nested fields (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a scene: writes timeseries.csv, summary.json, phi_final.npy/.vti and PNG images.
+    #[command(after_help = RUN_EXAMPLE)]
+    Run {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Output folder (default: out/<scene name>); never overwritten without --force.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Replace an existing output folder.
+        #[arg(long)]
+        force: bool,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate a scene and print it with every default resolved, and its stability bound.
+    #[command(after_help = "Example:\n  vesicle check runs/prolate3d.json --set method=fd")]
+    Check {
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
+    /// Run the finite-difference reference and the spectral engine on the same initial field;
+    /// print and write a table of both at common times.
+    #[command(after_help = "Example:\n  vesicle compare runs/compare2d.json --out out/compare")]
+    Compare {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Output folder (default: out/<scene name>-compare).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Replace an existing output folder.
+        #[arg(long)]
+        force: bool,
+    },
+}
+
+/// Parse the command line, run it, and return the process exit code.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            exit_code(&e)
+        }
+    }
+}
+
+/// Exit code of an error: 2 invalid input, 3 blow-up, 1 otherwise.
+pub fn exit_code(e: &Error) -> i32 {
+    match e {
+        Error::Config { .. } => 2,
+        Error::Blowup { .. } => 3,
+        Error::Io { .. } | Error::Output(_) => 1,
+    }
+}
+
+fn load(args: &SceneArgs) -> Result<Scene, Error> {
+    if !args.scene.exists() {
+        return Err(Error::config(
+            "(scene file)",
+            format!("{} does not exist", args.scene.display()),
+        ));
+    }
+    config::load(&args.scene, &args.set)
+}
+
+fn default_out(scene: &Path, suffix: &str) -> PathBuf {
+    let stem = scene
+        .file_stem()
+        .map_or("run".into(), |s| s.to_string_lossy().to_string());
+    PathBuf::from("out").join(format!("{stem}{suffix}"))
+}
+
+fn with_threads<T>(scene: &Scene, f: impl FnOnce() -> T + Send) -> T
+where
+    T: Send,
+{
+    match scene.threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .expect("thread pool")
+            .install(f),
+        None => f(),
+    }
+}
+
+fn dispatch(cli: Cli) -> Result<(), Error> {
+    match cli.command {
+        Command::Run {
+            scene: args,
+            out,
+            force,
+            quiet,
+        } => {
+            let scene = load(&args)?;
+            let out = out.unwrap_or_else(|| default_out(&args.scene, ""));
+            let opts = RunOptions {
+                out: out.clone(),
+                force,
+                progress: !quiet && std::io::stderr().is_terminal(),
+            };
+            let outcome = with_threads(&scene, || run::run(&scene, &opts))?;
+            let l = &outcome.last;
+            eprintln!(
+                "done ({}): step {} t {:.6e} e {:.6} v {:.6} sigma {:.4e} residual {:.3e} in {:.2} s -> {}",
+                match outcome.stopped {
+                    run::Stopped::Stationary => "stationary",
+                    run::Stopped::TimeEnd => "t_end",
+                    run::Stopped::MaxSteps => "max_steps",
+                },
+                l.step,
+                l.t,
+                l.reduced_energy,
+                l.reduced_volume,
+                l.sigma,
+                l.residual,
+                outcome.wall_seconds,
+                out.display()
+            );
+            Ok(())
+        }
+        Command::Check { scene: args } => {
+            let scene = load(&args)?;
+            let problem = crate::setup::build(&scene)?;
+            run::check_stability(&scene, &problem.grid)?;
+            let resolved = run::resolved_scene(
+                &scene,
+                scene.area.target.unwrap_or(f64::NAN),
+                &problem.mirror,
+            );
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&resolved).expect("serialisable")
+            );
+            eprintln!("{}", run::describe(&scene, &problem, "check"));
+            Ok(())
+        }
+        Command::Compare {
+            scene: args,
+            out,
+            force,
+        } => {
+            let scene = load(&args)?;
+            let out = out.unwrap_or_else(|| default_out(&args.scene, "-compare"));
+            with_threads(&scene, || crate::compare::compare(&scene, &out, force))
+        }
+    }
+}

@@ -1,0 +1,240 @@
+//! `vesicle compare`: the finite-difference reference and the spectral engine from the same
+//! (prepared) initial field, side by side at common times.
+
+use crate::config::{AreaMethod, Method, Scene};
+use crate::engine::{AreaConstraint, Engine};
+use crate::error::{Error, Result};
+use crate::fd;
+use crate::model::Measures;
+use crate::run;
+use crate::setup;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// Rows of the comparison table.
+pub const ROWS: usize = 10;
+
+/// One engine's state at a common time.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    /// F_sc, A, V.
+    pub measures: Measures,
+    /// σ.
+    pub sigma: f64,
+    /// Steps taken so far.
+    pub steps: usize,
+    /// Wall seconds so far.
+    pub wall: f64,
+}
+
+/// The comparison at one time.
+#[derive(Clone, Copy, Debug)]
+pub struct Row {
+    /// Common time.
+    pub t: f64,
+    /// Finite differences.
+    pub fd: Sample,
+    /// Spectral.
+    pub spectral: Sample,
+    /// max |φ_fd − φ_sp|.
+    pub max_dphi: f64,
+}
+
+/// The FD time step used by `compare`: the scene's `dt` when the scene is an FD scene, else
+/// half the FD stability bound.
+pub fn fd_dt(scene: &Scene, grid: &crate::grid::Grid) -> f64 {
+    match scene.method {
+        Method::Fd => scene.dt,
+        Method::Spectral => 0.5 * fd::stability_bound(grid, scene.eps, 0.0),
+    }
+}
+
+/// Advance `engine` from `t` to exactly `t_target` with steps of at most `dt`.
+fn advance(
+    engine: &mut dyn Engine,
+    t: &mut f64,
+    t_target: f64,
+    dt: f64,
+    steps: &mut usize,
+) -> Result<()> {
+    let mut dt_try = dt;
+    while *t < t_target * (1.0 - 1e-13) {
+        let h = engine.next_dt(dt_try).min(t_target - *t);
+        let r = engine.step(*t, h).map_err(|d| Error::Blowup {
+            step: *steps + 1,
+            t: *t,
+            reason: format!("{} engine: {}", engine.name(), d.0),
+        })?;
+        *t += r.dt;
+        dt_try = engine.next_dt(r.dt);
+        *steps += 1;
+    }
+    Ok(())
+}
+
+/// Run both engines over `[0, t_end]` and compare them at `ROWS` common times.
+///
+/// # Errors
+/// `Error::Config` if the scene has no `t_end` or the output folder exists (without `force`);
+/// `Error::Blowup` if either engine diverges.
+pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
+    let t_end = scene
+        .t_end
+        .ok_or_else(|| Error::config("t_end", "compare needs t_end (the common time span)"))?;
+    let problem = setup::build(scene)?;
+    let mut sp_scene = scene.clone();
+    sp_scene.method = Method::Spectral;
+    let mut fd_scene = scene.clone();
+    fd_scene.method = Method::Fd;
+    fd_scene.adaptive = crate::config::AdaptiveSpec::Flag(false);
+    fd_scene.dt = fd_dt(scene, &problem.grid);
+    run::check_stability(&fd_scene, &problem.grid)?;
+    // Prepare once (FD), then both engines start from the same field and A0.
+    let mut fd_engine = run::build_engine(&fd_scene, &problem)?;
+    let a0 = run::prepare(&fd_scene, fd_engine.as_mut())?;
+    let mut prepared = problem.clone();
+    prepared.phi = fd_engine.phi().clone();
+    let mut sp_engine = run::build_engine(&sp_scene, &prepared)?;
+    let method = scene.area_method();
+    let fd_method = if method == AreaMethod::Projection {
+        AreaMethod::Lagrangian
+    } else {
+        method
+    };
+    let area = |m| AreaConstraint {
+        method: m,
+        alpha: scene.alpha(),
+        target: a0,
+    };
+    sp_engine.set_area(area(method));
+    fd_engine = run::build_engine(&fd_scene, &prepared)?;
+    fd_engine.set_area(area(fd_method));
+    let (mut t_fd, mut t_sp, mut n_fd, mut n_sp, mut w_fd, mut w_sp) = (0.0, 0.0, 0, 0, 0.0, 0.0);
+    let mut rows = Vec::with_capacity(ROWS + 1);
+    for j in 0..=ROWS {
+        let target = t_end * j as f64 / ROWS as f64;
+        let clock = Instant::now();
+        advance(
+            fd_engine.as_mut(),
+            &mut t_fd,
+            target,
+            fd_scene.dt,
+            &mut n_fd,
+        )?;
+        w_fd += clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
+        advance(
+            sp_engine.as_mut(),
+            &mut t_sp,
+            target,
+            sp_scene.dt,
+            &mut n_sp,
+        )?;
+        w_sp += clock.elapsed().as_secs_f64();
+        let max_dphi = fd_engine
+            .phi()
+            .iter()
+            .zip(sp_engine.phi())
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let sample = |e: &dyn Engine, steps, wall| Sample {
+            measures: e.measures(),
+            sigma: e.sigma(),
+            steps,
+            wall,
+        };
+        rows.push(Row {
+            t: target,
+            fd: sample(fd_engine.as_ref(), n_fd, w_fd),
+            spectral: sample(sp_engine.as_ref(), n_sp, w_sp),
+            max_dphi,
+        });
+    }
+    Ok(rows)
+}
+
+/// CSV of the comparison (one line per common time).
+pub fn to_csv(rows: &[Row], dim: usize, eps: f64) -> String {
+    let mut s = String::from(
+        "t,fd_energy,sp_energy,fd_area,sp_area,fd_volume,sp_volume,fd_reduced_volume,sp_reduced_volume,\
+         fd_reduced_energy,sp_reduced_energy,fd_sigma,sp_sigma,max_abs_dphi,fd_steps,sp_steps,fd_wall_seconds,sp_wall_seconds\n",
+    );
+    for r in rows {
+        let (a, b) = (r.fd.measures, r.spectral.measures);
+        let (ra, rb) = (a.reduced(dim, eps), b.reduced(dim, eps));
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.t,
+            a.energy,
+            b.energy,
+            a.area,
+            b.area,
+            a.volume,
+            b.volume,
+            ra.volume,
+            rb.volume,
+            ra.energy,
+            rb.energy,
+            r.fd.sigma,
+            r.spectral.sigma,
+            r.max_dphi,
+            r.fd.steps,
+            r.spectral.steps,
+            r.fd.wall,
+            r.spectral.wall
+        );
+    }
+    s
+}
+
+/// The printed table.
+pub fn to_table(rows: &[Row], dim: usize, eps: f64) -> String {
+    let mut s = format!(
+        "{:>11} {:>13} {:>13} {:>9} {:>9} {:>9} {:>9} {:>10}\n",
+        "t", "F_fd", "F_sp", "e_fd", "e_sp", "v_fd", "v_sp", "max|dphi|"
+    );
+    for r in rows {
+        let (a, b) = (r.fd.measures, r.spectral.measures);
+        let (ra, rb) = (a.reduced(dim, eps), b.reduced(dim, eps));
+        let _ = writeln!(
+            s,
+            "{:>11.4e} {:>13.6e} {:>13.6e} {:>9.5} {:>9.5} {:>9.5} {:>9.5} {:>10.3e}",
+            r.t, a.energy, b.energy, ra.energy, rb.energy, ra.volume, rb.volume, r.max_dphi
+        );
+    }
+    if let Some(last) = rows.last() {
+        let _ = writeln!(
+            s,
+            "steps: fd {} spectral {}; wall: fd {:.3} s spectral {:.3} s; fd/spectral wall-time ratio {:.1}",
+            last.fd.steps,
+            last.spectral.steps,
+            last.fd.wall,
+            last.spectral.wall,
+            last.fd.wall / last.spectral.wall.max(1e-12)
+        );
+    }
+    s
+}
+
+/// `vesicle compare`: run the pair, print the table, write `compare.csv` and `compare.txt`.
+///
+/// # Errors
+/// As [`run_pair`], plus `Error::Io` when writing.
+pub fn compare(scene: &Scene, out: &Path, force: bool) -> Result<()> {
+    if out.exists() && !force {
+        run::make_out_dir(out, false)?;
+    }
+    let rows = run_pair(scene)?;
+    run::make_out_dir(out, force)?;
+    let table = to_table(&rows, scene.dim, scene.eps);
+    println!("{table}");
+    for (name, text) in [
+        ("compare.csv", to_csv(&rows, scene.dim, scene.eps)),
+        ("compare.txt", table),
+    ] {
+        let path = out.join(name);
+        std::fs::write(&path, text).map_err(|source| Error::Io { path, source })?;
+    }
+    Ok(())
+}

@@ -1,0 +1,66 @@
+//! What the run driver needs from an engine (finite differences, spectral, relaxational).
+
+use crate::config::AreaMethod;
+use crate::model::Measures;
+use ndarray::Array3;
+
+/// The area constraint an engine applies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaConstraint {
+    /// How σ is chosen.
+    pub method: AreaMethod,
+    /// α of the Lagrangian update σ^{n+1} = σ^n + α (A^n − A0).
+    pub alpha: f64,
+    /// Target area A0.
+    pub target: f64,
+}
+
+impl AreaConstraint {
+    /// No constraint (σ stays 0): used by the preparation steps.
+    pub fn none() -> Self {
+        AreaConstraint {
+            method: AreaMethod::None,
+            alpha: 0.0,
+            target: 0.0,
+        }
+    }
+}
+
+/// What one accepted step did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepReport {
+    /// The step taken (an adaptive engine may take less than it was offered).
+    pub dt: f64,
+    /// Stationarity residual max|φ^{n+1} − φ^n| / Δt.
+    pub residual: f64,
+    /// Attempts rejected before this step was accepted.
+    pub rejected: usize,
+}
+
+/// Why a step could not be completed (the driver adds the step and time).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diverged(pub String);
+
+/// A time stepper holding the current state φ, σ and its measures.
+pub trait Engine {
+    /// Current φ on the computed grid.
+    fn phi(&self) -> &Array3<f64>;
+    /// Current σ (the multiplier that produced the current state).
+    fn sigma(&self) -> f64;
+    /// F_sc, A, V of the current state (full-box values).
+    fn measures(&self) -> Measures;
+    /// Replace the area constraint (σ is reset to 0 when the method changes to none).
+    fn set_area(&mut self, area: AreaConstraint);
+    /// Advance from time `t` by at most `dt`.
+    ///
+    /// # Errors
+    /// [`Diverged`] if the state became non-finite or broke a constraint; the engine then
+    /// still holds the last good state.
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged>;
+    /// The step the engine proposes next (adaptive engines), or `dt` unchanged.
+    fn next_dt(&self, dt: f64) -> f64 {
+        dt
+    }
+    /// Short name for logs and tables.
+    fn name(&self) -> &'static str;
+}

@@ -1,0 +1,37 @@
+//! Error types of the library. The CLI maps them to exit codes: invalid input → 2, a run that
+//! blew up or broke a constraint → 3.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in the library.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene field is invalid: `field` is its dotted key.
+    #[error("invalid scene: `{field}`: {reason}")]
+    Config { field: String, reason: String },
+    /// The run diverged or broke a constraint at step `step`, time `t`.
+    #[error("run stopped at step {step}, t = {t:.6e}: {reason}")]
+    Blowup { step: usize, t: f64, reason: String },
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// An output writer failed.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+}
+
+impl Error {
+    /// A `Config` error for `field`.
+    pub fn config(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Config {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Library result type.
+pub type Result<T> = std::result::Result<T, Error>;

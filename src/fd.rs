@@ -1,0 +1,192 @@
+//! The paper's finite-difference reference (DESIGN.md §2): second-order central differences,
+//! explicit Euler,
+//!
+//! ```text
+//! φ^{n+1} = φ^n + Δt ∇²_h μ_h(φ^n, σ^n),
+//! μ_h     = 2[f'(φ)Φ_h − ε² ∇²_h Φ_h] − (3/√2) ε σ ∇²_h φ,   Φ_h = f(φ) − ε² ∇²_h φ,
+//! ```
+//!
+//! with the paper's Lagrangian area update σ^{n+1} = σ^n + α (A_h^n − A0) (σ^0 = 0).
+//! Stable for Δt < 1 / (λ (2 + ε²λ)² + (3/√2) ε σ λ²/2), λ = 4d/h² ([`stability_bound`]).
+
+use crate::config::AreaMethod;
+use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
+use crate::grid::Grid;
+use crate::model::{self, bulk, bulk_derivative, Measures, C0};
+use crate::stencil;
+use ndarray::{Array3, Zip};
+
+/// Largest |φ| a state may reach before the run counts as blown up.
+pub const PHI_BLOWUP: f64 = 5.0;
+
+/// Explicit-Euler stability bound of the FD scheme at tension σ:
+/// `Δt < 1 / (λ (2 + ε²λ)² + (3/√2) ε σ λ²/2)`, λ = 4d/h² (linearisation about φ = ±1).
+pub fn stability_bound(grid: &Grid, eps: f64, sigma: f64) -> f64 {
+    let l = stencil::lambda_max(grid);
+    let denom = l * (2.0 + eps * eps * l).powi(2)
+        + 3.0 / std::f64::consts::SQRT_2 * eps * sigma * l * l / 2.0;
+    if denom > 0.0 {
+        1.0 / denom
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The FD engine's state and work arrays.
+pub struct FdEngine {
+    grid: Grid,
+    eps: f64,
+    c0: C0,
+    phi: Array3<f64>,
+    /// ∇²_h φ of the current state.
+    lap_phi: Array3<f64>,
+    /// Φ_h of the current state.
+    big_phi: Array3<f64>,
+    /// Work: μ_h, then the previous φ after a step.
+    mu: Array3<f64>,
+    /// Work: ∇²_h Φ_h, then ∇²_h μ_h.
+    work: Array3<f64>,
+    sigma: f64,
+    area: AreaConstraint,
+    measures: Measures,
+    /// Largest Δt / bound(σ) seen.
+    pub max_bound_ratio: f64,
+}
+
+impl FdEngine {
+    /// Engine at time `t` holding `phi`, with no area constraint.
+    ///
+    /// # Errors
+    /// [`Diverged`] if `phi` is not finite.
+    pub fn new(grid: Grid, eps: f64, c0: C0, phi: Array3<f64>, t: f64) -> Result<Self, Diverged> {
+        let zeros = grid.zeros();
+        let mut e = FdEngine {
+            eps,
+            c0,
+            phi,
+            lap_phi: zeros.clone(),
+            big_phi: zeros.clone(),
+            mu: zeros.clone(),
+            work: zeros,
+            sigma: 0.0,
+            area: AreaConstraint::none(),
+            measures: Measures::default(),
+            max_bound_ratio: 0.0,
+            grid,
+        };
+        e.refresh(t)?;
+        Ok(e)
+    }
+
+    /// Recompute ∇²_h φ, Φ_h and the measures of the current state at time `t`.
+    fn refresh(&mut self, t: f64) -> Result<(), Diverged> {
+        stencil::laplacian(&self.grid, &self.phi, &mut self.lap_phi);
+        let r = self.c0.ramp(t);
+        let e2 = self.eps * self.eps;
+        let c0 = &self.c0;
+        let phi = self.phi.as_slice().expect("standard layout");
+        let lap = self.lap_phi.as_slice().expect("standard layout");
+        let big = self.big_phi.as_slice_mut().expect("standard layout");
+        let mut sum_sq = 0.0;
+        let mut max_abs = 0.0f64;
+        for i in 0..phi.len() {
+            let p = phi[i];
+            let b = bulk(p, c0.at(i, r)) - e2 * lap[i];
+            big[i] = b;
+            sum_sq += b * b;
+            max_abs = max_abs.max(p.abs());
+        }
+        let dv = self.grid.cell_volume() * self.grid.mirror_factor();
+        self.measures = Measures {
+            energy: sum_sq * dv,
+            area: stencil::area(&self.grid, self.eps, &self.phi),
+            volume: model::volume(&self.grid, &self.phi),
+        };
+        if !(max_abs <= PHI_BLOWUP) || !self.measures.energy.is_finite() {
+            return Err(Diverged(format!(
+                "max|φ| = {max_abs:.3e}, F = {:.3e} (limit |φ| ≤ {PHI_BLOWUP}): the explicit scheme diverged",
+                self.measures.energy
+            )));
+        }
+        Ok(())
+    }
+
+    /// The FD stability bound at the current σ.
+    pub fn bound(&self) -> f64 {
+        stability_bound(&self.grid, self.eps, self.sigma)
+    }
+
+    /// `mu = μ_h(φ, σ)` from the cached ∇²_h φ and Φ_h.
+    fn chemical_potential(&mut self, t: f64) {
+        stencil::laplacian(&self.grid, &self.big_phi, &mut self.work);
+        let r = self.c0.ramp(t);
+        let e2 = self.eps * self.eps;
+        let tension = 3.0 / std::f64::consts::SQRT_2 * self.eps * self.sigma;
+        let c0 = &self.c0;
+        let phi = self.phi.as_slice().expect("standard layout");
+        let big = self.big_phi.as_slice().expect("standard layout");
+        let lap_big = self.work.as_slice().expect("standard layout");
+        let lap = self.lap_phi.as_slice().expect("standard layout");
+        let mu = self.mu.as_slice_mut().expect("standard layout");
+        for i in 0..phi.len() {
+            let fp = bulk_derivative(phi[i], c0.at(i, r));
+            mu[i] = 2.0 * (fp * big[i] - e2 * lap_big[i]) - tension * lap[i];
+        }
+    }
+}
+
+impl Engine for FdEngine {
+    fn phi(&self) -> &Array3<f64> {
+        &self.phi
+    }
+
+    fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    fn measures(&self) -> Measures {
+        self.measures
+    }
+
+    fn set_area(&mut self, area: AreaConstraint) {
+        if area.method == AreaMethod::None {
+            self.sigma = 0.0;
+        }
+        self.area = area;
+    }
+
+    /// One explicit Euler step; σ^{n+1} from the area of the state before the step.
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+        self.max_bound_ratio = self.max_bound_ratio.max(dt / self.bound());
+        self.chemical_potential(t);
+        stencil::laplacian(&self.grid, &self.mu, &mut self.work);
+        // Keep φ^n in `mu` (no longer needed) so a blow-up can restore it.
+        std::mem::swap(&mut self.mu, &mut self.phi);
+        let mut residual = 0.0f64;
+        Zip::from(&mut self.phi)
+            .and(&self.mu)
+            .and(&self.work)
+            .for_each(|new, &old, &lap_mu| {
+                *new = old + dt * lap_mu;
+                residual = residual.max(lap_mu.abs());
+            });
+        let area_before = self.measures.area;
+        if let Err(e) = self.refresh(t + dt) {
+            std::mem::swap(&mut self.mu, &mut self.phi);
+            self.refresh(t)?;
+            return Err(e);
+        }
+        if self.area.method == AreaMethod::Lagrangian {
+            self.sigma += self.area.alpha * (area_before - self.area.target);
+        }
+        Ok(StepReport {
+            dt,
+            residual,
+            rejected: 0,
+        })
+    }
+
+    fn name(&self) -> &'static str {
+        "fd"
+    }
+}

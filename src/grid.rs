@@ -1,0 +1,165 @@
+//! The computational grid: a box of `n` points with spacing `h`, periodic or with mirror walls.
+//!
+//! Every field is stored as a standard-layout `Array3<f64>` of shape `[n0, n1, n2]`. A 2D scene
+//! with `n = [nx, ny]` is stored as `[1, nx, ny]`: the leading axis has length 1, so every
+//! stencil and transform sees no variation along it and the memory layout equals the C-order
+//! `[nx, ny]` array of the contract.
+//!
+//! A mirrored axis holds the upper half of a periodic full box that is even about its centre.
+//! Full-box points sit at `x_i = (i + 1/2 − N/2) h` (cell-centred, symmetric about 0), so the
+//! mirror planes fall half-way between grid points: the reduced box keeps `i = N/2 .. N−1`, its
+//! ghost values are `φ_{−1} = φ_0` and `φ_m = φ_{m−1}` (Neumann walls), and the matching spectral
+//! transform is the DCT-II. Reduced-box sums are multiplied by `2^(mirrored axes)` to report the
+//! full-box integrals.
+
+use ndarray::{Array3, Axis};
+
+/// Boundary treatment of one axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AxisKind {
+    /// Periodic box of `n` points.
+    Periodic,
+    /// Upper half of an even periodic box of `2n` points: Neumann walls half-way between points.
+    Mirror,
+}
+
+/// Grid geometry shared by all engines.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid {
+    /// Spatial dimension of the scene (2 or 3).
+    pub dim: usize,
+    /// Points of the computed (possibly reduced) box, internal 3-axis form.
+    pub shape: [usize; 3],
+    /// Boundary kind of each internal axis.
+    pub kinds: [AxisKind; 3],
+    /// Grid spacing.
+    pub h: f64,
+}
+
+impl Grid {
+    /// Grid for a scene with `n` points (2 or 3 entries) and the mirror flags of each scene
+    /// axis. A mirrored axis is halved: the computed box holds `n/2` points along it.
+    ///
+    /// # Panics
+    /// If `n` has not 2 or 3 entries or a mirrored axis has an odd length (validated earlier).
+    pub fn new(n: &[usize], h: f64, mirror: &[bool]) -> Self {
+        assert!(n.len() == 2 || n.len() == 3, "n must have 2 or 3 entries");
+        assert_eq!(n.len(), mirror.len());
+        let offset = 3 - n.len();
+        let mut shape = [1usize; 3];
+        let mut kinds = [AxisKind::Periodic; 3];
+        for (a, (&len, &m)) in n.iter().zip(mirror).enumerate() {
+            if m {
+                assert!(len % 2 == 0, "mirrored axis needs an even length");
+                shape[a + offset] = len / 2;
+                kinds[a + offset] = AxisKind::Mirror;
+            } else {
+                shape[a + offset] = len;
+            }
+        }
+        Grid {
+            dim: n.len(),
+            shape,
+            kinds,
+            h,
+        }
+    }
+
+    /// Number of computed points.
+    pub fn len(&self) -> usize {
+        self.shape.iter().product()
+    }
+
+    /// True when the grid has no points (never for a validated scene).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Volume of one cell, `h^dim`.
+    pub fn cell_volume(&self) -> f64 {
+        self.h.powi(self.dim as i32)
+    }
+
+    /// Factor from reduced-box sums to full-box integrals: `2^(number of mirrored axes)`.
+    pub fn mirror_factor(&self) -> f64 {
+        let m = self
+            .kinds
+            .iter()
+            .filter(|k| **k == AxisKind::Mirror)
+            .count();
+        (1u32 << m) as f64
+    }
+
+    /// Points of the full (unreduced) box along each internal axis.
+    pub fn full_shape(&self) -> [usize; 3] {
+        let mut s = self.shape;
+        for a in 0..3 {
+            if self.kinds[a] == AxisKind::Mirror {
+                s[a] *= 2;
+            }
+        }
+        s
+    }
+
+    /// The full box shape as the scene writes it (`dim` entries).
+    pub fn scene_shape(&self) -> Vec<usize> {
+        self.full_shape()[3 - self.dim..].to_vec()
+    }
+
+    /// Coordinates of the computed points along internal axis `a`, centred on the full box:
+    /// `x_i = (i + 1/2 − N/2) h` with `N` the full-box length (the reduced box keeps `x > 0`).
+    pub fn coords(&self, a: usize) -> Vec<f64> {
+        let full = self.full_shape()[a] as f64;
+        let start = self.full_shape()[a] - self.shape[a];
+        (start..self.full_shape()[a])
+            .map(|i| (i as f64 + 0.5 - full / 2.0) * self.h)
+            .collect()
+    }
+
+    /// A zero field of the computed shape.
+    pub fn zeros(&self) -> Array3<f64> {
+        Array3::zeros(self.shape)
+    }
+
+    /// Evaluate `f(p)` at every computed point, `p` the point in scene coordinates
+    /// (`[x, y, 0]` in 2D, `[x, y, z]` in 3D), centred on the full box.
+    pub fn field_from(&self, f: impl Fn([f64; 3]) -> f64) -> Array3<f64> {
+        let c = [self.coords(0), self.coords(1), self.coords(2)];
+        let dim = self.dim;
+        Array3::from_shape_fn(self.shape, |(i, j, k)| {
+            if dim == 2 {
+                f([c[1][j], c[2][k], 0.0])
+            } else {
+                f([c[0][i], c[1][j], c[2][k]])
+            }
+        })
+    }
+
+    /// Unfold a reduced-box field to the full box by mirroring every mirrored axis.
+    pub fn unfold(&self, field: &Array3<f64>) -> Array3<f64> {
+        let mut out = field.clone();
+        for a in 0..3 {
+            if self.kinds[a] == AxisKind::Mirror {
+                let upper = out.clone();
+                let mut lower = upper.clone();
+                lower.invert_axis(Axis(a));
+                out = ndarray::concatenate(Axis(a), &[lower.view(), upper.view()])
+                    .expect("same shapes")
+                    .as_standard_layout()
+                    .to_owned();
+            }
+        }
+        out
+    }
+
+    /// Restrict a full-box field to the computed (upper) part of each mirrored axis.
+    pub fn restrict(&self, full: &Array3<f64>) -> Array3<f64> {
+        let fs = self.full_shape();
+        let s = full.slice(ndarray::s![
+            fs[0] - self.shape[0]..,
+            fs[1] - self.shape[1]..,
+            fs[2] - self.shape[2]..
+        ]);
+        s.as_standard_layout().to_owned()
+    }
+}

@@ -1,0 +1,130 @@
+//! Writers for simulation output: raw arrays (`.npy`), ParaView volumes (`.vti`), slice
+//! pictures of the phase field and time-series charts (`.png`).
+//!
+//! Every writer receives a FULL-box field (already unfolded from any mirror reduction) in the
+//! internal layout of [`crate::grid`]: a standard-layout `Array3<f64>` of shape `[n0, n1, n2]`,
+//! with a 2D scene stored as `[1, nx, ny]`, together with the scene dimension.
+
+pub mod chart;
+pub mod image;
+pub mod npy;
+pub mod vti;
+
+use ndarray::Array3;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// Errors of the output writers and readers; every message names the file concerned.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// Creating, reading or writing a file failed.
+    #[error("I/O error on {}: {source}", path.display())]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// An array had another shape than the one required.
+    #[error("{}: expected array shape {expected:?}, found {found:?}", path.display())]
+    Shape {
+        /// The file concerned.
+        path: PathBuf,
+        /// The required shape.
+        expected: Vec<usize>,
+        /// The shape actually found.
+        found: Vec<usize>,
+    },
+    /// Malformed content or unusable arguments (the message names the file).
+    #[error("{0}")]
+    Format(String),
+}
+
+impl OutputError {
+    /// An [`OutputError::Io`] for `path`.
+    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
+        OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    /// An [`OutputError::Format`] whose message starts with the file name.
+    pub(crate) fn format(path: &Path, message: impl std::fmt::Display) -> Self {
+        OutputError::Format(format!("{}: {message}", path.display()))
+    }
+}
+
+/// Font family name under which the embedded DejaVu Sans is registered with plotters.
+pub(crate) const FONT_FAMILY: &str = "dejavu-sans";
+
+/// DejaVu Sans (Bitstream Vera licence, see `assets/DejaVuSans-LICENSE.txt`).
+const FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+
+/// Register the embedded font with plotters once; later calls return the first outcome.
+pub(crate) fn ensure_font(path: &Path) -> Result<(), OutputError> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT_FAMILY, plotters::style::FontStyle::Normal, FONT_BYTES)
+            .is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(OutputError::format(
+            path,
+            "embedded font could not be loaded",
+        ))
+    }
+}
+
+/// Check that `field` is a valid full-box field of a `dim`-dimensional scene.
+pub(crate) fn check_field(path: &Path, field: &Array3<f64>, dim: usize) -> Result<(), OutputError> {
+    match dim {
+        2 if field.shape()[0] != 1 => Err(OutputError::format(
+            path,
+            format!(
+                "a 2D field must have shape [1, nx, ny], got {:?}",
+                field.shape()
+            ),
+        )),
+        2 | 3 if field.is_empty() => Err(OutputError::format(path, "the field is empty")),
+        2 | 3 => Ok(()),
+        _ => Err(OutputError::format(
+            path,
+            format!("scene dimension must be 2 or 3, got {dim}"),
+        )),
+    }
+}
+
+/// Create `path` for buffered writing.
+pub(crate) fn create_file(path: &Path) -> Result<BufWriter<File>, OutputError> {
+    File::create(path)
+        .map(BufWriter::new)
+        .map_err(|e| OutputError::io(path, e))
+}
+
+/// Encode an 8-bit RGB buffer of `width x height` pixels (row-major) as a PNG file.
+pub(crate) fn write_rgb_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+) -> Result<(), OutputError> {
+    let mut file = create_file(path)?;
+    let mut encoder = png::Encoder::new(&mut file, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Best);
+    encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
+    let png_err = |e: png::EncodingError| match e {
+        png::EncodingError::IoError(io) => OutputError::io(path, io),
+        other => OutputError::format(path, other),
+    };
+    let mut writer = encoder.write_header().map_err(png_err)?;
+    writer.write_image_data(rgb).map_err(png_err)?;
+    writer.finish().map_err(png_err)?;
+    file.flush().map_err(|e| OutputError::io(path, e))
+}

@@ -1,0 +1,132 @@
+//! The time series of a run: one [`Record`] per recorded step, written to `timeseries.csv`
+//! with the contract's columns first.
+
+use crate::error::{Error, Result};
+use crate::model::Measures;
+use serde::Serialize;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// One row of `timeseries.csv` (and the `"final"` object of `summary.json`).
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct Record {
+    /// Accepted steps so far.
+    pub step: usize,
+    /// Simulated time.
+    pub t: f64,
+    /// The step that produced this state (0 for the initial state).
+    pub dt: f64,
+    /// F_sc.
+    pub energy: f64,
+    /// Diffuse area A.
+    pub area: f64,
+    /// Diffuse volume V.
+    pub volume: f64,
+    /// v (DESIGN.md §1).
+    pub reduced_volume: f64,
+    /// e (DESIGN.md §1).
+    pub reduced_energy: f64,
+    /// σ.
+    pub sigma: f64,
+    /// max|φ^{n+1} − φ^n|/Δt of the step that produced this state (NaN for the initial one).
+    pub residual: f64,
+    /// Rejected attempts so far (adaptive stepping).
+    pub rejected: usize,
+    /// Wall-clock seconds since the time loop started.
+    pub wall_seconds: f64,
+}
+
+impl Record {
+    /// A record of a state with `measures` in a scene of dimension `dim`, width `eps`.
+    pub fn new(
+        step: usize,
+        t: f64,
+        dt: f64,
+        m: Measures,
+        sigma: f64,
+        dim: usize,
+        eps: f64,
+    ) -> Self {
+        let r = m.reduced(dim, eps);
+        Record {
+            step,
+            t,
+            dt,
+            energy: m.energy,
+            area: m.area,
+            volume: m.volume,
+            reduced_volume: r.volume,
+            reduced_energy: r.energy,
+            sigma,
+            residual: f64::NAN,
+            rejected: 0,
+            wall_seconds: 0.0,
+        }
+    }
+}
+
+/// The CSV header: the contract's ten columns, then `rejected,wall_seconds`.
+pub const HEADER: &str =
+    "step,t,dt,energy,area,volume,reduced_volume,reduced_energy,sigma,residual,rejected,wall_seconds";
+
+/// Writes `timeseries.csv` row by row (values in shortest round-trip form).
+pub struct TimeSeries {
+    path: PathBuf,
+    out: BufWriter<File>,
+}
+
+impl TimeSeries {
+    /// Create the file and write the header.
+    ///
+    /// # Errors
+    /// `Error::Io` if the file cannot be created.
+    pub fn create(path: &Path) -> Result<Self> {
+        let file = File::create(path).map_err(|source| io(path, source))?;
+        let mut ts = TimeSeries {
+            path: path.to_path_buf(),
+            out: BufWriter::new(file),
+        };
+        writeln!(ts.out, "{HEADER}").map_err(|e| io(path, e))?;
+        Ok(ts)
+    }
+
+    /// Append one row.
+    ///
+    /// # Errors
+    /// `Error::Io` on a write failure.
+    pub fn push(&mut self, r: &Record) -> Result<()> {
+        writeln!(
+            self.out,
+            "{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.step,
+            r.t,
+            r.dt,
+            r.energy,
+            r.area,
+            r.volume,
+            r.reduced_volume,
+            r.reduced_energy,
+            r.sigma,
+            r.residual,
+            r.rejected,
+            r.wall_seconds
+        )
+        .map_err(|e| io(&self.path, e))
+    }
+
+    /// Flush buffered rows to disk.
+    ///
+    /// # Errors
+    /// `Error::Io` on a write failure.
+    pub fn flush(&mut self) -> Result<()> {
+        self.out.flush().map_err(|e| io(&self.path, e))
+    }
+}
+
+fn io(path: &Path, source: std::io::Error) -> Error {
+    Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}

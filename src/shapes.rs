@@ -1,0 +1,191 @@
+//! Initial shapes as signed distances (positive inside) and the tanh profile
+//! φ = tanh(d / (√2 ε)) built from them (DESIGN.md §4).
+
+use crate::config::{axis_index, Shape, SpheroidKind};
+use std::f64::consts::PI;
+
+/// Signed distance of `p` (scene coordinates, 3 entries, z = 0 in 2D) to the shape's surface,
+/// positive inside. Exact for spheres, capsules and their set operations up to the usual
+/// min/max approximation; first-order (d ≈ (1 − F)/|∇F|) for ellipsoids.
+pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
+    match shape {
+        Shape::Sphere { radius, center } => radius - norm(sub(p, center.as_deref())),
+        Shape::Ellipsoid { axes, center } => {
+            let mut a = [1.0; 3];
+            a[..dim].copy_from_slice(axes);
+            ellipsoid_distance(sub(p, center.as_deref()), a, dim)
+        }
+        Shape::Spheroid {
+            reduced_volume,
+            r0,
+            kind,
+            axis,
+            center,
+        } => {
+            let (equatorial, polar) = spheroid_axes(*reduced_volume, *r0, *kind, dim);
+            let mut a = [equatorial; 3];
+            a[axis_of(axis, dim)] = polar;
+            ellipsoid_distance(sub(p, center.as_deref()), a, dim)
+        }
+        Shape::Cup {
+            radius,
+            inner_radius,
+            offset,
+            axis,
+            center,
+        } => {
+            let q = sub(p, center.as_deref());
+            let mut inner_center = [0.0; 3];
+            inner_center[axis_of(axis, dim)] = *offset;
+            let outer = radius - norm(q);
+            let inner = inner_radius - norm(sub(q, Some(&inner_center)));
+            outer.min(-inner)
+        }
+        Shape::Capsule {
+            radius,
+            length,
+            axis,
+            center,
+        } => {
+            let q = sub(p, center.as_deref());
+            let ax = axis_of(axis, dim);
+            let mut r = q;
+            r[ax] = (q[ax].abs() - length / 2.0).max(0.0);
+            radius - norm(r)
+        }
+        Shape::Union { of } => of
+            .iter()
+            .map(|s| signed_distance(s, p, dim))
+            .fold(f64::NEG_INFINITY, f64::max),
+        Shape::Difference { base, minus } => {
+            signed_distance(base, p, dim).min(-signed_distance(minus, p, dim))
+        }
+    }
+}
+
+/// The shape with every spheroid given by (v, R0) replaced by its ellipsoid (solve once, then
+/// evaluate the distance at every grid point).
+pub fn resolve(shape: &Shape, dim: usize) -> Shape {
+    match shape {
+        Shape::Spheroid { reduced_volume, r0, kind, axis, center } => {
+            let (equatorial, polar) = spheroid_axes(*reduced_volume, *r0, *kind, dim);
+            let mut axes = vec![equatorial; dim];
+            axes[axis_of(axis, dim)] = polar;
+            Shape::Ellipsoid { axes, center: center.clone() }
+        }
+        Shape::Union { of } => Shape::Union { of: of.iter().map(|s| resolve(s, dim)).collect() },
+        Shape::Difference { base, minus } => Shape::Difference {
+            base: Box::new(resolve(base, dim)),
+            minus: Box::new(resolve(minus, dim)),
+        },
+        other => other.clone(),
+    }
+}
+
+/// The tanh profile φ = tanh(d/(√2 ε)).
+pub fn profile(d: f64, eps: f64) -> f64 {
+    (d / (std::f64::consts::SQRT_2 * eps)).tanh()
+}
+
+/// `p − c` (c absent: the box centre, 0).
+fn sub(p: [f64; 3], c: Option<&[f64]>) -> [f64; 3] {
+    let mut q = p;
+    for (qi, ci) in q.iter_mut().zip(c.unwrap_or(&[])) {
+        *qi -= ci;
+    }
+    q
+}
+
+fn norm(q: [f64; 3]) -> f64 {
+    (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt()
+}
+
+fn axis_of(axis: &Option<String>, dim: usize) -> usize {
+    axis.as_deref()
+        .and_then(|a| axis_index(a, dim))
+        .unwrap_or(dim - 1)
+}
+
+/// d ≈ (1 − F)/|∇F| with F = √(Σ (x_i/a_i)²).
+fn ellipsoid_distance(q: [f64; 3], a: [f64; 3], dim: usize) -> f64 {
+    let f = (0..dim).map(|i| (q[i] / a[i]).powi(2)).sum::<f64>().sqrt();
+    let g = (0..dim)
+        .map(|i| q[i] * q[i] / a[i].powi(4))
+        .sum::<f64>()
+        .sqrt();
+    if g < 1e-300 {
+        a[..dim].iter().cloned().fold(f64::INFINITY, f64::min)
+    } else {
+        (1.0 - f) * f / g
+    }
+}
+
+/// Semi-axes (equatorial, polar) of the spheroid (3D) or ellipse (2D) with reduced volume `v`
+/// and size `r0`. 3D: v = V/((4π/3) R0³) with A = 4π R0²; 2D: v = 4πV/L² with L = 2π R0.
+/// The aspect ratio q = polar/equatorial is found by bisection (v is monotone in q on each
+/// branch: q > 1 prolate, q < 1 oblate), then the size is scaled to R0.
+pub fn spheroid_axes(v: f64, r0: f64, kind: SpheroidKind, dim: usize) -> (f64, f64) {
+    let (mut lo, mut hi): (f64, f64) = match kind {
+        SpheroidKind::Prolate => (1.0, 1e3),
+        SpheroidKind::Oblate => (1e-3, 1.0),
+    };
+    for _ in 0..200 {
+        let mid = (lo * hi).sqrt();
+        let too_round = reduced_volume_of(1.0, mid, dim) > v;
+        // On the prolate branch v falls as q grows; on the oblate branch it rises.
+        if too_round == (kind == SpheroidKind::Prolate) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let q = (lo * hi).sqrt();
+    let size = size_of(1.0, q, dim);
+    (r0 / size, q * r0 / size)
+}
+
+/// Reduced volume of the spheroid/ellipse with equatorial semi-axis `a` and polar `c`.
+fn reduced_volume_of(a: f64, c: f64, dim: usize) -> f64 {
+    if dim == 3 {
+        let r0 = size_of(a, c, 3);
+        4.0 / 3.0 * PI * a * a * c / (4.0 / 3.0 * PI * r0.powi(3))
+    } else {
+        let l = ellipse_perimeter(a, c);
+        4.0 * PI * PI * a * c / (l * l)
+    }
+}
+
+/// R0 of the spheroid (√(A/4π)) or ellipse (L/2π).
+fn size_of(a: f64, c: f64, dim: usize) -> f64 {
+    if dim == 3 {
+        (spheroid_area(a, c) / (4.0 * PI)).sqrt()
+    } else {
+        ellipse_perimeter(a, c) / (2.0 * PI)
+    }
+}
+
+/// Area of the spheroid with semi-axes (a, a, c).
+pub fn spheroid_area(a: f64, c: f64) -> f64 {
+    if (c - a).abs() < 1e-12 * a {
+        4.0 * PI * a * a
+    } else if c > a {
+        let e = (1.0 - a * a / (c * c)).sqrt();
+        2.0 * PI * a * a * (1.0 + c / (a * e) * e.asin())
+    } else {
+        let e = (1.0 - c * c / (a * a)).sqrt();
+        2.0 * PI * a * a * (1.0 + (1.0 - e * e) / e * e.atanh())
+    }
+}
+
+/// Perimeter of the ellipse with semi-axes a, c (trapezoid rule on the periodic integrand,
+/// spectrally accurate).
+pub fn ellipse_perimeter(a: f64, c: f64) -> f64 {
+    let m = 4096;
+    let s: f64 = (0..m)
+        .map(|i| {
+            let t = 2.0 * PI * i as f64 / m as f64;
+            (a * a * t.sin().powi(2) + c * c * t.cos().powi(2)).sqrt()
+        })
+        .sum();
+    s * 2.0 * PI / m as f64
+}

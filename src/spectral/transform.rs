@@ -1,0 +1,722 @@
+//! Planned three-dimensional real transforms: FFT on periodic axes, DCT-II on mirror axes.
+//!
+//! A real field `x` of shape `[n0, n1, n2]` maps to a complex spectrum `X` of shape
+//! [`Transform::spectral_shape`]. Every axis contributes one factor of the separable kernel
+//!
+//! * periodic axis of length `n`: `e^{−2πi j i / n}` (DFT); on the last axis the real-to-complex
+//!   half spectrum `j = 0..=n/2` is kept;
+//! * mirror axis of length `m`: `cos(π j (2i+1) / (2m))` (unnormalised DCT-II), which is the DFT
+//!   of the half-sample-even extension of the data to `2m` points.
+//!
+//! The inverse is the exact inverse of the forward map (`1/n` per periodic axis, the DCT-III
+//! scaled by `1/m`, i.e. `x_i = (X_0 + 2 Σ_{j≥1} X_j cos(π j (2i+1)/(2m))) / m`, per mirror axis).
+//!
+//! Implementation: the last (contiguous) axis is transformed lane by lane with `realfft` (periodic)
+//! or, for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
+//! gathered a block of columns at a time into contiguous lanes, transformed with one batched
+//! `rustfft` call and scattered back. A DCT-II of length `m` is computed with one complex FFT of
+//! length `m` (Makhoul's even/odd reordering plus a twiddle); it is C-linear, so a complex lane
+//! holding two real lanes (or the real and imaginary parts of one complex lane) costs one FFT.
+//! All buffers live in the struct: a transform call allocates nothing.
+
+use std::f64::consts::PI;
+use std::fmt;
+use std::sync::Arc;
+
+use ndarray::{s, Array3, ArrayView2, ArrayViewMut2, ArrayViewMut3, Axis};
+use rayon::prelude::*;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::num_complex::Complex64;
+use rustfft::{Fft, FftPlanner};
+
+use crate::grid::AxisKind;
+
+/// Complex values in one batch of gathered lanes (32 KiB: stays in L1 with the FFT scratch).
+const LANE_BUFFER: usize = 4096;
+/// Fewest lanes per batch (four complex values fill one 64-byte cache line of a row).
+const MIN_BATCH: usize = 4;
+/// Column split between threads is rounded to this many columns (whole cache lines).
+const COLUMN_ALIGN: usize = 8;
+
+/// Direction of a transform stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Direction {
+    Forward,
+    Inverse,
+}
+
+/// How the columns of a strided stage map onto complex lanes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Packing {
+    /// One complex column per lane.
+    Complex,
+    /// The real parts of two adjacent columns form one lane (`re + i·re'`); imaginary parts are
+    /// zero and stay zero. Used when every transformed axis is a mirror axis.
+    RealPairs,
+}
+
+impl Packing {
+    fn columns_per_lane(self) -> usize {
+        match self {
+            Packing::Complex => 1,
+            Packing::RealPairs => 2,
+        }
+    }
+}
+
+/// A batched 1D kernel along one axis: a complex FFT (periodic) or a DCT-II/DCT-III computed with
+/// a complex FFT of the same length (mirror). Both act on lanes of `len` contiguous values.
+struct LaneKernel {
+    len: usize,
+    /// Lanes per batch.
+    batch: usize,
+    forward: Arc<dyn Fft<f64>>,
+    inverse: Arc<dyn Fft<f64>>,
+    scratch_len: usize,
+    /// Lane position of data index `i`: `i` for the FFT; for the DCT the Makhoul order
+    /// `v_p = x_{2p}`, `v_{m−1−p} = x_{2p+1}`.
+    pos: Vec<usize>,
+    /// Lane position of spectral index `j`: always `j`.
+    identity: Vec<usize>,
+    /// DCT twiddles `w_k = e^{−iπk/(2m)}`; empty for the FFT.
+    twiddle: Vec<Complex64>,
+}
+
+impl LaneKernel {
+    fn new(planner: &mut FftPlanner<f64>, len: usize, kind: AxisKind) -> Self {
+        let forward = planner.plan_fft_forward(len);
+        let inverse = planner.plan_fft_inverse(len);
+        let scratch_len = forward
+            .get_inplace_scratch_len()
+            .max(inverse.get_inplace_scratch_len());
+        let (pos, twiddle) = match kind {
+            AxisKind::Periodic => ((0..len).collect(), Vec::new()),
+            AxisKind::Mirror => (
+                makhoul_positions(len),
+                (0..len)
+                    .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * len) as f64))
+                    .collect(),
+            ),
+        };
+        LaneKernel {
+            len,
+            batch: (LANE_BUFFER / len).max(MIN_BATCH),
+            forward,
+            inverse,
+            scratch_len,
+            pos,
+            identity: (0..len).collect(),
+            twiddle,
+        }
+    }
+
+    /// Lane positions of the rows to gather and of the rows to scatter for direction `dir`:
+    /// data order on the real-space side, identity on the spectral side.
+    fn orders(&self, dir: Direction) -> (&[usize], &[usize]) {
+        match dir {
+            Direction::Forward => (&self.pos, &self.identity),
+            Direction::Inverse => (&self.identity, &self.pos),
+        }
+    }
+
+    /// Transform every lane of `lanes` (a whole number of lanes) in place.
+    fn apply(&self, dir: Direction, lanes: &mut [Complex64], scratch: &mut [Complex64]) {
+        let scratch = &mut scratch[..self.scratch_len];
+        match dir {
+            Direction::Forward => {
+                self.forward.process_with_scratch(lanes, scratch);
+                if !self.twiddle.is_empty() {
+                    lanes
+                        .chunks_exact_mut(self.len)
+                        .for_each(|lane| dct_post_twiddle(lane, &self.twiddle));
+                }
+            }
+            Direction::Inverse => {
+                if !self.twiddle.is_empty() {
+                    lanes
+                        .chunks_exact_mut(self.len)
+                        .for_each(|lane| dct_pre_twiddle(lane, &self.twiddle));
+                }
+                self.inverse.process_with_scratch(lanes, scratch);
+            }
+        }
+    }
+}
+
+/// Makhoul's reordering for the DCT through an FFT: data index `i` goes to lane position
+/// `i/2` when even and `m − 1 − (i−1)/2` when odd.
+fn makhoul_positions(m: usize) -> Vec<usize> {
+    (0..m)
+        .map(|i| if i % 2 == 0 { i / 2 } else { m - 1 - i / 2 })
+        .collect()
+}
+
+/// From `V = FFT(v)` of the reordered lane to the DCT-II, in place:
+/// `X_k = (w_k V_k + w̄_k V_{m−k}) / 2` (and `X_0 = V_0`). The map is C-linear, so it holds for
+/// complex lanes (the DCT of the real and imaginary parts).
+fn dct_post_twiddle(lane: &mut [Complex64], w: &[Complex64]) {
+    let m = lane.len();
+    for k in 1..=m / 2 {
+        let (a, b) = (lane[k], lane[m - k]);
+        lane[k] = 0.5 * (w[k] * a + w[k].conj() * b);
+        lane[m - k] = 0.5 * (w[m - k] * b + w[m - k].conj() * a);
+    }
+}
+
+/// Inverse of [`dct_post_twiddle`] up to the FFT normalisation, in place:
+/// `V_k = w̄_k (X_k − i X_{m−k})` (and `V_0 = X_0`).
+fn dct_pre_twiddle(lane: &mut [Complex64], w: &[Complex64]) {
+    let m = lane.len();
+    let i = Complex64::i();
+    for k in 1..=m / 2 {
+        let (a, b) = (lane[k], lane[m - k]);
+        lane[k] = w[k].conj() * (a - i * b);
+        lane[m - k] = w[m - k].conj() * (b - i * a);
+    }
+}
+
+/// The transform along the last (contiguous) axis.
+enum LastAxis {
+    /// Real-to-complex FFT (periodic axis).
+    Real {
+        r2c: Arc<dyn RealToComplex<f64>>,
+        c2r: Arc<dyn ComplexToReal<f64>>,
+    },
+    /// DCT-II (mirror axis), two real lanes per complex lane.
+    Mirror(LaneKernel),
+}
+
+/// Scratch owned by one parallel chunk.
+struct Work {
+    lanes: Vec<Complex64>,
+    scratch: Vec<Complex64>,
+    real: Vec<f64>,
+}
+
+/// Everything fixed at planning time (shared read-only by the parallel chunks).
+struct Plan {
+    shape: [usize; 3],
+    kinds: [AxisKind; 3],
+    spectral: [usize; 3],
+    last: LastAxis,
+    /// Kernels of axes 0 and 1; `None` for an axis of length 1 (identity).
+    strided: [Option<LaneKernel>; 2],
+    packing: Packing,
+}
+
+/// A planned 3D real transform (FFT on periodic axes, DCT-II on mirror axes) with all scratch
+/// preallocated; see the module documentation for the conventions.
+pub struct Transform {
+    plan: Plan,
+    works: Vec<Work>,
+}
+
+impl fmt::Debug for Transform {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Transform")
+            .field("shape", &self.plan.shape)
+            .field("kinds", &self.plan.kinds)
+            .field("threads", &self.works.len())
+            .finish()
+    }
+}
+
+impl Transform {
+    /// Plan the transform of real fields of shape `shape` with boundary kinds `kinds`, with
+    /// scratch for `threads` parallel chunks run on rayon's current pool (`threads <= 1`: serial,
+    /// no rayon). Planning picks the fastest FFT kernels of this CPU (AVX when present).
+    ///
+    /// # Panics
+    /// If an axis has length 0.
+    pub fn new(shape: [usize; 3], kinds: [AxisKind; 3], threads: usize) -> Self {
+        assert!(shape.iter().all(|&n| n > 0), "axes must not be empty");
+        let mut planner = FftPlanner::new();
+        let last = match kinds[2] {
+            AxisKind::Periodic => {
+                let mut real = RealFftPlanner::new();
+                LastAxis::Real {
+                    r2c: real.plan_fft_forward(shape[2]),
+                    c2r: real.plan_fft_inverse(shape[2]),
+                }
+            }
+            AxisKind::Mirror => {
+                LastAxis::Mirror(LaneKernel::new(&mut planner, shape[2], AxisKind::Mirror))
+            }
+        };
+        let strided = [0, 1]
+            .map(|a| (shape[a] > 1).then(|| LaneKernel::new(&mut planner, shape[a], kinds[a])));
+        let real_only = kinds[2] == AxisKind::Mirror
+            && (0..2).all(|a| shape[a] == 1 || kinds[a] == AxisKind::Mirror);
+        let mut spectral = shape;
+        if kinds[2] == AxisKind::Periodic {
+            spectral[2] = shape[2] / 2 + 1;
+        }
+        let plan = Plan {
+            shape,
+            kinds,
+            spectral,
+            last,
+            strided,
+            packing: if real_only {
+                Packing::RealPairs
+            } else {
+                Packing::Complex
+            },
+        };
+        let works = (0..threads.max(1)).map(|_| plan.new_work()).collect();
+        Transform { plan, works }
+    }
+
+    /// Shape `[s0, s1, s2]` of the spectrum: `s_a = n_a`, except `s2 = n2/2 + 1` when axis 2
+    /// is periodic (real-to-complex half spectrum).
+    pub fn spectral_shape(&self) -> [usize; 3] {
+        self.plan.spectral
+    }
+
+    /// Real-space shape `[n0, n1, n2]` this transform was planned for.
+    pub fn shape(&self) -> [usize; 3] {
+        self.plan.shape
+    }
+
+    /// Forward transform `X_j = Σ_i x_i Π_a K_a(j_a, i_a)` with `K = e^{−2πi j i/n}` on periodic
+    /// axes and `K = cos(π j (2i+1)/(2m))` on mirror axes. `input` is left untouched.
+    /// When every axis longer than 1 is a mirror axis the spectrum is real (imaginary parts 0).
+    ///
+    /// # Panics
+    /// If the shapes differ from the plan or an array is not in standard layout.
+    pub fn forward(&mut self, input: &Array3<f64>, out: &mut Array3<Complex64>) {
+        let Transform { plan, works } = self;
+        assert_eq!(input.shape(), plan.shape, "input shape");
+        assert_eq!(out.shape(), plan.spectral, "spectrum shape");
+        let x = input.as_slice().expect("input in standard layout");
+        let y = out.as_slice_mut().expect("spectrum in standard layout");
+        let [n0, n1, n2] = plan.shape;
+        let s2 = plan.spectral[2];
+        let threads = works.len();
+        if threads == 1 {
+            plan.forward_slabs(x, y, &mut works[0]);
+        } else if n0 >= threads {
+            let slabs = n0.div_ceil(threads);
+            x.par_chunks(slabs * n1 * n2)
+                .zip(y.par_chunks_mut(slabs * n1 * s2))
+                .zip(works.par_iter_mut())
+                .for_each(|((x, y), work)| plan.forward_slabs(x, y, work));
+        } else {
+            let rows = (n0 * n1).div_ceil(threads);
+            x.par_chunks(rows * n2)
+                .zip(y.par_chunks_mut(rows * s2))
+                .zip(works.par_iter_mut())
+                .for_each(|((x, y), work)| plan.last.forward_rows(x, y, n2, work));
+            plan.strided_pass(1, Direction::Forward, y, works);
+        }
+        plan.strided_pass(0, Direction::Forward, y, works);
+    }
+
+    /// Inverse transform: the exact inverse of [`Transform::forward`] (normalised by
+    /// `1/(n0 n1 n2)`), returning the real part. Before the real-to-complex inverse the
+    /// imaginary parts of the self-conjugate columns (`j2 = 0`, and `j2 = n2/2` for even `n2`)
+    /// are zeroed; on a mirror last axis only real parts are used.
+    ///
+    /// `input` is used as scratch: its contents are garbage afterwards.
+    ///
+    /// # Panics
+    /// If the shapes differ from the plan or an array is not in standard layout.
+    pub fn inverse(&mut self, input: &mut Array3<Complex64>, out: &mut Array3<f64>) {
+        let Transform { plan, works } = self;
+        assert_eq!(input.shape(), plan.spectral, "spectrum shape");
+        assert_eq!(out.shape(), plan.shape, "output shape");
+        let y = input.as_slice_mut().expect("spectrum in standard layout");
+        let x = out.as_slice_mut().expect("output in standard layout");
+        let [n0, n1, n2] = plan.shape;
+        let s2 = plan.spectral[2];
+        let scale = 1.0 / (n0 * n1 * n2) as f64;
+        let threads = works.len();
+        plan.strided_pass(0, Direction::Inverse, y, works);
+        if threads == 1 {
+            plan.inverse_slabs(y, x, scale, &mut works[0]);
+        } else if n0 >= threads {
+            let slabs = n0.div_ceil(threads);
+            y.par_chunks_mut(slabs * n1 * s2)
+                .zip(x.par_chunks_mut(slabs * n1 * n2))
+                .zip(works.par_iter_mut())
+                .for_each(|((y, x), work)| plan.inverse_slabs(y, x, scale, work));
+        } else {
+            plan.strided_pass(1, Direction::Inverse, y, works);
+            let rows = (n0 * n1).div_ceil(threads);
+            y.par_chunks_mut(rows * s2)
+                .zip(x.par_chunks_mut(rows * n2))
+                .zip(works.par_iter_mut())
+                .for_each(|((y, x), work)| plan.last.inverse_rows(y, x, n2, scale, work));
+        }
+    }
+
+    /// Signed wavenumber of every spectral index, per axis, for grid spacing `h`:
+    /// periodic `k_j = 2π m_j/(n h)` with `m_j = j` for `j <= n/2` and `j − n` otherwise
+    /// (`m_j = j` on a real-to-complex last axis); mirror `k_j = π j/(m h)`.
+    pub fn wavenumbers(&self, h: f64) -> [Vec<f64>; 3] {
+        [0, 1, 2].map(|a| {
+            let n = self.plan.shape[a];
+            (0..self.plan.spectral[a])
+                .map(|j| match self.plan.kinds[a] {
+                    AxisKind::Mirror => PI * j as f64 / (n as f64 * h),
+                    AxisKind::Periodic => {
+                        let m = if j <= n / 2 {
+                            j as f64
+                        } else {
+                            j as f64 - n as f64
+                        };
+                        2.0 * PI * m / (n as f64 * h)
+                    }
+                })
+                .collect()
+        })
+    }
+
+    /// Per-axis weights with `Σ_x u v = Σ_k w0[k0] w1[k1] w2[k2] Re(U_k conj V_k)` for real
+    /// fields `u, v` (in particular `Σ_x x² = Σ_k w |X_k|²`): `1/n` on a complex periodic axis;
+    /// on a real-to-complex last axis `1/n` for `j = 0` and for `j = n/2` when `n` is even, `2/n`
+    /// otherwise; on a mirror axis `1/m` for `j = 0` and `2/m` otherwise.
+    pub fn parseval_weights(&self) -> [Vec<f64>; 3] {
+        [0, 1, 2].map(|a| {
+            let n = self.plan.shape[a];
+            let inv = 1.0 / n as f64;
+            (0..self.plan.spectral[a])
+                .map(|j| match self.plan.kinds[a] {
+                    AxisKind::Mirror => {
+                        if j == 0 {
+                            inv
+                        } else {
+                            2.0 * inv
+                        }
+                    }
+                    AxisKind::Periodic if a < 2 => inv,
+                    AxisKind::Periodic => {
+                        if j == 0 || 2 * j == n {
+                            inv
+                        } else {
+                            2.0 * inv
+                        }
+                    }
+                })
+                .collect()
+        })
+    }
+
+    /// Project the self-conjugate planes of a real-to-complex spectrum onto Hermitian symmetry:
+    /// for `j2 = 0` (and `j2 = n2/2` when `n2` is even) set
+    /// `X(k0,k1) ← (X(k0,k1) + conj X(−k0,−k1)) / 2`, with `−k` taken mod `n` on periodic axes and
+    /// `−k = k` on mirror axes. A no-op when axis 2 is a mirror axis.
+    ///
+    /// # Panics
+    /// If `a` does not have the spectral shape.
+    pub fn hermitian_symmetrize(&self, a: &mut Array3<Complex64>) {
+        assert_eq!(a.shape(), self.plan.spectral, "spectrum shape");
+        if self.plan.kinds[2] == AxisKind::Mirror {
+            return;
+        }
+        let n2 = self.plan.shape[2];
+        let nyquist = (n2 % 2 == 0).then_some(n2 / 2);
+        for j2 in std::iter::once(0).chain(nyquist) {
+            self.symmetrize_plane(a.index_axis_mut(Axis(2), j2));
+        }
+    }
+
+    /// Hermitian projection of one self-conjugate plane (see [`Transform::hermitian_symmetrize`]).
+    fn symmetrize_plane(&self, mut plane: ArrayViewMut2<Complex64>) {
+        let [n0, n1, _] = self.plan.shape;
+        let neg = |j: usize, n: usize, a: usize| match self.plan.kinds[a] {
+            AxisKind::Periodic => (n - j) % n,
+            AxisKind::Mirror => j,
+        };
+        for i0 in 0..n0 {
+            for i1 in 0..n1 {
+                let q = (neg(i0, n0, 0), neg(i1, n1, 1));
+                if q < (i0, i1) {
+                    continue;
+                }
+                let mean = 0.5 * (plane[(i0, i1)] + plane[q].conj());
+                plane[(i0, i1)] = mean;
+                plane[q] = mean.conj();
+            }
+        }
+    }
+}
+
+impl Plan {
+    /// Scratch for one parallel chunk, sized for every stage.
+    fn new_work(&self) -> Work {
+        let kernels = self.strided.iter().flatten();
+        let mut lanes = kernels.clone().map(|k| k.batch * k.len).max().unwrap_or(0);
+        let mut scratch = kernels.map(|k| k.scratch_len).max().unwrap_or(0);
+        match &self.last {
+            LastAxis::Real { r2c, c2r } => {
+                scratch = scratch
+                    .max(r2c.get_scratch_len())
+                    .max(c2r.get_scratch_len());
+            }
+            LastAxis::Mirror(k) => {
+                lanes = lanes.max(k.batch * k.len);
+                scratch = scratch.max(k.scratch_len);
+            }
+        }
+        Work {
+            lanes: vec![Complex64::default(); lanes],
+            scratch: vec![Complex64::default(); scratch],
+            real: vec![0.0; self.shape[2]],
+        }
+    }
+
+    /// Forward transform along axes 2 then 1 of whole slabs (`x`, `y` hold whole `i0` slabs),
+    /// one slab at a time so that it stays in cache between the two stages.
+    fn forward_slabs(&self, x: &[f64], y: &mut [Complex64], work: &mut Work) {
+        let [_, n1, n2] = self.shape;
+        let s2 = self.spectral[2];
+        for (xs, ys) in x.chunks_exact(n1 * n2).zip(y.chunks_exact_mut(n1 * s2)) {
+            self.last.forward_rows(xs, ys, n2, work);
+            if let Some(kernel) = &self.strided[1] {
+                let slab = ArrayViewMut3::from_shape([1, n1, s2], ys).expect("slab shape");
+                strided_piece(slab, kernel, self.packing, Direction::Forward, work);
+            }
+        }
+    }
+
+    /// Inverse of [`Plan::forward_slabs`], with the overall normalisation `scale`.
+    fn inverse_slabs(&self, y: &mut [Complex64], x: &mut [f64], scale: f64, work: &mut Work) {
+        let [_, n1, n2] = self.shape;
+        let s2 = self.spectral[2];
+        for (ys, xs) in y.chunks_exact_mut(n1 * s2).zip(x.chunks_exact_mut(n1 * n2)) {
+            if let Some(kernel) = &self.strided[1] {
+                let slab = ArrayViewMut3::from_shape([1, n1, s2], &mut *ys).expect("slab shape");
+                strided_piece(slab, kernel, self.packing, Direction::Inverse, work);
+            }
+            self.last.inverse_rows(ys, xs, n2, scale, work);
+        }
+    }
+
+    /// Transform the whole spectrum along axis `a` (0 or 1), split between the chunks of
+    /// `works`: by slabs when there are enough, by column ranges otherwise.
+    fn strided_pass(&self, a: usize, dir: Direction, y: &mut [Complex64], works: &mut [Work]) {
+        let Some(kernel) = &self.strided[a] else {
+            return;
+        };
+        let s = self.spectral;
+        let geometry = if a == 0 {
+            [1, s[0], s[1] * s[2]]
+        } else {
+            [s[0], s[1], s[2]]
+        };
+        let mut view = ArrayViewMut3::from_shape(geometry, y).expect("spectrum shape");
+        let threads = works.len();
+        if threads == 1 {
+            strided_piece(view, kernel, self.packing, dir, &mut works[0]);
+            return;
+        }
+        let (axis, chunk) = if geometry[0] >= threads {
+            (Axis(0), geometry[0].div_ceil(threads))
+        } else {
+            let cols = geometry[2].div_ceil(threads).div_ceil(COLUMN_ALIGN) * COLUMN_ALIGN;
+            (Axis(2), cols)
+        };
+        view.axis_chunks_iter_mut(axis, chunk)
+            .into_par_iter()
+            .zip(works.par_iter_mut())
+            .for_each(|(piece, work)| strided_piece(piece, kernel, self.packing, dir, work));
+    }
+}
+
+impl LastAxis {
+    /// Forward transform of the contiguous rows of length `n` in `x` into rows of `y`.
+    fn forward_rows(&self, x: &[f64], y: &mut [Complex64], n: usize, work: &mut Work) {
+        match self {
+            LastAxis::Real { r2c, .. } => {
+                let scratch = &mut work.scratch[..r2c.get_scratch_len()];
+                let buf = &mut work.real[..n];
+                for (xr, yr) in x.chunks_exact(n).zip(y.chunks_exact_mut(n / 2 + 1)) {
+                    buf.copy_from_slice(xr);
+                    r2c.process_with_scratch(buf, yr, scratch)
+                        .expect("lengths fixed by the plan");
+                }
+            }
+            LastAxis::Mirror(kernel) => {
+                let group = 2 * kernel.batch * n;
+                for (xg, yg) in x.chunks(group).zip(y.chunks_mut(group)) {
+                    let lanes = &mut work.lanes[..(xg.len() / n).div_ceil(2) * n];
+                    pack_real_rows(xg, lanes, &kernel.pos);
+                    kernel.apply(Direction::Forward, lanes, &mut work.scratch);
+                    unpack_to_complex_rows(lanes, yg, n);
+                }
+            }
+        }
+    }
+
+    /// Inverse of [`LastAxis::forward_rows`] scaled by `scale`; `y` is used as scratch.
+    fn inverse_rows(
+        &self,
+        y: &mut [Complex64],
+        x: &mut [f64],
+        n: usize,
+        scale: f64,
+        work: &mut Work,
+    ) {
+        match self {
+            LastAxis::Real { c2r, .. } => {
+                let scratch = &mut work.scratch[..c2r.get_scratch_len()];
+                for (yr, xr) in y.chunks_exact_mut(n / 2 + 1).zip(x.chunks_exact_mut(n)) {
+                    yr[0].im = 0.0;
+                    if n % 2 == 0 {
+                        yr[n / 2].im = 0.0;
+                    }
+                    c2r.process_with_scratch(yr, xr, scratch)
+                        .expect("lengths fixed by the plan, self-conjugate entries made real");
+                    xr.iter_mut().for_each(|v| *v *= scale);
+                }
+            }
+            LastAxis::Mirror(kernel) => {
+                let group = 2 * kernel.batch * n;
+                for (yg, xg) in y.chunks(group).zip(x.chunks_mut(group)) {
+                    let lanes = &mut work.lanes[..(yg.len() / n).div_ceil(2) * n];
+                    pack_complex_rows(yg, lanes, n);
+                    kernel.apply(Direction::Inverse, lanes, &mut work.scratch);
+                    unpack_to_real_rows(lanes, xg, &kernel.pos, scale);
+                }
+            }
+        }
+    }
+}
+
+/// Pack real rows `2l`, `2l+1` of `x` into lane `l` as `x_{2l} + i x_{2l+1}` (reordered by `pos`).
+fn pack_real_rows(x: &[f64], lanes: &mut [Complex64], pos: &[usize]) {
+    let n = pos.len();
+    for (lane, pair) in lanes.chunks_exact_mut(n).zip(x.chunks(2 * n)) {
+        let (a, b) = pair.split_at(n);
+        if b.is_empty() {
+            a.iter()
+                .zip(pos)
+                .for_each(|(&u, &p)| lane[p] = Complex64::new(u, 0.0));
+        } else {
+            for ((&u, &v), &p) in a.iter().zip(b).zip(pos) {
+                lane[p] = Complex64::new(u, v);
+            }
+        }
+    }
+}
+
+/// Unpack lanes of length `n` into complex rows of `y`: lane `l` gives row `2l` its real part
+/// and row `2l+1` its imaginary part (stored as real values, imaginary parts zero).
+fn unpack_to_complex_rows(lanes: &[Complex64], y: &mut [Complex64], n: usize) {
+    for (lane, pair) in lanes.chunks_exact(n).zip(y.chunks_mut(2 * n)) {
+        let (a, b) = pair.split_at_mut(n);
+        a.iter_mut()
+            .zip(lane)
+            .for_each(|(u, z)| *u = Complex64::new(z.re, 0.0));
+        b.iter_mut()
+            .zip(lane)
+            .for_each(|(v, z)| *v = Complex64::new(z.im, 0.0));
+    }
+}
+
+/// Pack the real parts of complex rows `2l`, `2l+1` of `y` (length `n`) into lane `l`.
+fn pack_complex_rows(y: &[Complex64], lanes: &mut [Complex64], n: usize) {
+    for (lane, pair) in lanes.chunks_exact_mut(n).zip(y.chunks(2 * n)) {
+        let (a, b) = pair.split_at(n);
+        if b.is_empty() {
+            lane.iter_mut()
+                .zip(a)
+                .for_each(|(z, u)| *z = Complex64::new(u.re, 0.0));
+        } else {
+            for ((z, u), v) in lane.iter_mut().zip(a).zip(b) {
+                *z = Complex64::new(u.re, v.re);
+            }
+        }
+    }
+}
+
+/// Unpack lane `l` (reordered by `pos`) into real rows `2l` (real part) and `2l+1` (imaginary
+/// part) of `x`, times `scale`.
+fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale: f64) {
+    let n = pos.len();
+    for (lane, pair) in lanes.chunks_exact(n).zip(x.chunks_mut(2 * n)) {
+        let (a, b) = pair.split_at_mut(n);
+        a.iter_mut()
+            .zip(pos)
+            .for_each(|(u, &p)| *u = scale * lane[p].re);
+        b.iter_mut()
+            .zip(pos)
+            .for_each(|(v, &p)| *v = scale * lane[p].im);
+    }
+}
+
+/// Transform a piece `[outer, len, width]` of the spectrum along its middle axis: a block of
+/// columns at a time is gathered into contiguous lanes, transformed in one batched call and
+/// scattered back.
+fn strided_piece(
+    mut piece: ArrayViewMut3<Complex64>,
+    kernel: &LaneKernel,
+    packing: Packing,
+    dir: Direction,
+    work: &mut Work,
+) {
+    let per_lane = packing.columns_per_lane();
+    let columns = kernel.batch * per_lane;
+    let (from, to) = kernel.orders(dir);
+    for mut slab in piece.outer_iter_mut() {
+        let width = slab.ncols();
+        for c0 in (0..width).step_by(columns) {
+            let mut block = slab.slice_mut(s![.., c0..(c0 + columns).min(width)]);
+            let lanes = &mut work.lanes[..block.ncols().div_ceil(per_lane) * kernel.len];
+            gather(block.view(), lanes, from, packing);
+            kernel.apply(dir, lanes, &mut work.scratch);
+            scatter(lanes, block.view_mut(), to, packing);
+        }
+    }
+}
+
+/// Copy the columns of `block` into lanes: lane `l`, position `pos[i]` ← row `i` of column `l`
+/// (or of the real parts of columns `2l`, `2l+1` packed as `re + i·re'`).
+fn gather(block: ArrayView2<Complex64>, lanes: &mut [Complex64], pos: &[usize], packing: Packing) {
+    let len = pos.len();
+    for (row, &p) in block.rows().into_iter().zip(pos) {
+        let row = row.to_slice().expect("rows are contiguous");
+        match packing {
+            Packing::Complex => {
+                for (lane, &v) in lanes.chunks_exact_mut(len).zip(row) {
+                    lane[p] = v;
+                }
+            }
+            Packing::RealPairs => {
+                for (lane, pair) in lanes.chunks_exact_mut(len).zip(row.chunks(2)) {
+                    lane[p] = Complex64::new(pair[0].re, pair.get(1).map_or(0.0, |v| v.re));
+                }
+            }
+        }
+    }
+}
+
+/// Inverse of [`gather`]: write the lanes back into the columns of `block`.
+fn scatter(
+    lanes: &[Complex64],
+    mut block: ArrayViewMut2<Complex64>,
+    pos: &[usize],
+    packing: Packing,
+) {
+    let len = pos.len();
+    for (row, &p) in block.rows_mut().into_iter().zip(pos) {
+        let row = row.into_slice().expect("rows are contiguous");
+        match packing {
+            Packing::Complex => {
+                for (lane, v) in lanes.chunks_exact(len).zip(row) {
+                    *v = lane[p];
+                }
+            }
+            Packing::RealPairs => {
+                for (lane, pair) in lanes.chunks_exact(len).zip(row.chunks_mut(2)) {
+                    let z = lane[p];
+                    pair[0] = Complex64::new(z.re, 0.0);
+                    if let Some(v) = pair.get_mut(1) {
+                        *v = Complex64::new(z.im, 0.0);
+                    }
+                }
+            }
+        }
+    }
+}
