@@ -70,6 +70,11 @@ pub struct Scene {
     /// same stationary states).
     #[serde(default)]
     pub dynamics: Dynamics,
+    /// Discrete Laplacian of the spectral engine: `spectral` (−|k|², the default) or `fd` (the
+    /// symbol −Σ (4/h²) sin²(k_a h/2) of the FD reference's (2d+1)-point stencil: the engine
+    /// then integrates exactly the FD reference's semi-discrete equations, semi-implicitly).
+    #[serde(default)]
+    pub laplacian: Laplacian,
     /// Linear stabiliser of the spectral engine, S(k) = s2 |k|² + s4 ε² |k|⁴.
     #[serde(default)]
     pub stabilizer: Stabilizer,
@@ -102,6 +107,17 @@ pub enum Scheme {
     Sbdf1,
     /// Second-order semi-implicit backward differentiation (variable step).
     Sbdf2,
+}
+
+/// Discrete Laplacian used by the spectral engine.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Laplacian {
+    /// Exact Fourier symbol −|k|².
+    #[default]
+    Spectral,
+    /// Symbol of the second-order stencil, −Σ_a (4/h²) sin²(k_a h/2).
+    Fd,
 }
 
 /// Dynamics.

@@ -116,8 +116,14 @@ impl FdEngine {
         stability_bound(&self.grid, self.eps, self.sigma)
     }
 
+    /// μ_h(φ, σ) of the current state at time `t` (the discrete δF_eff/δφ divided by h^d).
+    pub fn chemical_potential(&mut self, t: f64) -> &Array3<f64> {
+        self.compute_mu(t);
+        &self.mu
+    }
+
     /// `mu = μ_h(φ, σ)` from the cached ∇²_h φ and Φ_h.
-    fn chemical_potential(&mut self, t: f64) {
+    fn compute_mu(&mut self, t: f64) {
         stencil::laplacian(&self.grid, &self.big_phi, &mut self.work);
         let r = self.c0.ramp(t);
         let e2 = self.eps * self.eps;
@@ -158,7 +164,7 @@ impl Engine for FdEngine {
     /// One explicit Euler step; σ^{n+1} from the area of the state before the step.
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
         self.max_bound_ratio = self.max_bound_ratio.max(dt / self.bound());
-        self.chemical_potential(t);
+        self.compute_mu(t);
         stencil::laplacian(&self.grid, &self.mu, &mut self.work);
         // Keep φ^n in `mu` (no longer needed) so a blow-up can restore it.
         std::mem::swap(&mut self.mu, &mut self.phi);

@@ -65,7 +65,7 @@ pub fn stability_bound(scene: &Scene, grid: &Grid) -> Option<f64> {
     match (scene.method, scene.dynamics) {
         (Method::Fd, _) => Some(fd::stability_bound(grid, scene.eps, 0.0)),
         (Method::Spectral, Dynamics::Conserved) => {
-            let b = spectral::stability_bound(grid, scene.eps, &scene.stabilizer);
+            let b = spectral::stability_bound(grid, scene.eps, &scene.stabilizer, scene.laplacian);
             b.is_finite().then_some(b)
         }
         (Method::Spectral, Dynamics::Relaxational) => None,

@@ -73,10 +73,11 @@ fn initial_field(scene: &Scene, grid: &Grid) -> Result<Array3<f64>> {
     }
 }
 
-/// The outer faces of the box must be bulk outside (φ ≤ FACE_PHI_MAX).
+/// The outer faces of the box must be bulk outside (φ ≤ FACE_PHI_MAX), except along an axis
+/// the field does not depend on (a periodic tube or slab running through the box).
 fn check_fits(grid: &Grid, phi: &Array3<f64>) -> Result<()> {
     for a in 0..3 {
-        if grid.shape[a] == 1 {
+        if grid.shape[a] == 1 || invariant_along(phi, a) {
             continue;
         }
         for idx in [0, grid.shape[a] - 1] {
@@ -99,6 +100,13 @@ fn check_fits(grid: &Grid, phi: &Array3<f64>) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// True when φ does not change along internal axis `a` (to 1e-12).
+fn invariant_along(phi: &Array3<f64>, a: usize) -> bool {
+    let first = phi.index_axis(Axis(a), 0);
+    phi.axis_iter(Axis(a))
+        .all(|plane| plane.iter().zip(first.iter()).all(|(x, y)| (x - y).abs() <= 1e-12))
 }
 
 /// Largest |u(x) − u(mirror_a x)| over the box, mirror about the centre of internal axis `a`.

@@ -19,7 +19,7 @@
 //! nearest the last σ and rejects a step with no real root.
 
 use super::transform::Transform;
-use crate::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer};
+use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::fd::PHI_BLOWUP;
 use crate::grid::Grid;
@@ -38,10 +38,10 @@ pub const CONSTRAINT_TOL: f64 = 1e-9;
 /// with the bulk linearisation −2k²(2 + ε²k²)² split into implicit b = 2ε⁴k⁶ + S and explicit
 /// a = 8k² + 8ε²k⁴, the amplification (1 + Δt(S − a))/(1 + Δt(b + S)) stays in [−1, 1] for
 /// Δt ≤ 2 / max_k (a − b − 2S). Infinite when a − b − 2S ≤ 0 for every k (e.g. S ≥ a/2).
-pub fn stability_bound(grid: &Grid, eps: f64, s: &Stabilizer) -> f64 {
+pub fn stability_bound(grid: &Grid, eps: f64, s: &Stabilizer, laplacian: Laplacian) -> f64 {
     let k2_max: f64 = (0..3)
         .filter(|&a| grid.shape[a] > 1)
-        .map(|_| (std::f64::consts::PI / grid.h).powi(2))
+        .map(|_| axis_symbol(std::f64::consts::PI / grid.h, grid.h, laplacian))
         .sum();
     let e2 = eps * eps;
     let worst = (0..=4000)
@@ -120,7 +120,7 @@ impl SpectralEngine {
     /// [`Diverged`] if `phi` is not finite.
     pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
         let transform = Transform::new(grid.shape, grid.kinds, rayon::current_num_threads());
-        let symbols = symbols(&transform, &grid, scene.eps);
+        let symbols = symbols(&transform, &grid, scene.eps, scene.laplacian);
         let mut ev = Evaluator {
             spare: Array3::zeros(transform.spectral_shape()),
             work: grid.zeros(),
@@ -408,9 +408,21 @@ impl Evaluator {
     }
 }
 
-/// |k|² and the area weights of every spectral index (flattened, standard layout).
-fn symbols(t: &Transform, grid: &Grid, eps: f64) -> Symbols {
-    let k = t.wavenumbers(grid.h);
+/// One axis's share of the Laplacian's symbol: k² (spectral) or (4/h²) sin²(kh/2) (the
+/// second-order stencil, diagonal in the same Fourier/cosine basis).
+pub fn axis_symbol(k: f64, h: f64, laplacian: Laplacian) -> f64 {
+    match laplacian {
+        Laplacian::Spectral => k * k,
+        Laplacian::Fd => (2.0 / h * (0.5 * k * h).sin()).powi(2),
+    }
+}
+
+/// |k|² (or the FD symbol) and the area weights of every spectral index (flattened, standard
+/// layout).
+fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Symbols {
+    let k = t.wavenumbers(grid.h).map(|ks| {
+        ks.iter().map(|&k| axis_symbol(k, grid.h, laplacian)).collect::<Vec<f64>>()
+    });
     let w = t.parseval_weights();
     let [s0, s1, s2] = t.spectral_shape();
     let mut k2 = Vec::with_capacity(s0 * s1 * s2);
@@ -419,7 +431,7 @@ fn symbols(t: &Transform, grid: &Grid, eps: f64) -> Symbols {
     for i in 0..s0 {
         for j in 0..s1 {
             for l in 0..s2 {
-                let kk = k[0][i].powi(2) + k[1][j].powi(2) + k[2][l].powi(2);
+                let kk = k[0][i] + k[1][j] + k[2][l];
                 k2.push(kk);
                 area_weight.push(AREA_PREFACTOR * eps * dv * w[0][i] * w[1][j] * w[2][l] * kk);
             }
