@@ -106,7 +106,9 @@ fn max_diff_c(a: &Array3<Complex64>, b: &Array3<Complex64>) -> f64 {
 
 fn max_diff(a: &Array3<f64>, b: &Array3<f64>) -> f64 {
     assert_eq!(a.shape(), b.shape());
-    Zip::from(a).and(b).fold(0.0f64, |m, x, y| m.max((x - y).abs()))
+    Zip::from(a)
+        .and(b)
+        .fold(0.0f64, |m, x, y| m.max((x - y).abs()))
 }
 
 fn forward_of(t: &mut Transform, x: &Array3<f64>) -> Array3<Complex64> {
@@ -124,9 +126,18 @@ fn inverse_of(t: &mut Transform, spectrum: &Array3<Complex64>) -> Array3<f64> {
 
 #[test]
 fn spectral_shape_halves_a_periodic_last_axis_only() {
-    assert_eq!(Transform::new([3, 5, 8], [P, P, P], 1).spectral_shape(), [3, 5, 5]);
-    assert_eq!(Transform::new([3, 5, 7], [P, M, P], 1).spectral_shape(), [3, 5, 4]);
-    assert_eq!(Transform::new([3, 5, 7], [P, P, M], 1).spectral_shape(), [3, 5, 7]);
+    assert_eq!(
+        Transform::new([3, 5, 8], [P, P, P], 1).spectral_shape(),
+        [3, 5, 5]
+    );
+    assert_eq!(
+        Transform::new([3, 5, 7], [P, M, P], 1).spectral_shape(),
+        [3, 5, 4]
+    );
+    assert_eq!(
+        Transform::new([3, 5, 7], [P, P, M], 1).spectral_shape(),
+        [3, 5, 7]
+    );
 }
 
 #[test]
@@ -183,7 +194,10 @@ fn large_round_trip_in_parallel() {
         let a = forward_of(&mut serial, &x);
         let b = forward_of(&mut parallel, &x);
         assert!(max_diff_c(&a, &b) < 1e-12, "{kinds:?}");
-        assert!(max_diff(&inverse_of(&mut parallel, &b), &x) < 1e-13, "{kinds:?}");
+        assert!(
+            max_diff(&inverse_of(&mut parallel, &b), &x) < 1e-13,
+            "{kinds:?}"
+        );
     }
 }
 
@@ -243,7 +257,7 @@ fn mirror_transform_equals_unfolded_periodic_transform() {
             let phase = |a: usize, k: usize| match kinds[a] {
                 P => Complex64::new(1.0, 0.0),
                 M => {
-                    let sign = if k % 2 == 0 { 2.0 } else { -2.0 };
+                    let sign = if k.is_multiple_of(2) { 2.0 } else { -2.0 };
                     sign * Complex64::from_polar(1.0, PI * k as f64 / (2 * shape[a]) as f64)
                 }
             };
@@ -298,13 +312,19 @@ fn wavenumbers_follow_the_index_conventions() {
     let t = Transform::new([4, 5, 6], [P, M, P], 1);
     let k = t.wavenumbers(h);
     let unit = |n: f64| 2.0 * PI / (n * h);
-    let expect0: Vec<f64> = [0.0, 1.0, 2.0, -1.0].iter().map(|m| m * unit(4.0)).collect();
+    let expect0: Vec<f64> = [0.0, 1.0, 2.0, -1.0]
+        .iter()
+        .map(|m| m * unit(4.0))
+        .collect();
     let expect1: Vec<f64> = (0..5).map(|j| PI * j as f64 / (5.0 * h)).collect();
     let expect2: Vec<f64> = (0..4).map(|j| j as f64 * unit(6.0)).collect();
     assert_eq!(k, [expect0, expect1, expect2]);
     let odd = Transform::new([5, 1, 1], [P, P, P], 1).wavenumbers(1.0);
     let m: Vec<f64> = odd[0].iter().map(|k| k * 5.0 / (2.0 * PI)).collect();
-    assert_eq!(m.iter().map(|v| v.round()).collect::<Vec<_>>(), [0.0, 1.0, 2.0, -2.0, -1.0]);
+    assert_eq!(
+        m.iter().map(|v| v.round()).collect::<Vec<_>>(),
+        [0.0, 1.0, 2.0, -2.0, -1.0]
+    );
     assert_eq!(odd[2], [0.0]);
 }
 
@@ -336,7 +356,10 @@ fn hermitian_symmetrize_projects_onto_real_field_spectra() {
             t.hermitian_symmetrize(&mut y);
             let mut twice = y.clone();
             t.hermitian_symmetrize(&mut twice);
-            assert!(max_diff_c(&twice, &y) < 1e-15, "idempotent {shape:?} {kinds:?}");
+            assert!(
+                max_diff_c(&twice, &y) < 1e-15,
+                "idempotent {shape:?} {kinds:?}"
+            );
             let field = inverse_of(&mut t, &y);
             let again = forward_of(&mut t, &field);
             assert!(max_diff_c(&again, &y) < 1e-12, "{shape:?} {kinds:?}");

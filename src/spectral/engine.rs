@@ -421,7 +421,9 @@ pub fn axis_symbol(k: f64, h: f64, laplacian: Laplacian) -> f64 {
 /// layout).
 fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Symbols {
     let k = t.wavenumbers(grid.h).map(|ks| {
-        ks.iter().map(|&k| axis_symbol(k, grid.h, laplacian)).collect::<Vec<f64>>()
+        ks.iter()
+            .map(|&k| axis_symbol(k, grid.h, laplacian))
+            .collect::<Vec<f64>>()
     });
     let w = t.parseval_weights();
     let [s0, s1, s2] = t.spectral_shape();

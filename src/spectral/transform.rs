@@ -35,8 +35,6 @@ use crate::grid::AxisKind;
 const LANE_BUFFER: usize = 2048;
 /// Fewest lanes per batch (four complex values fill one 64-byte cache line of a row).
 const MIN_BATCH: usize = 4;
-/// Rows gathered together into the lanes.
-const TILE: usize = 4;
 /// Column split between threads is rounded to this many columns (whole cache lines).
 const COLUMN_ALIGN: usize = 8;
 
@@ -417,7 +415,7 @@ impl Transform {
             return;
         }
         let n2 = self.plan.shape[2];
-        let nyquist = (n2 % 2 == 0).then_some(n2 / 2);
+        let nyquist = n2.is_multiple_of(2).then_some(n2 / 2);
         for j2 in std::iter::once(0).chain(nyquist) {
             self.symmetrize_plane(a.index_axis_mut(Axis(2), j2));
         }
@@ -565,7 +563,7 @@ impl LastAxis {
                 let scratch = &mut work.scratch[..c2r.get_scratch_len()];
                 for (yr, xr) in y.chunks_exact_mut(n / 2 + 1).zip(x.chunks_exact_mut(n)) {
                     yr[0].im = 0.0;
-                    if n % 2 == 0 {
+                    if n.is_multiple_of(2) {
                         yr[n / 2].im = 0.0;
                     }
                     c2r.process_with_scratch(yr, xr, scratch)
@@ -677,22 +675,18 @@ fn strided_piece(
 /// (or of the real parts of columns `2l`, `2l+1` packed as `re + i·re'`).
 fn gather(block: ArrayView2<Complex64>, lanes: &mut [Complex64], pos: &[usize], packing: Packing) {
     let len = pos.len();
-    // Tiles of rows: each lane receives `TILE` neighbouring values at once instead of one
-    // value per row sweep, so the strided writes stay in few cache lines.
-    for (tile, pos) in block.axis_chunks_iter(Axis(0), TILE).zip(pos.chunks(TILE)) {
-        let mut rows: [&[Complex64]; TILE] = [&[]; TILE];
-        for (slot, row) in rows.iter_mut().zip(tile.rows()) {
-            *slot = row.to_slice().expect("rows are contiguous");
-        }
-        let rows = &rows[..pos.len()];
-        for (j, lane) in lanes.chunks_exact_mut(len).enumerate() {
-            for (row, &p) in rows.iter().zip(pos) {
-                lane[p] = match packing {
-                    Packing::Complex => row[j],
-                    Packing::RealPairs => {
-                        Complex64::new(row[2 * j].re, row.get(2 * j + 1).map_or(0.0, |v| v.re))
-                    }
-                };
+    for (row, &p) in block.rows().into_iter().zip(pos) {
+        let row = row.to_slice().expect("rows are contiguous");
+        match packing {
+            Packing::Complex => {
+                for (lane, &v) in lanes.chunks_exact_mut(len).zip(row) {
+                    lane[p] = v;
+                }
+            }
+            Packing::RealPairs => {
+                for (lane, pair) in lanes.chunks_exact_mut(len).zip(row.chunks(2)) {
+                    lane[p] = Complex64::new(pair[0].re, pair.get(1).map_or(0.0, |v| v.re));
+                }
             }
         }
     }
