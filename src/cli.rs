@@ -146,6 +146,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
                     run::Stopped::Stationary => "stationary",
                     run::Stopped::TimeEnd => "t_end",
                     run::Stopped::MaxSteps => "max_steps",
+                    run::Stopped::Stalled => "stalled",
                 },
                 l.step,
                 l.t,

@@ -2,7 +2,7 @@
 //! (prepared) initial field, side by side at common times.
 
 use crate::config::{AreaMethod, Method, Scene};
-use crate::engine::{AreaConstraint, Engine};
+use crate::engine::Engine;
 use crate::error::{Error, Result};
 use crate::fd;
 use crate::model::Measures;
@@ -91,25 +91,21 @@ pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
     fd_scene.dt = fd_dt(scene, &problem.grid);
     run::check_stability(&fd_scene, &problem.grid)?;
     // Prepare once (FD), then both engines start from the same field and A0.
-    let mut fd_engine = run::build_engine(&fd_scene, &problem)?;
-    let a0 = run::prepare(&fd_scene, fd_engine.as_mut())?;
+    let (prepared_engine, a0) = run::start(&fd_scene, &problem)?;
     let mut prepared = problem.clone();
-    prepared.phi = fd_engine.phi().clone();
-    let mut sp_engine = run::build_engine(&sp_scene, &prepared)?;
+    prepared.phi = prepared_engine.phi().clone();
     let method = scene.area_method();
-    let fd_method = if method == AreaMethod::Projection {
-        AreaMethod::Lagrangian
-    } else {
-        method
-    };
-    let area = |m| AreaConstraint {
-        method: m,
-        alpha: scene.alpha(),
-        target: a0,
-    };
-    sp_engine.set_area(area(method));
-    fd_engine = run::build_engine(&fd_scene, &prepared)?;
-    fd_engine.set_area(area(fd_method));
+    let fd_method = if method == AreaMethod::Projection { AreaMethod::Lagrangian } else { method };
+    for (s, m) in [(&mut sp_scene, method), (&mut fd_scene, fd_method)] {
+        s.prepare_steps = 0;
+        s.area.method = Some(m);
+        s.area.target = Some(a0);
+        if m != AreaMethod::Lagrangian {
+            s.area.alpha = None;
+        }
+    }
+    let (mut fd_engine, _) = run::start(&fd_scene, &prepared)?;
+    let (mut sp_engine, _) = run::start(&sp_scene, &prepared)?;
     let (mut t_fd, mut t_sp, mut n_fd, mut n_sp, mut w_fd, mut w_sp) = (0.0, 0.0, 0, 0, 0.0, 0.0);
     let mut rows = Vec::with_capacity(ROWS + 1);
     for j in 0..=ROWS {

@@ -75,6 +75,9 @@ pub struct Scene {
     /// then integrates exactly the FD reference's semi-discrete equations, semi-implicitly).
     #[serde(default)]
     pub laplacian: Laplacian,
+    /// L-BFGS memory (pairs kept) of the relaxational dynamics.
+    #[serde(default = "default_memory")]
+    pub lbfgs_memory: usize,
     /// Linear stabiliser of the spectral engine, S(k) = s2 |k|² + s4 ε² |k|⁴.
     #[serde(default)]
     pub stabilizer: Stabilizer,
@@ -85,6 +88,10 @@ pub struct Scene {
 
 fn one() -> f64 {
     1.0
+}
+
+fn default_memory() -> usize {
+    10
 }
 
 /// Engine.
@@ -626,6 +633,9 @@ impl Scene {
                 "area.method",
                 "relaxational dynamics holds the area exactly; use projection or none",
             ));
+        }
+        if self.lbfgs_memory == 0 {
+            return Err(Error::config("lbfgs_memory", "must be at least 1"));
         }
         if !(self.stabilizer.s2 >= 0.0 && self.stabilizer.s2.is_finite()) {
             return Err(Error::config("stabilizer.s2", "must be finite and ≥ 0"));

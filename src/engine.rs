@@ -61,6 +61,11 @@ pub trait Engine {
     fn next_dt(&self, dt: f64) -> f64 {
         dt
     }
+    /// True when the engine can make no further progress (a line search found no decrease at
+    /// round-off level); the driver then stops.
+    fn stalled(&self) -> bool {
+        false
+    }
     /// Short name for logs and tables.
     fn name(&self) -> &'static str;
 }

@@ -12,6 +12,7 @@ pub mod grid;
 pub mod model;
 pub mod output;
 pub mod record;
+pub mod relax;
 pub mod run;
 pub mod setup;
 pub mod shapes;

@@ -8,6 +8,7 @@ use crate::fd::{self, FdEngine};
 use crate::grid::Grid;
 use crate::output;
 use crate::record::{Record, TimeSeries};
+use crate::relax::RelaxEngine;
 use crate::setup::{self, Problem};
 use crate::spectral::{self, SpectralEngine};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -35,6 +36,8 @@ pub enum Stopped {
     TimeEnd,
     /// `max_steps` reached.
     MaxSteps,
+    /// The engine could make no further progress (round-off floor).
+    Stalled,
 }
 
 impl Stopped {
@@ -43,6 +46,7 @@ impl Stopped {
             Stopped::Stationary => "stationary",
             Stopped::TimeEnd => "t_end",
             Stopped::MaxSteps => "max_steps",
+            Stopped::Stalled => "stalled",
         }
     }
 }
@@ -100,11 +104,11 @@ pub fn check_stability(scene: &Scene, grid: &Grid) -> Result<()> {
     }
 }
 
-/// Build the engine a scene asks for, holding `phi` at time 0 with no area constraint.
+/// Build the engine a scene asks for, holding `problem.phi` at time 0, no area constraint.
 ///
 /// # Errors
 /// `Error::Config` if the initial field is not finite.
-pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine + Send>> {
+fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine + Send>> {
     let grid = problem.grid.clone();
     let c0 = problem.c0.clone();
     let phi = problem.phi.clone();
@@ -115,17 +119,27 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
             Box::new(SpectralEngine::new(scene, grid, c0, phi).map_err(bad)?)
         }
         (Method::Spectral, Dynamics::Relaxational) => {
-            return Err(Error::config("dynamics", "relaxational: not built yet"));
+            Box::new(RelaxEngine::new(scene, grid, c0, phi).map_err(bad)?)
         }
     })
 }
 
-/// Run the unconstrained preparation steps, then install the area constraint with A0 = the
-/// scene's target or the prepared area. Returns A0.
+/// Build the engine, run the unconstrained preparation steps (σ = 0; the conserved spectral
+/// SBDF1 stepper when the dynamics is relaxational), then install the area constraint with
+/// A0 = the scene's target or the prepared area. Returns the engine and A0.
 ///
 /// # Errors
-/// `Error::Blowup` if a preparation step diverges.
-pub fn prepare(scene: &Scene, engine: &mut dyn Engine) -> Result<f64> {
+/// `Error::Config` if the initial field is not finite; `Error::Blowup` if a preparation step
+/// diverges.
+pub fn start(scene: &Scene, problem: &Problem) -> Result<(Box<dyn Engine + Send>, f64)> {
+    let relaxational = scene.dynamics == Dynamics::Relaxational;
+    let mut prep_scene = scene.clone();
+    if relaxational {
+        prep_scene.dynamics = Dynamics::Conserved;
+        prep_scene.scheme = crate::config::Scheme::Sbdf1;
+        prep_scene.adaptive = crate::config::AdaptiveSpec::Flag(false);
+    }
+    let mut engine = build_engine(&prep_scene, problem)?;
     engine.set_area(AreaConstraint::none());
     for i in 0..scene.prepare_steps {
         engine.step(0.0, scene.dt).map_err(|d| Error::Blowup {
@@ -134,13 +148,18 @@ pub fn prepare(scene: &Scene, engine: &mut dyn Engine) -> Result<f64> {
             reason: format!("during preparation: {}", d.0),
         })?;
     }
+    if relaxational {
+        let mut prepared = problem.clone();
+        prepared.phi = engine.phi().clone();
+        engine = build_engine(scene, &prepared)?;
+    }
     let a0 = scene.area.target.unwrap_or(engine.measures().area);
     engine.set_area(AreaConstraint {
         method: scene.area_method(),
         alpha: scene.alpha(),
         target: a0,
     });
-    Ok(a0)
+    Ok((engine, a0))
 }
 
 /// The scene with every default made explicit, as saved under `"spec"` in `summary.json`.
@@ -198,11 +217,10 @@ pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
     let problem = setup::build(scene)?;
     check_stability(scene, &problem.grid)?;
-    let mut engine = build_engine(scene, &problem)?;
     if opts.out.exists() && !opts.force {
         make_out_dir(&opts.out, false)?;
     }
-    let a0 = prepare(scene, engine.as_mut())?;
+    let (mut engine, a0) = start(scene, &problem)?;
     make_out_dir(&opts.out, opts.force)?;
     let resolved = resolved_scene(scene, a0, &problem.mirror);
     eprintln!("{}", describe(&resolved, &problem, engine.name()));
@@ -239,6 +257,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
         stopped: match stopped.as_str() {
             "stationary" => Stopped::Stationary,
             "t_end" => Stopped::TimeEnd,
+            "stalled" => Stopped::Stalled,
             _ => Stopped::MaxSteps,
         },
         wall_seconds: wall,
@@ -287,7 +306,11 @@ fn time_loop(
         dt = report.dt;
         step += 1;
         rejected += report.rejected;
-        let stop = stop_rule(scene, t, step, report.residual);
+        let stop = if engine.stalled() {
+            Some(Stopped::Stalled)
+        } else {
+            stop_rule(scene, t, step, report.residual)
+        };
         if step % scene.output.record_every == 0 || stop.is_some() {
             last = record(step, t, dt, engine);
             last.residual = report.residual;

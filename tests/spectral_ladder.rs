@@ -113,8 +113,7 @@ fn sbdf_temporal_orders() {
     let a0 = prepared.measures().area;
     let run = |scheme: &str, dt: f64| {
         let s = scene(with(&base, json!({"scheme": scheme, "dt": dt, "prepare_steps": 0, "area": {"target": a0}})));
-        let mut e = vesicle::run::build_engine(&s, &problem).unwrap();
-        vesicle::run::prepare(&s, e.as_mut()).unwrap();
+        let (mut e, _) = vesicle::run::start(&s, &problem).unwrap();
         advance(e.as_mut(), dt, 1.0);
         e.phi().clone()
     };

@@ -18,12 +18,11 @@
 //! quadratic computed by Parseval with no extra transform; the exact projection takes the root
 //! nearest the last σ and rejects a step with no real root.
 
-use super::transform::Transform;
+use super::evaluator::{axis_symbol, Evaluator, ExplicitTerm, State};
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
-use crate::fd::PHI_BLOWUP;
 use crate::grid::Grid;
-use crate::model::{self, bulk, bulk_derivative, Measures, AREA_PREFACTOR, C0};
+use crate::model::{self, Measures, C0};
 use ndarray::{Array3, Zip};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -60,37 +59,6 @@ pub fn stability_bound(grid: &Grid, eps: f64, s: &Stabilizer, laplacian: Laplaci
     }
 }
 
-/// A state of the engine: φ in both spaces, its explicit term N̂ and its measures.
-struct State {
-    hat: Array3<Complex64>,
-    nonlinear: Array3<Complex64>,
-    phi: Array3<f64>,
-    measures: Measures,
-}
-
-/// Per-wavenumber tables.
-struct Symbols {
-    /// |k|².
-    k2: Vec<f64>,
-    /// Parseval weight × ∫-factor × (3/(2√2))ε |k|²: A = Σ area_weight |φ̂|².
-    area_weight: Vec<f64>,
-}
-
-/// Evaluates a state from its φ̂: the transforms, tables and scratch, planned once.
-struct Evaluator {
-    grid: Grid,
-    eps: f64,
-    c0: C0,
-    transform: Transform,
-    symbols: Symbols,
-    /// Q̂ of the step being taken, then scratch for transforms.
-    spare: Array3<Complex64>,
-    /// Real scratch: ∇²φ, then f.
-    work: Array3<f64>,
-    /// Real scratch: f'Φ.
-    work2: Array3<f64>,
-}
-
 /// The spectral engine.
 pub struct SpectralEngine {
     ev: Evaluator,
@@ -119,21 +87,8 @@ impl SpectralEngine {
     /// # Errors
     /// [`Diverged`] if `phi` is not finite.
     pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
-        let transform = Transform::new(grid.shape, grid.kinds, rayon::current_num_threads());
-        let symbols = symbols(&transform, &grid, scene.eps, scene.laplacian);
-        let mut ev = Evaluator {
-            spare: Array3::zeros(transform.spectral_shape()),
-            work: grid.zeros(),
-            work2: grid.zeros(),
-            eps: scene.eps,
-            c0,
-            transform,
-            symbols,
-            grid,
-        };
-        let mut cur = ev.blank();
-        ev.transform.forward(&phi, &mut cur.hat);
-        ev.evaluate(&mut cur, 0.0)?;
+        let mut ev = Evaluator::new(grid, scene.eps, c0, scene.laplacian, ExplicitTerm::ConservedRhs);
+        let cur = ev.state_of(&phi, 0.0)?;
         let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
             dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
             dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
@@ -322,129 +277,6 @@ impl SpectralEngine {
             .clamp(dt_min, (a.growth * dt).max(dt_min))
             .min(dt_max)
     }
-}
-
-impl Evaluator {
-    /// A state of the right shapes, all zeros.
-    fn blank(&self) -> State {
-        State {
-            hat: Array3::zeros(self.transform.spectral_shape()),
-            nonlinear: Array3::zeros(self.transform.spectral_shape()),
-            phi: self.grid.zeros(),
-            measures: Measures::default(),
-        }
-    }
-
-    /// From `state.hat`, compute φ, ∇²φ, Φ, F_sc, A, V and N̂ at time `t`
-    /// (two inverse and two forward transforms).
-    fn evaluate(&mut self, state: &mut State, t: f64) -> Result<(), Diverged> {
-        let k2 = &self.symbols.k2;
-        self.transform.hermitian_symmetrize(&mut state.hat);
-        // φ = IFT[φ̂]
-        self.spare.assign(&state.hat);
-        self.transform.inverse(&mut self.spare, &mut state.phi);
-        // ∇²φ = IFT[−k² φ̂]
-        Zip::from(&mut self.spare)
-            .and(&state.hat)
-            .and(k2_view(k2, &state.hat))
-            .par_for_each(|s, &h, &k| *s = h * (-k));
-        self.transform.inverse(&mut self.spare, &mut self.work);
-        // Φ = f − ε²∇²φ, F = ∫Φ²; work ← f, work2 ← f'Φ
-        let r = self.c0.ramp(t);
-        let e2 = self.eps * self.eps;
-        let c0 = &self.c0;
-        let phi = state.phi.as_slice().expect("standard layout");
-        let (energy, max_abs) = self
-            .work
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_iter_mut()
-            .zip(
-                self.work2
-                    .as_slice_mut()
-                    .expect("standard layout")
-                    .par_iter_mut(),
-            )
-            .enumerate()
-            .map(|(i, (w, w2))| {
-                let p = phi[i];
-                let ec0 = c0.at(i, r);
-                let f = bulk(p, ec0);
-                let big = f - e2 * *w;
-                *w = f;
-                *w2 = bulk_derivative(p, ec0) * big;
-                (big * big, p.abs())
-            })
-            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)));
-        let dv = self.grid.cell_volume() * self.grid.mirror_factor();
-        state.measures = Measures {
-            energy: energy * dv,
-            area: self.area_of(&state.hat),
-            volume: model::volume(&self.grid, &state.phi),
-        };
-        if !(max_abs <= PHI_BLOWUP) || !state.measures.energy.is_finite() {
-            return Err(Diverged(format!(
-                "max|φ| = {max_abs:.3e}, F = {:.3e}: the state diverged",
-                state.measures.energy
-            )));
-        }
-        // N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f]
-        self.transform.forward(&self.work2, &mut state.nonlinear);
-        self.transform.forward(&self.work, &mut self.spare);
-        Zip::from(&mut state.nonlinear)
-            .and(&self.spare)
-            .and(k2_view(k2, &state.hat))
-            .par_for_each(|n, &g, &k| *n = *n * (-2.0 * k) + g * (-2.0 * e2 * k * k));
-        Ok(())
-    }
-
-    /// A = (3/(2√2)) ε ∫|∇φ|² = Σ_k area_weight |φ̂|² (Parseval).
-    fn area_of(&self, hat: &Array3<Complex64>) -> f64 {
-        let hs = hat.as_slice().expect("standard layout");
-        hs.par_iter()
-            .zip(&self.symbols.area_weight)
-            .map(|(h, w)| w * h.norm_sqr())
-            .sum()
-    }
-}
-
-/// One axis's share of the Laplacian's symbol: k² (spectral) or (4/h²) sin²(kh/2) (the
-/// second-order stencil, diagonal in the same Fourier/cosine basis).
-pub fn axis_symbol(k: f64, h: f64, laplacian: Laplacian) -> f64 {
-    match laplacian {
-        Laplacian::Spectral => k * k,
-        Laplacian::Fd => (2.0 / h * (0.5 * k * h).sin()).powi(2),
-    }
-}
-
-/// |k|² (or the FD symbol) and the area weights of every spectral index (flattened, standard
-/// layout).
-fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Symbols {
-    let k = t.wavenumbers(grid.h).map(|ks| {
-        ks.iter()
-            .map(|&k| axis_symbol(k, grid.h, laplacian))
-            .collect::<Vec<f64>>()
-    });
-    let w = t.parseval_weights();
-    let [s0, s1, s2] = t.spectral_shape();
-    let mut k2 = Vec::with_capacity(s0 * s1 * s2);
-    let mut area_weight = Vec::with_capacity(s0 * s1 * s2);
-    let dv = grid.cell_volume() * grid.mirror_factor();
-    for i in 0..s0 {
-        for j in 0..s1 {
-            for l in 0..s2 {
-                let kk = k[0][i] + k[1][j] + k[2][l];
-                k2.push(kk);
-                area_weight.push(AREA_PREFACTOR * eps * dv * w[0][i] * w[1][j] * w[2][l] * kk);
-            }
-        }
-    }
-    Symbols { k2, area_weight }
-}
-
-/// View the flat |k|² table with the spectral array's shape.
-fn k2_view<'a>(k2: &'a [f64], like: &Array3<Complex64>) -> ndarray::ArrayView3<'a, f64> {
-    ndarray::ArrayView3::from_shape(like.raw_dim(), k2).expect("table matches spectral shape")
 }
 
 impl Engine for SpectralEngine {

@@ -381,21 +381,15 @@ impl Transform {
             let n = self.plan.shape[a];
             let inv = 1.0 / n as f64;
             (0..self.plan.spectral[a])
-                .map(|j| match self.plan.kinds[a] {
-                    AxisKind::Mirror => {
-                        if j == 0 {
-                            inv
-                        } else {
-                            2.0 * inv
-                        }
-                    }
-                    AxisKind::Periodic if a < 2 => inv,
-                    AxisKind::Periodic => {
-                        if j == 0 || 2 * j == n {
-                            inv
-                        } else {
-                            2.0 * inv
-                        }
+                .map(|j| {
+                    let doubled = match self.plan.kinds[a] {
+                        AxisKind::Mirror => j > 0,
+                        AxisKind::Periodic => a == 2 && j > 0 && 2 * j != n,
+                    };
+                    if doubled {
+                        2.0 * inv
+                    } else {
+                        inv
                     }
                 })
                 .collect()

@@ -17,8 +17,7 @@ pub fn scene(v: Value) -> Scene {
 /// The problem and a prepared engine (area constraint installed) for `scene`.
 pub fn engine(scene: &Scene) -> (Problem, Box<dyn Engine + Send>) {
     let problem = setup::build(scene).expect("problem");
-    let mut e = run::build_engine(scene, &problem).expect("engine");
-    run::prepare(scene, e.as_mut()).expect("prepared");
+    let (e, _) = run::start(scene, &problem).expect("engine");
     (problem, e)
 }
 

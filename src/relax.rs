@@ -1,0 +1,377 @@
+//! `"dynamics": "relaxational"`: the fastest route to the conserved flow's stationary states
+//! (DESIGN.md §7), a preconditioned L-BFGS on the constrained energy.
+//!
+//! Minimise F_sc(φ) subject to V(φ) = V0 (the k = 0 mode is never changed) and A(φ) = A0.
+//! With the metric ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*), M(k) = 2ε⁴k⁴ + 8 + 8ε²k² (the Hessian of
+//! F_sc in the bulk), the preconditioned gradient is
+//!
+//! ```text
+//! r = M⁻¹ (ĝ + σ â),   ĝ = FT[δF_sc/δφ],   â = FT[δA/δφ] = (3/√2) ε k² φ̂,   r(0) = 0,
+//! σ = −⟨ĝ, M⁻¹â⟩ / ⟨â, M⁻¹â⟩            (r tangent to A = A0),
+//! ```
+//!
+//! the search direction is the two-loop recursion in the M metric, projected onto the tangent
+//! space; a trial point φ + α d is retracted onto A = A0 along M⁻¹â (a quadratic in the step,
+//! as in the spectral projection), and α is backtracked until Armijo's condition on F_sc holds.
+//! The memory is reset when the direction is not a descent direction. At a stationary point
+//! μ = δF_sc/δφ + σ δA/δφ is constant: the residual reported is the RMS of μ − mean(μ).
+//! `t` advances by the nominal `dt` per iteration and is not physical time.
+
+use crate::config::{AreaMethod, Scene};
+use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
+use crate::grid::Grid;
+use crate::model::{Measures, C0};
+use crate::spectral::evaluator::{Evaluator, ExplicitTerm, State};
+use ndarray::{Array3, Zip};
+use rayon::prelude::*;
+use rustfft::num_complex::Complex64;
+use std::collections::VecDeque;
+
+/// Armijo constant: accept when F(φ + αd) ≤ F(φ) + c α ⟨∇F, d⟩.
+const ARMIJO: f64 = 1e-4;
+/// Backtracking halvings before the line search gives up.
+const MAX_BACKTRACKS: usize = 40;
+
+/// One stored L-BFGS pair (s, y) with ρ = 1/⟨y, s⟩_M.
+struct Pair {
+    s: Array3<Complex64>,
+    y: Array3<Complex64>,
+    rho: f64,
+}
+
+/// The L-BFGS relaxation engine.
+pub struct RelaxEngine {
+    ev: Evaluator,
+    cur: State,
+    trial: State,
+    /// M(k), flattened like the spectrum; M(0) is irrelevant (the mode is held).
+    metric: Vec<f64>,
+    /// Preconditioned projected gradient r of the current state.
+    grad: Array3<Complex64>,
+    /// r of the trial state, then scratch.
+    grad_trial: Array3<Complex64>,
+    /// Search direction.
+    dir: Array3<Complex64>,
+    /// M⁻¹â of the current state (retraction and tangent projection).
+    area_dir: Array3<Complex64>,
+    pairs: VecDeque<Pair>,
+    spare_pairs: Vec<Pair>,
+    memory: usize,
+    alphas: Vec<f64>,
+    sigma: f64,
+    residual: f64,
+    area: AreaConstraint,
+    stalled: bool,
+}
+
+impl RelaxEngine {
+    /// Engine holding `phi`, no area constraint yet.
+    ///
+    /// # Errors
+    /// [`Diverged`] if `phi` is not finite.
+    pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
+        let mut ev = Evaluator::new(grid, scene.eps, c0, scene.laplacian, ExplicitTerm::Gradient);
+        let cur = ev.state_of(&phi, 0.0)?;
+        let e2 = scene.eps * scene.eps;
+        let metric = ev
+            .symbols
+            .k2
+            .iter()
+            .map(|&k| 2.0 * e2 * e2 * k * k + 8.0 + 8.0 * e2 * k)
+            .collect();
+        let zeros = Array3::zeros(cur.hat.raw_dim());
+        let mut e = RelaxEngine {
+            trial: ev.blank(),
+            ev,
+            cur,
+            metric,
+            grad: zeros.clone(),
+            grad_trial: zeros.clone(),
+            dir: zeros.clone(),
+            area_dir: zeros,
+            pairs: VecDeque::new(),
+            spare_pairs: Vec::new(),
+            memory: scene.lbfgs_memory,
+            alphas: vec![0.0; scene.lbfgs_memory],
+            sigma: 0.0,
+            residual: f64::INFINITY,
+            area: AreaConstraint::none(),
+            stalled: false,
+        };
+        e.refresh_gradient();
+        Ok(e)
+    }
+
+    /// ⟨u, v⟩_M = Σ w M Re(u v*).
+    fn dot_m(&self, u: &Array3<Complex64>, v: &Array3<Complex64>) -> f64 {
+        weighted_dot(&self.ev.symbols.weight, Some(&self.metric), u, v)
+    }
+
+    /// For the current state: M⁻¹â, σ, r = M⁻¹(ĝ + σâ) and the residual.
+    fn refresh_gradient(&mut self) {
+        let (sigma, residual) = gradient(
+            &self.ev,
+            &self.metric,
+            self.area.method,
+            &self.cur,
+            &mut self.area_dir,
+            &mut self.grad,
+        );
+        self.sigma = sigma;
+        self.residual = residual;
+    }
+
+    /// `dir = −H r` by the two-loop recursion in the M metric, projected on the tangent space.
+    fn direction(&mut self) {
+        self.dir.assign(&self.grad);
+        let n = self.pairs.len();
+        for i in 0..n {
+            let p = &self.pairs[n - 1 - i];
+            let a = p.rho * self.dot_m(&p.s, &self.dir);
+            self.alphas[n - 1 - i] = a;
+            axpy(&mut self.dir, -a, &p.y);
+        }
+        if let Some(p) = self.pairs.back() {
+            let gamma = 1.0 / (p.rho * self.dot_m(&p.y, &p.y));
+            self.dir.par_mapv_inplace(|z| z * gamma);
+        }
+        for i in 0..n {
+            let p = &self.pairs[i];
+            let b = p.rho * self.dot_m(&p.y, &self.dir);
+            axpy(&mut self.dir, self.alphas[i] - b, &p.s);
+        }
+        self.dir.par_mapv_inplace(|z| -z);
+        self.project_tangent();
+    }
+
+    /// d ← d − (⟨â, d⟩ / ⟨â, M⁻¹â⟩) M⁻¹â: no first-order change of A.
+    fn project_tangent(&mut self) {
+        if self.area.method == AreaMethod::None {
+            return;
+        }
+        // ⟨â, d⟩ = ⟨q, d⟩_M and ⟨â, M⁻¹â⟩ = ⟨q, q⟩_M with q = M⁻¹â.
+        let qd = self.dot_m(&self.area_dir, &self.dir);
+        let qq = self.dot_m(&self.area_dir, &self.area_dir);
+        if qq > 0.0 {
+            axpy(&mut self.dir, -qd / qq, &self.area_dir);
+        }
+    }
+
+    /// Trial state φ̂ + α d, retracted onto A = A0 along M⁻¹â. `None` if no real root.
+    fn retract(&mut self, alpha: f64) -> Option<()> {
+        Zip::from(&mut self.trial.hat)
+            .and(&self.cur.hat)
+            .and(&self.dir)
+            .par_for_each(|t, &x, &d| *t = x + d * alpha);
+        if self.area.method == AreaMethod::None {
+            return Some(());
+        }
+        let aw = &self.ev.symbols.area_weight;
+        let (app, apq, aqq) = quadratic(aw, &self.trial.hat, &self.area_dir);
+        let tau = nearest_root(aqq, apq, app - self.area.target, 0.0)?;
+        axpy(&mut self.trial.hat, tau, &self.area_dir);
+        Some(())
+    }
+
+    /// Store the pair (s, y) = (x_new − x, r_new − r) if ⟨y, s⟩_M > 0.
+    fn remember(&mut self) {
+        let mut pair = match self.spare_pairs.pop() {
+            Some(p) => p,
+            None if self.pairs.len() < self.memory => Pair {
+                s: Array3::zeros(self.dir.raw_dim()),
+                y: Array3::zeros(self.dir.raw_dim()),
+                rho: 0.0,
+            },
+            None => self.pairs.pop_front().expect("memory is full"),
+        };
+        Zip::from(&mut pair.s)
+            .and(&self.trial.hat)
+            .and(&self.cur.hat)
+            .par_for_each(|s, &a, &b| *s = a - b);
+        Zip::from(&mut pair.y)
+            .and(&self.grad_trial)
+            .and(&self.grad)
+            .par_for_each(|y, &a, &b| *y = a - b);
+        let ys = self.dot_m(&pair.y, &pair.s);
+        if ys > 0.0 {
+            pair.rho = 1.0 / ys;
+            self.pairs.push_back(pair);
+        } else {
+            self.spare_pairs.push(pair);
+        }
+    }
+
+    fn reset_memory(&mut self) {
+        self.spare_pairs.extend(self.pairs.drain(..));
+    }
+}
+
+/// For `state`: q = M⁻¹â into `area_dir`, σ = −⟨ĝ, q⟩/⟨q, q⟩_M (0 without an area
+/// constraint), r = M⁻¹ĝ + σq into `grad` with r(0) = 0; returns σ and the residual
+/// RMS(μ − mean μ) = (Σ_{k≠0} w |ĝ + σâ|² / |box|)^½.
+fn gradient(
+    ev: &Evaluator,
+    metric: &[f64],
+    method: AreaMethod,
+    state: &State,
+    area_dir: &mut Array3<Complex64>,
+    grad: &mut Array3<Complex64>,
+) -> (f64, f64) {
+    let c_sigma = 3.0 / std::f64::consts::SQRT_2 * ev.eps;
+    let k2 = &ev.symbols.k2;
+    let weight = &ev.symbols.weight;
+    let hat = state.hat.as_slice().expect("standard layout");
+    area_dir
+        .as_slice_mut()
+        .expect("standard layout")
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, q)| *q = hat[i] * (c_sigma * k2[i] / metric[i]));
+    let sigma = if method == AreaMethod::None {
+        0.0
+    } else {
+        // ⟨â, M⁻¹â⟩ = ⟨q, q⟩_M and ⟨ĝ, M⁻¹â⟩ = ⟨ĝ, q⟩.
+        let qq = weighted_dot(weight, Some(metric), area_dir, area_dir);
+        let gq = weighted_dot(weight, None, &state.nonlinear, area_dir);
+        if qq > 0.0 {
+            -gq / qq
+        } else {
+            0.0
+        }
+    };
+    let g = state.nonlinear.as_slice().expect("standard layout");
+    let q = area_dir.as_slice().expect("standard layout");
+    let sum_sq: f64 = grad
+        .as_slice_mut()
+        .expect("standard layout")
+        .par_iter_mut()
+        .enumerate()
+        .map(|(i, r)| {
+            if k2[i] == 0.0 {
+                *r = Complex64::default();
+                return 0.0;
+            }
+            *r = g[i] / metric[i] + q[i] * sigma;
+            weight[i] * (*r * metric[i]).norm_sqr()
+        })
+        .sum();
+    let box_volume = ev.grid.len() as f64 * ev.grid.cell_volume();
+    (sigma, (sum_sq / box_volume).sqrt())
+}
+
+/// Σ w [M] Re(u v*).
+fn weighted_dot(w: &[f64], m: Option<&[f64]>, u: &Array3<Complex64>, v: &Array3<Complex64>) -> f64 {
+    let (u, v) = (u.as_slice().expect("std"), v.as_slice().expect("std"));
+    (0..u.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| w[i] * m.map_or(1.0, |m| m[i]) * (u[i].re * v[i].re + u[i].im * v[i].im))
+        .sum()
+}
+
+/// y ← y + a x.
+fn axpy(y: &mut Array3<Complex64>, a: f64, x: &Array3<Complex64>) {
+    Zip::from(y).and(x).par_for_each(|y, &x| *y += x * a);
+}
+
+/// (A_PP, A_PQ, A_QQ) with A(p + τq) = A_PP + 2τ A_PQ + τ² A_QQ.
+pub fn quadratic(aw: &[f64], p: &Array3<Complex64>, q: &Array3<Complex64>) -> (f64, f64, f64) {
+    let (p, q) = (p.as_slice().expect("std"), q.as_slice().expect("std"));
+    (0..p.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| {
+            let (a, b) = (p[i], q[i]);
+            (aw[i] * a.norm_sqr(), aw[i] * (a.re * b.re + a.im * b.im), aw[i] * b.norm_sqr())
+        })
+        .reduce(|| (0.0, 0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1, x.2 + y.2))
+}
+
+/// The root of a x² + 2b x + c = 0 nearest `near` (numerically stable), `None` if not real.
+pub fn nearest_root(a: f64, b: f64, c: f64, near: f64) -> Option<f64> {
+    if a <= 0.0 {
+        return (b != 0.0).then(|| -c / (2.0 * b));
+    }
+    let disc = b * b - a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    let q = -(b + b.signum() * disc.sqrt());
+    let r1 = q / a;
+    let r2 = if q != 0.0 { c / q } else { r1 };
+    Some(if (r1 - near).abs() <= (r2 - near).abs() { r1 } else { r2 })
+}
+
+impl Engine for RelaxEngine {
+    fn phi(&self) -> &Array3<f64> {
+        &self.cur.phi
+    }
+
+    fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    fn measures(&self) -> Measures {
+        self.cur.measures
+    }
+
+    fn set_area(&mut self, area: AreaConstraint) {
+        self.area = area;
+        self.reset_memory();
+        self.refresh_gradient();
+    }
+
+    /// One L-BFGS iteration (its line search may take several evaluations).
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+        self.direction();
+        if self.dot_m(&self.grad, &self.dir) >= 0.0 {
+            self.reset_memory();
+            self.direction();
+        }
+        let slope = self.dot_m(&self.grad, &self.dir);
+        let f0 = self.cur.measures.energy;
+        let mut alpha = 1.0;
+        let mut rejected = 0;
+        loop {
+            let accepted = self.retract(alpha).is_some()
+                && self.ev.evaluate(&mut self.trial, t + dt).is_ok()
+                && self.trial.measures.energy <= f0 + ARMIJO * alpha * slope;
+            if accepted {
+                break;
+            }
+            rejected += 1;
+            alpha *= 0.5;
+            if rejected >= MAX_BACKTRACKS {
+                self.stalled = true;
+                self.reset_memory();
+                return Ok(StepReport { dt, residual: self.residual, rejected });
+            }
+        }
+        let (sigma, residual) = gradient(
+            &self.ev,
+            &self.metric,
+            self.area.method,
+            &self.trial,
+            &mut self.area_dir,
+            &mut self.grad_trial,
+        );
+        self.remember();
+        std::mem::swap(&mut self.cur, &mut self.trial);
+        std::mem::swap(&mut self.grad, &mut self.grad_trial);
+        self.sigma = sigma;
+        self.residual = residual;
+        Ok(StepReport {
+            dt,
+            residual,
+            rejected,
+        })
+    }
+
+    fn stalled(&self) -> bool {
+        self.stalled
+    }
+
+    fn name(&self) -> &'static str {
+        "relaxational (L-BFGS)"
+    }
+}

@@ -1,0 +1,224 @@
+//! Evaluation of a state from its spectrum φ̂: φ, ∇²φ, Φ, F_sc, A, V and the explicit term,
+//! with two inverse and two forward real transforms (planned once, no allocation per call).
+
+use super::transform::Transform;
+use crate::config::Laplacian;
+use crate::engine::Diverged;
+use crate::fd::PHI_BLOWUP;
+use crate::grid::Grid;
+use crate::model::{self, bulk, bulk_derivative, Measures, AREA_PREFACTOR, C0};
+use ndarray::{Array3, Zip};
+use rayon::prelude::*;
+use rustfft::num_complex::Complex64;
+
+/// Which explicit term [`Evaluator::evaluate`] leaves in `State::nonlinear`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExplicitTerm {
+    /// The conserved flow's explicit part N̂ = −2|k|² FT[f'Φ] − 2ε²|k|⁴ FT[f].
+    ConservedRhs,
+    /// The full gradient ĝ = FT[δF_sc/δφ] = 2 FT[f'Φ] + 2ε²|k|² FT[f] + 2ε⁴|k|⁴ φ̂.
+    Gradient,
+}
+
+/// A state of the engine: φ in both spaces, its explicit term N̂ and its measures.
+pub struct State {
+    pub hat: Array3<Complex64>,
+    pub nonlinear: Array3<Complex64>,
+    pub phi: Array3<f64>,
+    pub measures: Measures,
+}
+
+/// Per-wavenumber tables.
+pub struct Symbols {
+    /// |k|² (or the FD symbol).
+    pub k2: Vec<f64>,
+    /// Parseval weight × cell volume: ∫ u v dx = Σ_k weight Re(û v̂*).
+    pub weight: Vec<f64>,
+    /// (3/(2√2)) ε |k|² × weight: A = Σ_k area_weight |φ̂|².
+    pub area_weight: Vec<f64>,
+}
+
+/// Evaluates a state from its φ̂: the transforms, tables and scratch, planned once.
+pub struct Evaluator {
+    pub grid: Grid,
+    pub eps: f64,
+    pub c0: C0,
+    pub transform: Transform,
+    pub symbols: Symbols,
+    explicit: ExplicitTerm,
+    /// Spectral scratch (the engines also use it between evaluations).
+    pub spare: Array3<Complex64>,
+    /// Real scratch: ∇²φ, then f.
+    work: Array3<f64>,
+    /// Real scratch: f'Φ.
+    work2: Array3<f64>,
+}
+
+impl Evaluator {
+    /// Plan the transforms and tables for `grid`.
+    pub fn new(grid: Grid, eps: f64, c0: C0, laplacian: Laplacian, explicit: ExplicitTerm) -> Self {
+        let transform = Transform::new(grid.shape, grid.kinds, rayon::current_num_threads());
+        Evaluator {
+            symbols: symbols(&transform, &grid, eps, laplacian),
+            spare: Array3::zeros(transform.spectral_shape()),
+            work: grid.zeros(),
+            work2: grid.zeros(),
+            explicit,
+            eps,
+            c0,
+            transform,
+            grid,
+        }
+    }
+
+    /// The state holding the real field `phi`, evaluated at time `t`.
+    ///
+    /// # Errors
+    /// [`Diverged`] if `phi` is not finite.
+    pub fn state_of(&mut self, phi: &Array3<f64>, t: f64) -> Result<State, Diverged> {
+        let mut s = self.blank();
+        self.transform.forward(phi, &mut s.hat);
+        self.evaluate(&mut s, t)?;
+        Ok(s)
+    }
+
+    /// A state of the right shapes, all zeros.
+    pub fn blank(&self) -> State {
+        State {
+            hat: Array3::zeros(self.transform.spectral_shape()),
+            nonlinear: Array3::zeros(self.transform.spectral_shape()),
+            phi: self.grid.zeros(),
+            measures: Measures::default(),
+        }
+    }
+
+    /// From `state.hat`, compute φ, ∇²φ, Φ, F_sc, A, V and N̂ at time `t`
+    /// (two inverse and two forward transforms).
+    pub fn evaluate(&mut self, state: &mut State, t: f64) -> Result<(), Diverged> {
+        let k2 = &self.symbols.k2;
+        self.transform.hermitian_symmetrize(&mut state.hat);
+        // φ = IFT[φ̂]
+        self.spare.assign(&state.hat);
+        self.transform.inverse(&mut self.spare, &mut state.phi);
+        // ∇²φ = IFT[−k² φ̂]
+        Zip::from(&mut self.spare)
+            .and(&state.hat)
+            .and(k2_view(k2, &state.hat))
+            .par_for_each(|s, &h, &k| *s = h * (-k));
+        self.transform.inverse(&mut self.spare, &mut self.work);
+        // Φ = f − ε²∇²φ, F = ∫Φ²; work ← f, work2 ← f'Φ
+        let r = self.c0.ramp(t);
+        let e2 = self.eps * self.eps;
+        let c0 = &self.c0;
+        let phi = state.phi.as_slice().expect("standard layout");
+        let (energy, max_abs) = self
+            .work
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_iter_mut()
+            .zip(
+                self.work2
+                    .as_slice_mut()
+                    .expect("standard layout")
+                    .par_iter_mut(),
+            )
+            .enumerate()
+            .map(|(i, (w, w2))| {
+                let p = phi[i];
+                let ec0 = c0.at(i, r);
+                let f = bulk(p, ec0);
+                let big = f - e2 * *w;
+                *w = f;
+                *w2 = bulk_derivative(p, ec0) * big;
+                (big * big, p.abs())
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+        let dv = self.grid.cell_volume() * self.grid.mirror_factor();
+        state.measures = Measures {
+            energy: energy * dv,
+            area: self.area_of(&state.hat),
+            volume: model::volume(&self.grid, &state.phi),
+        };
+        if !(max_abs <= PHI_BLOWUP) || !state.measures.energy.is_finite() {
+            return Err(Diverged(format!(
+                "max|φ| = {max_abs:.3e}, F = {:.3e}: the state diverged",
+                state.measures.energy
+            )));
+        }
+        self.transform.forward(&self.work2, &mut state.nonlinear);
+        self.transform.forward(&self.work, &mut self.spare);
+        let k2 = k2_view(&self.symbols.k2, &state.hat);
+        match self.explicit {
+            // N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f]
+            ExplicitTerm::ConservedRhs => Zip::from(&mut state.nonlinear)
+                .and(&self.spare)
+                .and(k2)
+                .par_for_each(|n, &g, &k| *n = *n * (-2.0 * k) + g * (-2.0 * e2 * k * k)),
+            // ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂
+            ExplicitTerm::Gradient => Zip::from(&mut state.nonlinear)
+                .and(&self.spare)
+                .and(&state.hat)
+                .and(k2)
+                .par_for_each(|n, &g, &h, &k| {
+                    *n = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k)
+                }),
+        }
+        Ok(())
+    }
+
+    /// A = (3/(2√2)) ε ∫|∇φ|² = Σ_k area_weight |φ̂|² (Parseval).
+    pub fn area_of(&self, hat: &Array3<Complex64>) -> f64 {
+        let hs = hat.as_slice().expect("standard layout");
+        hs.par_iter()
+            .zip(&self.symbols.area_weight)
+            .map(|(h, w)| w * h.norm_sqr())
+            .sum()
+    }
+}
+
+/// One axis's share of the Laplacian's symbol: k² (spectral) or (4/h²) sin²(kh/2) (the
+/// second-order stencil, diagonal in the same Fourier/cosine basis).
+pub fn axis_symbol(k: f64, h: f64, laplacian: Laplacian) -> f64 {
+    match laplacian {
+        Laplacian::Spectral => k * k,
+        Laplacian::Fd => (2.0 / h * (0.5 * k * h).sin()).powi(2),
+    }
+}
+
+/// |k|² (or the FD symbol) and the area weights of every spectral index (flattened, standard
+/// layout).
+pub fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Symbols {
+    let k = t.wavenumbers(grid.h).map(|ks| {
+        ks.iter()
+            .map(|&k| axis_symbol(k, grid.h, laplacian))
+            .collect::<Vec<f64>>()
+    });
+    let w = t.parseval_weights();
+    let [s0, s1, s2] = t.spectral_shape();
+    let mut k2 = Vec::with_capacity(s0 * s1 * s2);
+    let mut area_weight = Vec::with_capacity(s0 * s1 * s2);
+    let mut weight = Vec::with_capacity(s0 * s1 * s2);
+    let dv = grid.cell_volume() * grid.mirror_factor();
+    for i in 0..s0 {
+        for j in 0..s1 {
+            for l in 0..s2 {
+                let kk = k[0][i] + k[1][j] + k[2][l];
+                k2.push(kk);
+                let wt = dv * w[0][i] * w[1][j] * w[2][l];
+                weight.push(wt);
+                area_weight.push(AREA_PREFACTOR * eps * kk * wt);
+            }
+        }
+    }
+    Symbols {
+        k2,
+        weight,
+        area_weight,
+    }
+}
+
+/// View the flat |k|² table with the spectral array's shape.
+pub fn k2_view<'a>(k2: &'a [f64], like: &Array3<Complex64>) -> ndarray::ArrayView3<'a, f64> {
+    ndarray::ArrayView3::from_shape(like.raw_dim(), k2).expect("table matches spectral shape")
+}
+
