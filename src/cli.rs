@@ -142,12 +142,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
             let l = &outcome.last;
             eprintln!(
                 "done ({}): step {} t {:.6e} e {:.6} v {:.6} sigma {:.4e} residual {:.3e} in {:.2} s -> {}",
-                match outcome.stopped {
-                    run::Stopped::Stationary => "stationary",
-                    run::Stopped::TimeEnd => "t_end",
-                    run::Stopped::MaxSteps => "max_steps",
-                    run::Stopped::Stalled => "stalled",
-                },
+                outcome.stopped.as_str(),
                 l.step,
                 l.t,
                 l.reduced_energy,

@@ -95,7 +95,11 @@ pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
     let mut prepared = problem.clone();
     prepared.phi = prepared_engine.phi().clone();
     let method = scene.area_method();
-    let fd_method = if method == AreaMethod::Projection { AreaMethod::Lagrangian } else { method };
+    let fd_method = if method == AreaMethod::Projection {
+        AreaMethod::Lagrangian
+    } else {
+        method
+    };
     for (s, m) in [(&mut sp_scene, method), (&mut fd_scene, fd_method)] {
         s.prepare_steps = 0;
         s.area.method = Some(m);

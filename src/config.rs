@@ -455,10 +455,13 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
         source,
     })?;
     let mut value: Value = serde_json::from_str(&text).map_err(|e| {
-        Error::config(
-            "(file)",
-            format!("{} is not valid JSON: {e}", path.display()),
-        )
+        let reason = format!("{} is not valid JSON: {e}", path.display());
+        match nonfinite_field(&text, e.line(), e.column()) {
+            Some((field, token)) if e.to_string().contains("number out of range") => {
+                Error::config(field, format!("must be a finite number, got {token}"))
+            }
+            _ => Error::config("(file)", reason),
+        }
     })?;
     for o in overrides {
         apply_override(&mut value, o)?;
@@ -471,13 +474,42 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
     Ok(scene)
 }
 
+/// The dotted field holding the out-of-range number that ends near (line, column) of `text`,
+/// and the number: the number is quoted and the scene read again, so the type error names it.
+fn nonfinite_field(text: &str, line: usize, column: usize) -> Option<(String, String)> {
+    let offset: usize = text
+        .lines()
+        .take(line.saturating_sub(1))
+        .map(|l| l.len() + 1)
+        .sum();
+    let bytes = text.as_bytes();
+    let is_num = |b: u8| b.is_ascii_digit() || b"eE+-.".contains(&b);
+    let mut end = (offset + column).min(bytes.len());
+    while end > 0 && !is_num(bytes[end - 1]) {
+        end -= 1;
+    }
+    let mut start = end;
+    while start > 0 && is_num(bytes[start - 1]) {
+        start -= 1;
+    }
+    let token = text.get(start..end)?.to_string();
+    let quoted = format!("{}\"{token}\"{}", &text[..start], &text[end..]);
+    match from_value(serde_json::from_str(&quoted).ok()?) {
+        Err(Error::Config { field, .. }) => Some((field, token)),
+        _ => None,
+    }
+}
+
 /// Deserialize a scene from JSON, reporting the dotted path of a bad field.
 ///
 /// # Errors
 /// `Error::Config` with the path of the offending key.
 pub fn from_value(value: Value) -> Result<Scene> {
-    serde_path_to_error::deserialize(value).map_err(|e| {
+    serde_path_to_error::deserialize::<_, Scene>(value.clone()).map_err(|e| {
         let path = e.path().to_string();
+        if let Some(err) = refine(&path, &value) {
+            return err;
+        }
         let field = if path == "." {
             "(top level)".into()
         } else {
@@ -485,6 +517,31 @@ pub fn from_value(value: Value) -> Result<Scene> {
         };
         Error::config(field, e.into_inner().to_string())
     })
+}
+
+/// Fields read through an intermediate value (`initial`, `c0`, `adaptive`) lose the inner key
+/// of an error: read the sub-object again as its concrete type to name it.
+fn refine(path: &str, scene: &Value) -> Option<Error> {
+    fn inner<T: serde::de::DeserializeOwned>(at: &str, v: &Value) -> Option<Error> {
+        let e = serde_path_to_error::deserialize::<_, T>(v.clone()).err()?;
+        let p = e.path().to_string();
+        let field = if p == "." {
+            at.to_string()
+        } else {
+            format!("{at}.{p}")
+        };
+        Some(Error::config(field, e.into_inner().to_string()))
+    }
+    let v = scene.get(path)?;
+    if !v.is_object() {
+        return None;
+    }
+    match path {
+        "initial" if v.get("file").is_none() => inner::<Shape>(path, v),
+        "c0" => inner::<C0Field>(path, v),
+        "adaptive" => inner::<AdaptiveSettings>(path, v),
+        _ => None,
+    }
 }
 
 /// A relative `.npy` path is taken from the scene file's folder if it exists there, else from
@@ -730,7 +787,7 @@ impl Scene {
                     return Err(Error::config("symmetry", format!("axis {a:?} given twice")));
                 }
                 seen.push(i);
-                if self.n[i] % 2 != 0 {
+                if !self.n[i].is_multiple_of(2) {
                     return Err(Error::config(
                         "symmetry",
                         format!("mirror axis {a:?} needs an even n, got {}", self.n[i]),

@@ -12,12 +12,9 @@
 use crate::config::AreaMethod;
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
-use crate::model::{self, bulk, bulk_derivative, Measures, C0};
+use crate::model::{self, bulk, bulk_derivative, Measures, C0, PHI_BLOWUP};
 use crate::stencil;
 use ndarray::{Array3, Zip};
-
-/// Largest |φ| a state may reach before the run counts as blown up.
-pub const PHI_BLOWUP: f64 = 5.0;
 
 /// Explicit-Euler stability bound of the FD scheme at tension σ:
 /// `Δt < 1 / (λ (2 + ε²λ)² + (3/√2) ε σ λ²/2)`, λ = 4d/h² (linearisation about φ = ±1).
@@ -102,7 +99,7 @@ impl FdEngine {
             area: stencil::area(&self.grid, self.eps, &self.phi),
             volume: model::volume(&self.grid, &self.phi),
         };
-        if !(max_abs <= PHI_BLOWUP) || !self.measures.energy.is_finite() {
+        if model::diverged(max_abs, self.measures.energy) {
             return Err(Diverged(format!(
                 "max|φ| = {max_abs:.3e}, F = {:.3e} (limit |φ| ≤ {PHI_BLOWUP}): the explicit scheme diverged",
                 self.measures.energy

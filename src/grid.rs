@@ -93,9 +93,9 @@ impl Grid {
     /// Points of the full (unreduced) box along each internal axis.
     pub fn full_shape(&self) -> [usize; 3] {
         let mut s = self.shape;
-        for a in 0..3 {
-            if self.kinds[a] == AxisKind::Mirror {
-                s[a] *= 2;
+        for (len, kind) in s.iter_mut().zip(self.kinds) {
+            if kind == AxisKind::Mirror {
+                *len *= 2;
             }
         }
         s

@@ -155,6 +155,14 @@ pub fn volume(grid: &Grid, phi: &Array3<f64>) -> f64 {
     s * grid.cell_volume() * grid.mirror_factor()
 }
 
+/// Largest |φ| a state may reach before the run counts as blown up.
+pub const PHI_BLOWUP: f64 = 5.0;
+
+/// A state has diverged when max|φ| exceeds [`PHI_BLOWUP`] (or is NaN) or F is not finite.
+pub fn diverged(max_abs_phi: f64, energy: f64) -> bool {
+    max_abs_phi.is_nan() || max_abs_phi > PHI_BLOWUP || !energy.is_finite()
+}
+
 /// Stationarity residual max|φ^{n+1} − φ^n| / Δt.
 pub fn residual(new: &Array3<f64>, old: &Array3<f64>, dt: f64) -> f64 {
     new.iter()

@@ -282,7 +282,11 @@ pub fn quadratic(aw: &[f64], p: &Array3<Complex64>, q: &Array3<Complex64>) -> (f
         .with_min_len(4096)
         .map(|i| {
             let (a, b) = (p[i], q[i]);
-            (aw[i] * a.norm_sqr(), aw[i] * (a.re * b.re + a.im * b.im), aw[i] * b.norm_sqr())
+            (
+                aw[i] * a.norm_sqr(),
+                aw[i] * (a.re * b.re + a.im * b.im),
+                aw[i] * b.norm_sqr(),
+            )
         })
         .reduce(|| (0.0, 0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1, x.2 + y.2))
 }
@@ -299,7 +303,11 @@ pub fn nearest_root(a: f64, b: f64, c: f64, near: f64) -> Option<f64> {
     let q = -(b + b.signum() * disc.sqrt());
     let r1 = q / a;
     let r2 = if q != 0.0 { c / q } else { r1 };
-    Some(if (r1 - near).abs() <= (r2 - near).abs() { r1 } else { r2 })
+    Some(if (r1 - near).abs() <= (r2 - near).abs() {
+        r1
+    } else {
+        r2
+    })
 }
 
 impl Engine for RelaxEngine {
@@ -344,7 +352,11 @@ impl Engine for RelaxEngine {
             if rejected >= MAX_BACKTRACKS {
                 self.stalled = true;
                 self.reset_memory();
-                return Ok(StepReport { dt, residual: self.residual, rejected });
+                return Ok(StepReport {
+                    dt,
+                    residual: self.residual,
+                    rejected,
+                });
             }
         }
         let (sigma, residual) = gradient(

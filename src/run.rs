@@ -41,7 +41,8 @@ pub enum Stopped {
 }
 
 impl Stopped {
-    fn as_str(&self) -> &'static str {
+    /// The name written to `summary.json` (`"stopped"`).
+    pub fn as_str(&self) -> &'static str {
         match self {
             Stopped::Stationary => "stationary",
             Stopped::TimeEnd => "t_end",
@@ -132,6 +133,13 @@ fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine + Sen
 /// `Error::Config` if the initial field is not finite; `Error::Blowup` if a preparation step
 /// diverges.
 pub fn start(scene: &Scene, problem: &Problem) -> Result<(Box<dyn Engine + Send>, f64)> {
+    let (engine, a0) = prepared(scene, problem)?;
+    Ok((engine, a0?))
+}
+
+/// As [`start`], but a divergence during preparation still returns the engine (holding its
+/// last good state) beside the error.
+fn prepared(scene: &Scene, problem: &Problem) -> Result<(Box<dyn Engine + Send>, Result<f64>)> {
     let relaxational = scene.dynamics == Dynamics::Relaxational;
     let mut prep_scene = scene.clone();
     if relaxational {
@@ -142,11 +150,17 @@ pub fn start(scene: &Scene, problem: &Problem) -> Result<(Box<dyn Engine + Send>
     let mut engine = build_engine(&prep_scene, problem)?;
     engine.set_area(AreaConstraint::none());
     for i in 0..scene.prepare_steps {
-        engine.step(0.0, scene.dt).map_err(|d| Error::Blowup {
-            step: i,
-            t: 0.0,
-            reason: format!("during preparation: {}", d.0),
-        })?;
+        if let Err(d) = engine.step(0.0, scene.dt) {
+            let reason = format!("during preparation step {}: {}", i + 1, d.0);
+            return Ok((
+                engine,
+                Err(Error::Blowup {
+                    step: 0,
+                    t: 0.0,
+                    reason,
+                }),
+            ));
+        }
     }
     if relaxational {
         let mut prepared = problem.clone();
@@ -159,7 +173,7 @@ pub fn start(scene: &Scene, problem: &Problem) -> Result<(Box<dyn Engine + Send>
         alpha: scene.alpha(),
         target: a0,
     });
-    Ok((engine, a0))
+    Ok((engine, Ok(a0)))
 }
 
 /// The scene with every default made explicit, as saved under `"spec"` in `summary.json`.
@@ -220,8 +234,28 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
     if opts.out.exists() && !opts.force {
         make_out_dir(&opts.out, false)?;
     }
-    let (mut engine, a0) = start(scene, &problem)?;
+    let (mut engine, a0) = prepared(scene, &problem)?;
     make_out_dir(&opts.out, opts.force)?;
+    let a0 = match a0 {
+        Ok(a0) => a0,
+        Err(e) => {
+            let target = scene.area.target.unwrap_or(engine.measures().area);
+            let resolved = resolved_scene(scene, target, &problem.mirror);
+            let last = Record::new(0, 0.0, 0.0, engine.measures(), 0.0, scene.dim, scene.eps);
+            let mut series = TimeSeries::create(&opts.out.join("timeseries.csv"))?;
+            series.push(&last)?;
+            series.flush()?;
+            let stopped = format!("blew up: {e}");
+            let end = End {
+                last: &last,
+                stopped: &stopped,
+                wall: 0.0,
+                history: &[last],
+            };
+            write_final(&opts.out, &problem.grid, engine.phi(), &resolved, &end)?;
+            return Err(e);
+        }
+    };
     let resolved = resolved_scene(scene, a0, &problem.mirror);
     eprintln!("{}", describe(&resolved, &problem, engine.name()));
     let mut series = TimeSeries::create(&opts.out.join("timeseries.csv"))?;
@@ -236,35 +270,42 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
     );
     series.flush()?;
     let (last, stopped, wall, error) = match result {
-        Ok((last, stopped, wall)) => (last, stopped.as_str().to_string(), wall, None),
-        Err((last, wall, e)) => (last, format!("blew up: {e}"), wall, Some(e)),
+        Ok((last, stopped, wall)) => (last, Ok(stopped), wall, None),
+        Err(failed) => {
+            let (last, wall, e) = *failed;
+            (last, Err(format!("blew up: {e}")), wall, Some(e))
+        }
     };
-    write_final(
-        &opts.out,
-        &problem.grid,
-        engine.phi(),
-        &resolved,
-        &last,
-        &stopped,
+    let text = stopped
+        .as_ref()
+        .map_or_else(|s| s.clone(), |s| s.as_str().to_string());
+    let end = End {
+        last: &last,
+        stopped: &text,
         wall,
-        &history,
-    )?;
-    if let Some(e) = error {
-        return Err(e);
+        history: &history,
+    };
+    write_final(&opts.out, &problem.grid, engine.phi(), &resolved, &end)?;
+    match (stopped, error) {
+        (Ok(stopped), _) => Ok(Outcome {
+            last,
+            stopped,
+            wall_seconds: wall,
+        }),
+        (Err(_), Some(e)) => Err(e),
+        (Err(reason), None) => unreachable!("a failed loop carries its error: {reason}"),
     }
-    Ok(Outcome {
-        last,
-        stopped: match stopped.as_str() {
-            "stationary" => Stopped::Stationary,
-            "t_end" => Stopped::TimeEnd,
-            "stalled" => Stopped::Stalled,
-            _ => Stopped::MaxSteps,
-        },
-        wall_seconds: wall,
-    })
 }
 
-type LoopResult = std::result::Result<(Record, Stopped, f64), (Record, f64, Error)>;
+/// How a run ended, for the final outputs.
+struct End<'a> {
+    last: &'a Record,
+    stopped: &'a str,
+    wall: f64,
+    history: &'a [Record],
+}
+
+type LoopResult = std::result::Result<(Record, Stopped, f64), Box<(Record, f64, Error)>>;
 
 /// Step until a stop rule fires. On divergence returns the last good record and the error.
 fn time_loop(
@@ -280,7 +321,7 @@ fn time_loop(
         Record::new(step, t, dt, e.measures(), e.sigma(), scene.dim, scene.eps)
     };
     let mut last = record(0, 0.0, 0.0, engine);
-    let fail = |last: Record, e: Error| (last, start.elapsed().as_secs_f64(), e);
+    let fail = |last: Record, e: Error| Box::new((last, start.elapsed().as_secs_f64(), e));
     series.push(&last).map_err(|e| fail(last, e))?;
     history.push(last);
     let bar = progress_bar(scene, opts.progress);
@@ -299,6 +340,14 @@ fn time_loop(
                     t: t + dt,
                     reason,
                 };
+                if last.step != step {
+                    // Record the last good state, which the engine still holds.
+                    last = record(step, t, dt, engine);
+                    last.rejected = rejected;
+                    last.wall_seconds = start.elapsed().as_secs_f64();
+                    let _ = series.push(&last);
+                    history.push(last);
+                }
                 return Err(fail(last, err));
             }
         };
@@ -407,17 +456,14 @@ fn write_snapshot(
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
 fn write_final(
     out: &Path,
     grid: &Grid,
     phi: &ndarray::Array3<f64>,
     resolved: &Scene,
-    last: &Record,
-    stopped: &str,
-    wall: f64,
-    history: &[Record],
+    end: &End,
 ) -> Result<()> {
+    let (last, stopped) = (end.last, end.stopped);
     let full = grid.unfold(phi);
     output::npy::write_npy(&out.join("phi_final.npy"), &full, resolved.dim)?;
     if resolved.output.vti {
@@ -432,14 +478,14 @@ fn write_final(
     if resolved.output.png {
         let title = format!("step {} t = {:.4e} ({stopped})", last.step, last.t);
         output::image::write_slices_png(&out.join("shape_final.png"), &full, resolved.dim, &title)?;
-        write_charts(out, history)?;
+        write_charts(out, end.history)?;
     }
     let summary = json!({
         "spec": resolved,
         "final": last,
         "steps": last.step,
         "rejected_steps": last.rejected,
-        "wall_seconds": wall,
+        "wall_seconds": end.wall,
         "stopped": stopped,
         "computed_shape": grid.shape[3 - resolved.dim..],
         "version": env!("CARGO_PKG_VERSION"),

@@ -105,8 +105,12 @@ fn check_fits(grid: &Grid, phi: &Array3<f64>) -> Result<()> {
 /// True when φ does not change along internal axis `a` (to 1e-12).
 fn invariant_along(phi: &Array3<f64>, a: usize) -> bool {
     let first = phi.index_axis(Axis(a), 0);
-    phi.axis_iter(Axis(a))
-        .all(|plane| plane.iter().zip(first.iter()).all(|(x, y)| (x - y).abs() <= 1e-12))
+    phi.axis_iter(Axis(a)).all(|plane| {
+        plane
+            .iter()
+            .zip(first.iter())
+            .all(|(x, y)| (x - y).abs() <= 1e-12)
+    })
 }
 
 /// Largest |u(x) − u(mirror_a x)| over the box, mirror about the centre of internal axis `a`.
@@ -133,7 +137,7 @@ fn mirror_axes(scene: &Scene, grid: &Grid, phi: &Array3<f64>, c0: &C0) -> Result
         Symmetry::Auto(_) => {
             for (s, m) in mirror.iter_mut().enumerate() {
                 let a = internal(s);
-                *m = grid.shape[a] % 2 == 0
+                *m = grid.shape[a].is_multiple_of(2)
                     && asymmetry(phi, a) <= SYMMETRY_TOL
                     && c0_asymmetry(c0, a) <= SYMMETRY_TOL;
             }

@@ -67,13 +67,24 @@ pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
 /// evaluate the distance at every grid point).
 pub fn resolve(shape: &Shape, dim: usize) -> Shape {
     match shape {
-        Shape::Spheroid { reduced_volume, r0, kind, axis, center } => {
+        Shape::Spheroid {
+            reduced_volume,
+            r0,
+            kind,
+            axis,
+            center,
+        } => {
             let (equatorial, polar) = spheroid_axes(*reduced_volume, *r0, *kind, dim);
             let mut axes = vec![equatorial; dim];
             axes[axis_of(axis, dim)] = polar;
-            Shape::Ellipsoid { axes, center: center.clone() }
+            Shape::Ellipsoid {
+                axes,
+                center: center.clone(),
+            }
         }
-        Shape::Union { of } => Shape::Union { of: of.iter().map(|s| resolve(s, dim)).collect() },
+        Shape::Union { of } => Shape::Union {
+            of: of.iter().map(|s| resolve(s, dim)).collect(),
+        },
         Shape::Difference { base, minus } => Shape::Difference {
             base: Box::new(resolve(base, dim)),
             minus: Box::new(resolve(minus, dim)),

@@ -46,7 +46,10 @@ fn effective_energy_non_increasing_at_each_steps_sigma() {
         let after = e.measures();
         let f0 = before.energy + sigma * before.area;
         let f1 = after.energy + sigma * after.area;
-        assert!(f1 <= f0 + 1e-13 * f0.abs(), "step {n}: F_eff rose {f0} -> {f1}");
+        assert!(
+            f1 <= f0 + 1e-13 * f0.abs(),
+            "step {n}: F_eff rose {f0} -> {f1}"
+        );
     }
     assert!(e.sigma() != 0.0, "the area update must have acted");
 }
@@ -72,7 +75,9 @@ fn flat_interface_stationary_to_discretisation_error() {
             e.step(t, dt).unwrap();
             t += dt;
         }
-        phi0.iter().zip(e.phi()).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+        phi0.iter()
+            .zip(e.phi())
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
     };
     let (d1, d2) = (drift(0.5), drift(0.25));
     let ratio = d1 / d2;
@@ -114,8 +119,12 @@ fn chemical_potential_is_derivative_of_discrete_energy() {
         let dv = grid.cell_volume() * grid.mirror_factor();
         let analytic: f64 = mu.iter().zip(&psi).map(|(m, p)| m * p).sum::<f64>() * dv;
         let d = 1e-5;
-        let numeric = (f_eff(&(&problem.phi + &(&psi * d))) - f_eff(&(&problem.phi - &(&psi * d)))) / (2.0 * d);
-        assert!(rel(numeric, analytic) < 1e-6, "{symmetry}: numeric {numeric} vs μ {analytic}");
+        let numeric = (f_eff(&(&problem.phi + &(&psi * d))) - f_eff(&(&problem.phi - &(&psi * d))))
+            / (2.0 * d);
+        assert!(
+            rel(numeric, analytic) < 1e-6,
+            "{symmetry}: numeric {numeric} vs μ {analytic}"
+        );
     }
 }
 
@@ -166,7 +175,10 @@ fn relaxed_sphere_energy(h: f64, laplacian: &str) -> f64 {
 #[test]
 fn relaxed_sphere_energy_converges_as_h_squared() {
     let e_ref = relaxed_sphere_energy(0.5, "spectral");
-    let e: Vec<f64> = [1.0, 0.5, 0.25].iter().map(|&h| relaxed_sphere_energy(h, "fd")).collect();
+    let e: Vec<f64> = [1.0, 0.5, 0.25]
+        .iter()
+        .map(|&h| relaxed_sphere_energy(h, "fd"))
+        .collect();
     let err: Vec<f64> = e.iter().map(|x| (e_ref - x).abs()).collect();
     let orders = [(err[0] / err[1]).log2(), (err[1] / err[2]).log2()];
     eprintln!(
@@ -175,7 +187,11 @@ fn relaxed_sphere_energy_converges_as_h_squared() {
     );
     assert!((0.94..0.97).contains(&e[0]), "e_fd at h = ε is {}", e[0]);
     assert!((e_ref - 1.0).abs() < 1e-3, "spectral e = {e_ref}");
-    assert!((orders[1] - 2.0).abs() < 0.15, "observed order {}", orders[1]);
+    assert!(
+        (orders[1] - 2.0).abs() < 0.15,
+        "observed order {}",
+        orders[1]
+    );
     assert!(orders[0] > 1.7, "observed order {}", orders[0]);
 }
 
@@ -191,7 +207,9 @@ fn fd_symbol_engine_matches_fd_reference_to_time_error() {
     });
     let advance = |mut v: serde_json::Value| {
         let s = scene({
-            v.as_object_mut().unwrap().extend(base.as_object().unwrap().clone());
+            v.as_object_mut()
+                .unwrap()
+                .extend(base.as_object().unwrap().clone());
             v
         });
         let (_, mut e) = engine(&s);
@@ -207,7 +225,9 @@ fn fd_symbol_engine_matches_fd_reference_to_time_error() {
     let diff = |dt: f64| {
         let sp = advance(json!({"method": "spectral", "laplacian": "fd", "dt": dt,
                                "stabilizer": {"s2": 0.0, "s4": 0.0}}));
-        sp.iter().zip(&fd).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+        sp.iter()
+            .zip(&fd)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
     };
     let (d1, d2) = (diff(5e-3), diff(2.5e-3));
     let order = (d1 / d2).log2();

@@ -17,12 +17,16 @@ fn advance(e: &mut dyn Engine, dt: f64, t_end: f64) {
 }
 
 fn max_diff(a: &ndarray::Array3<f64>, b: &ndarray::Array3<f64>) -> f64 {
-    a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
 }
 
 fn with(base: &Value, extra: Value) -> Value {
     let mut v = base.clone();
-    v.as_object_mut().unwrap().extend(extra.as_object().unwrap().clone());
+    v.as_object_mut()
+        .unwrap()
+        .extend(extra.as_object().unwrap().clone());
     v
 }
 
@@ -49,8 +53,16 @@ fn projection_holds_volume_and_area() {
         let r = e.step(t, dt).unwrap();
         t += r.dt;
         let m = e.measures();
-        assert!(rel(m.volume, v0) < 1e-12, "step {n}: V off by {:e}", rel(m.volume, v0));
-        assert!(rel(m.area, a0) < 1e-10, "step {n}: A off by {:e}", rel(m.area, a0));
+        assert!(
+            rel(m.volume, v0) < 1e-12,
+            "step {n}: V off by {:e}",
+            rel(m.volume, v0)
+        );
+        assert!(
+            rel(m.area, a0) < 1e-10,
+            "step {n}: A off by {:e}",
+            rel(m.area, a0)
+        );
     }
     assert!(dt > 1.0, "the step should have grown, dt = {dt}");
 }
@@ -84,7 +96,10 @@ fn fd_spectral_difference_falls_as_h_squared() {
         let grid = vesicle::grid::Grid::new(&[n, n], h, &[true, true]);
         let fd_dt = 0.5 * vesicle::fd::stability_bound(&grid, 1.0, 0.0);
         let fd = scene(with(&base, json!({"method": "fd", "dt": fd_dt})));
-        let sp = scene(with(&base, json!({"method": "spectral", "scheme": "sbdf2", "dt": 2e-4})));
+        let sp = scene(with(
+            &base,
+            json!({"method": "spectral", "scheme": "sbdf2", "dt": 2e-4}),
+        ));
         let (_, mut a) = engine(&fd);
         let (_, mut b) = engine(&sp);
         advance(a.as_mut(), fd.dt, t_end);
@@ -94,7 +109,11 @@ fn fd_spectral_difference_falls_as_h_squared() {
     let d: Vec<f64> = [1.0, 0.5, 0.25].iter().map(|&h| diff(h)).collect();
     eprintln!("max|φ_fd − φ_sp| at t = {t_end}: h = 1: {:.3e}, 1/2: {:.3e}, 1/4: {:.3e}; ratios {:.2}, {:.2}",
         d[0], d[1], d[2], d[0] / d[1], d[1] / d[2]);
-    assert!(d[0] / d[1] >= 3.5 && d[1] / d[2] >= 3.5, "ratios {:?}", [d[0] / d[1], d[1] / d[2]]);
+    assert!(
+        d[0] / d[1] >= 3.5 && d[1] / d[2] >= 3.5,
+        "ratios {:?}",
+        [d[0] / d[1], d[1] / d[2]]
+    );
 }
 
 /// Temporal order at a fixed grid (2D ellipse, c0 ≠ 0, default stabiliser): errors at t = 1
@@ -112,7 +131,10 @@ fn sbdf_temporal_orders() {
     problem.phi = prepared.phi().clone();
     let a0 = prepared.measures().area;
     let run = |scheme: &str, dt: f64| {
-        let s = scene(with(&base, json!({"scheme": scheme, "dt": dt, "prepare_steps": 0, "area": {"target": a0}})));
+        let s = scene(with(
+            &base,
+            json!({"scheme": scheme, "dt": dt, "prepare_steps": 0, "area": {"target": a0}}),
+        ));
         let (mut e, _) = vesicle::run::start(&s, &problem).unwrap();
         advance(e.as_mut(), dt, 1.0);
         e.phi().clone()
@@ -120,7 +142,10 @@ fn sbdf_temporal_orders() {
     let dts = [0.004, 0.002, 0.001];
     let reference = run("sbdf2", dts[0] / 32.0);
     for (scheme, expected) in [("sbdf1", 1.0), ("sbdf2", 2.0)] {
-        let errors: Vec<f64> = dts.iter().map(|&dt| max_diff(&run(scheme, dt), &reference)).collect();
+        let errors: Vec<f64> = dts
+            .iter()
+            .map(|&dt| max_diff(&run(scheme, dt), &reference))
+            .collect();
         let order = log_slope(&dts, &errors);
         eprintln!("{scheme}: errors {errors:?}, observed order {order:.3}");
         assert!((order - expected).abs() < 0.15, "{scheme}: order {order}");
@@ -170,9 +195,17 @@ fn reduced_box_matches_full_box() {
     let (full, sigma_full) = run(json!([]));
     for sym in [json!(["x", "y", "z"]), json!(["x", "y"]), json!(["z"])] {
         let (red, sigma) = run(sym.clone());
-        assert!(rel(red.energy, full.energy) < 1e-10, "{sym}: F {} vs {}", red.energy, full.energy);
+        assert!(
+            rel(red.energy, full.energy) < 1e-10,
+            "{sym}: F {} vs {}",
+            red.energy,
+            full.energy
+        );
         assert!(rel(red.area, full.area) < 1e-10, "{sym}: A");
         assert!(rel(red.volume, full.volume) < 1e-12, "{sym}: V");
-        assert!(rel(sigma, sigma_full) < 1e-8, "{sym}: σ {sigma} vs {sigma_full}");
+        assert!(
+            rel(sigma, sigma_full) < 1e-8,
+            "{sym}: σ {sigma} vs {sigma_full}"
+        );
     }
 }

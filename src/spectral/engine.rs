@@ -87,7 +87,13 @@ impl SpectralEngine {
     /// # Errors
     /// [`Diverged`] if `phi` is not finite.
     pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
-        let mut ev = Evaluator::new(grid, scene.eps, c0, scene.laplacian, ExplicitTerm::ConservedRhs);
+        let mut ev = Evaluator::new(
+            grid,
+            scene.eps,
+            c0,
+            scene.laplacian,
+            ExplicitTerm::ConservedRhs,
+        );
         let cur = ev.state_of(&phi, 0.0)?;
         let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
             dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),

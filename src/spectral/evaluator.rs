@@ -4,7 +4,6 @@
 use super::transform::Transform;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
-use crate::fd::PHI_BLOWUP;
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, AREA_PREFACTOR, C0};
 use ndarray::{Array3, Zip};
@@ -139,7 +138,7 @@ impl Evaluator {
             area: self.area_of(&state.hat),
             volume: model::volume(&self.grid, &state.phi),
         };
-        if !(max_abs <= PHI_BLOWUP) || !state.measures.energy.is_finite() {
+        if model::diverged(max_abs, state.measures.energy) {
             return Err(Diverged(format!(
                 "max|φ| = {max_abs:.3e}, F = {:.3e}: the state diverged",
                 state.measures.energy
@@ -221,4 +220,3 @@ pub fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Sy
 pub fn k2_view<'a>(k2: &'a [f64], like: &Array3<Complex64>) -> ndarray::ArrayView3<'a, f64> {
     ndarray::ArrayView3::from_shape(like.raw_dim(), k2).expect("table matches spectral shape")
 }
-
