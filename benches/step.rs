@@ -50,12 +50,15 @@ fn bench_steps(c: &mut Criterion) {
         }
         let mut e = engine(method, 64, json!(["x", "y", "z"]));
         let mut t = 0.0;
-        group.bench_function(BenchmarkId::new(format!("{method}/eighth"), "64^3/t2"), |b| {
-            b.iter(|| {
-                e.step(t, dt).expect("step");
-                t += dt;
-            })
-        });
+        group.bench_function(
+            BenchmarkId::new(format!("{method}/eighth"), "64^3/t2"),
+            |b| {
+                b.iter(|| {
+                    e.step(t, dt).expect("step");
+                    t += dt;
+                })
+            },
+        );
     }
     group.finish();
 }

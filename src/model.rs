@@ -162,11 +162,3 @@ pub const PHI_BLOWUP: f64 = 5.0;
 pub fn diverged(max_abs_phi: f64, energy: f64) -> bool {
     max_abs_phi.is_nan() || max_abs_phi > PHI_BLOWUP || !energy.is_finite()
 }
-
-/// Stationarity residual max|φ^{n+1} − φ^n| / Δt.
-pub fn residual(new: &Array3<f64>, old: &Array3<f64>, dt: f64) -> f64 {
-    new.iter()
-        .zip(old)
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-        / dt
-}

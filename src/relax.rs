@@ -342,7 +342,7 @@ impl Engine for RelaxEngine {
         let mut rejected = 0;
         loop {
             let accepted = self.retract(alpha).is_some()
-                && self.ev.evaluate(&mut self.trial, t + dt).is_ok()
+                && self.ev.evaluate(&mut self.trial, t + dt, None).is_ok()
                 && self.trial.measures.energy <= f0 + ARMIJO * alpha * slope;
             if accepted {
                 break;

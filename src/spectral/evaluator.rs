@@ -77,7 +77,7 @@ impl Evaluator {
     pub fn state_of(&mut self, phi: &Array3<f64>, t: f64) -> Result<State, Diverged> {
         let mut s = self.blank();
         self.transform.forward(phi, &mut s.hat);
-        self.evaluate(&mut s, t)?;
+        self.evaluate(&mut s, t, None)?;
         Ok(s)
     }
 
@@ -93,24 +93,42 @@ impl Evaluator {
 
     /// From `state.hat`, compute φ, ∇²φ, Φ, F_sc, A, V and N̂ at time `t`
     /// (two inverse and two forward transforms).
-    pub fn evaluate(&mut self, state: &mut State, t: f64) -> Result<(), Diverged> {
-        let k2 = &self.symbols.k2;
+    ///
+    /// With `previous` (the state before a step) it also returns max|φ − φ_previous|, fused into
+    /// the pointwise pass; otherwise 0.
+    pub fn evaluate(
+        &mut self,
+        state: &mut State,
+        t: f64,
+        previous: Option<&Array3<f64>>,
+    ) -> Result<f64, Diverged> {
         self.transform.hermitian_symmetrize(&mut state.hat);
         // φ = IFT[φ̂]
         self.spare.assign(&state.hat);
         self.transform.inverse(&mut self.spare, &mut state.phi);
-        // ∇²φ = IFT[−k² φ̂]
-        Zip::from(&mut self.spare)
-            .and(&state.hat)
-            .and(k2_view(k2, &state.hat))
-            .par_for_each(|s, &h, &k| *s = h * (-k));
+        // ∇²φ = IFT[−k² φ̂], and A = Σ area_weight |φ̂|² in the same pass.
+        let (k2, aw) = (&self.symbols.k2, &self.symbols.area_weight);
+        let hat = state.hat.as_slice().expect("standard layout");
+        let area: f64 = self
+            .spare
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_iter_mut()
+            .with_min_len(4096)
+            .enumerate()
+            .map(|(i, s)| {
+                *s = hat[i] * (-k2[i]);
+                aw[i] * hat[i].norm_sqr()
+            })
+            .sum();
         self.transform.inverse(&mut self.spare, &mut self.work);
         // Φ = f − ε²∇²φ, F = ∫Φ²; work ← f, work2 ← f'Φ
         let r = self.c0.ramp(t);
         let e2 = self.eps * self.eps;
         let c0 = &self.c0;
         let phi = state.phi.as_slice().expect("standard layout");
-        let (energy, max_abs) = self
+        let old = previous.map(|p| p.as_slice().expect("standard layout"));
+        let (energy, max_abs, sum_phi, change) = self
             .work
             .as_slice_mut()
             .expect("standard layout")
@@ -121,6 +139,7 @@ impl Evaluator {
                     .expect("standard layout")
                     .par_iter_mut(),
             )
+            .with_min_len(4096)
             .enumerate()
             .map(|(i, (w, w2))| {
                 let p = phi[i];
@@ -129,14 +148,19 @@ impl Evaluator {
                 let big = f - e2 * *w;
                 *w = f;
                 *w2 = bulk_derivative(p, ec0) * big;
-                (big * big, p.abs())
+                let change = old.map_or(0.0, |o| (p - o[i]).abs());
+                (big * big, p.abs(), p, change)
             })
-            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+            .reduce(
+                || (0.0, 0.0, 0.0, 0.0),
+                |a, b| (a.0 + b.0, a.1.max(b.1), a.2 + b.2, a.3.max(b.3)),
+            );
         let dv = self.grid.cell_volume() * self.grid.mirror_factor();
         state.measures = Measures {
             energy: energy * dv,
-            area: self.area_of(&state.hat),
-            volume: model::volume(&self.grid, &state.phi),
+            area,
+            // V = Σ (1 + φ)/2 h^d
+            volume: 0.5 * (phi.len() as f64 + sum_phi) * dv,
         };
         if model::diverged(max_abs, state.measures.energy) {
             return Err(Diverged(format!(
@@ -162,16 +186,7 @@ impl Evaluator {
                     *n = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k)
                 }),
         }
-        Ok(())
-    }
-
-    /// A = (3/(2√2)) ε ∫|∇φ|² = Σ_k area_weight |φ̂|² (Parseval).
-    pub fn area_of(&self, hat: &Array3<Complex64>) -> f64 {
-        let hs = hat.as_slice().expect("standard layout");
-        hs.par_iter()
-            .zip(&self.symbols.area_weight)
-            .map(|(h, w)| w * h.norm_sqr())
-            .sum()
+        Ok(change)
     }
 }
 
