@@ -56,6 +56,9 @@ enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Studies that compare methods in one run and print ratios (tables, CSV, charts).
+    #[command(subcommand)]
+    Study(Study),
     /// Run the finite-difference reference and the spectral engine on the same initial field;
     /// print and write a table of both at common times.
     #[command(after_help = "Example:\n  vesicle compare runs/compare2d.json --out out/compare")]
@@ -68,6 +71,49 @@ enum Command {
         /// Replace an existing output folder.
         #[arg(long)]
         force: bool,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum Study {
+    /// Time the routes to a stationary shape: conserved flow with adaptive steps, the
+    /// relaxational L-BFGS (to the same energy within 1e-6), and FD at its bound (extrapolated).
+    #[command(
+        after_help = "Example:\n  vesicle study stationary runs/prolate3d.json --out out/stationary"
+    )]
+    Stationary {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Output folder (default: out/<scene name>-stationary).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Replace an existing output folder.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Map where each time stepper fails: a sweep of fixed Δt for FD, spectral SBDF1 with and
+    /// without stabiliser, and SBDF2, with the FD bound on the chart.
+    #[command(
+        after_help = "Example:\n  vesicle study stability runs/stability2d.json --out out/stability --steps 200"
+    )]
+    Stability {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Output folder (default: out/<scene name>-stability).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Replace an existing output folder.
+        #[arg(long)]
+        force: bool,
+        /// Fixed steps per run.
+        #[arg(long, default_value_t = 200)]
+        steps: usize,
+        /// Smallest Δt of the sweep.
+        #[arg(long, default_value_t = 1e-5)]
+        dt_min: f64,
+        /// Largest Δt of the sweep.
+        #[arg(long, default_value_t = 10.0)]
+        dt_max: f64,
     },
 }
 
@@ -168,6 +214,39 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
                 serde_json::to_string_pretty(&resolved).expect("serialisable")
             );
             eprintln!("{}", run::describe(&scene, &problem, "check"));
+            Ok(())
+        }
+        Command::Study(Study::Stationary {
+            scene: args,
+            out,
+            force,
+        }) => {
+            let scene = load(&args)?;
+            let out = out.unwrap_or_else(|| default_out(&args.scene, "-stationary"));
+            with_threads(&scene, || {
+                crate::study::stationary::stationary(&scene, &out, force)
+            })?;
+            Ok(())
+        }
+        Command::Study(Study::Stability {
+            scene: args,
+            out,
+            force,
+            steps,
+            dt_min,
+            dt_max,
+        }) => {
+            let scene = load(&args)?;
+            if !(dt_min > 0.0 && dt_max > dt_min) || steps == 0 {
+                return Err(Error::config(
+                    "--dt-min",
+                    "need 0 < --dt-min < --dt-max and --steps ≥ 1",
+                ));
+            }
+            let out = out.unwrap_or_else(|| default_out(&args.scene, "-stability"));
+            with_threads(&scene, || {
+                crate::study::stability::stability(&scene, &out, force, steps, dt_min, dt_max)
+            })?;
             Ok(())
         }
         Command::Compare {

@@ -90,8 +90,10 @@ fn one() -> f64 {
     1.0
 }
 
+/// L-BFGS memory: 5 pairs gave the least wall time on the 48³ prolate (20 pairs take fewer
+/// evaluations, 116 against 144, but more vector work per iteration).
 fn default_memory() -> usize {
-    10
+    5
 }
 
 /// Engine.

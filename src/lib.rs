@@ -18,3 +18,4 @@ pub mod setup;
 pub mod shapes;
 pub mod spectral;
 pub mod stencil;
+pub mod study;

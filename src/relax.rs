@@ -22,7 +22,8 @@ use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::spectral::evaluator::{Evaluator, ExplicitTerm, State};
-use ndarray::{Array3, Zip};
+use crate::spectral::PAR_CHUNK;
+use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 use std::collections::VecDeque;
@@ -32,11 +33,12 @@ const ARMIJO: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up.
 const MAX_BACKTRACKS: usize = 40;
 
-/// One stored L-BFGS pair (s, y) with ρ = 1/⟨y, s⟩_M.
+/// One stored L-BFGS pair (s, y) with ρ = 1/⟨y, s⟩_M and ⟨y, y⟩_M.
 struct Pair {
     s: Array3<Complex64>,
     y: Array3<Complex64>,
     rho: f64,
+    yy: f64,
 }
 
 /// The L-BFGS relaxation engine.
@@ -46,6 +48,10 @@ pub struct RelaxEngine {
     trial: State,
     /// M(k), flattened like the spectrum; M(0) is irrelevant (the mode is held).
     metric: Vec<f64>,
+    /// Parseval weight × M(k): ⟨u, v⟩_M = Σ wm Re(u v*).
+    wm: Vec<f64>,
+    /// ⟨M⁻¹â, M⁻¹â⟩_M of the current state.
+    qq: f64,
     /// Preconditioned projected gradient r of the current state.
     grad: Array3<Complex64>,
     /// r of the trial state, then scratch.
@@ -73,11 +79,16 @@ impl RelaxEngine {
         let mut ev = Evaluator::new(grid, scene.eps, c0, scene.laplacian, ExplicitTerm::Gradient);
         let cur = ev.state_of(&phi, 0.0)?;
         let e2 = scene.eps * scene.eps;
-        let metric = ev
+        let metric: Vec<f64> = ev
             .symbols
             .k2
             .iter()
             .map(|&k| 2.0 * e2 * e2 * k * k + 8.0 + 8.0 * e2 * k)
+            .collect();
+        let wm = metric
+            .iter()
+            .zip(&ev.symbols.weight)
+            .map(|(m, w)| m * w)
             .collect();
         let zeros = Array3::zeros(cur.hat.raw_dim());
         let mut e = RelaxEngine {
@@ -85,6 +96,8 @@ impl RelaxEngine {
             ev,
             cur,
             metric,
+            wm,
+            qq: 0.0,
             grad: zeros.clone(),
             grad_trial: zeros.clone(),
             dir: zeros.clone(),
@@ -104,72 +117,124 @@ impl RelaxEngine {
 
     /// ⟨u, v⟩_M = Σ w M Re(u v*).
     fn dot_m(&self, u: &Array3<Complex64>, v: &Array3<Complex64>) -> f64 {
-        weighted_dot(&self.ev.symbols.weight, Some(&self.metric), u, v)
+        weighted_dot(&self.wm, u, v)
     }
 
     /// For the current state: M⁻¹â, σ, r = M⁻¹(ĝ + σâ) and the residual.
     fn refresh_gradient(&mut self) {
-        let (sigma, residual) = gradient(
+        let g = gradient(
             &self.ev,
             &self.metric,
+            &self.wm,
             self.area.method,
             &self.cur,
             &mut self.area_dir,
             &mut self.grad,
         );
-        self.sigma = sigma;
-        self.residual = residual;
+        (self.sigma, self.residual, self.qq) = g;
     }
 
-    /// `dir = −H r` by the two-loop recursion in the M metric, projected on the tangent space.
+    /// `dir = −H r` by the two-loop recursion in the M metric, projected on the tangent space
+    /// of A (d ← d − (⟨â, d⟩/⟨â, M⁻¹â⟩) M⁻¹â). Each vector update is fused with the inner
+    /// product the next one needs: n + 2 passes for n pairs.
     fn direction(&mut self) {
-        self.dir.assign(&self.grad);
         let n = self.pairs.len();
+        let project = self.area.method != AreaMethod::None && self.qq > 0.0;
+        self.dir.assign(&self.grad);
+        // First loop, newest to oldest: α_i = ρ_i ⟨s_i, q⟩_M, q ← q − α_i y_i.
+        let mut dot = match self.pairs.back() {
+            Some(p) => self.dot_m(&p.s, &self.dir),
+            None => 0.0,
+        };
+        for i in (0..n).rev() {
+            let a = self.pairs[i].rho * dot;
+            self.alphas[i] = a;
+            let next = if i > 0 {
+                &self.pairs[i - 1].s
+            } else {
+                &self.pairs[0].y
+            };
+            dot = scale_axpy_dot(
+                &mut self.dir,
+                1.0,
+                -a,
+                &self.pairs[i].y,
+                Some(next),
+                &self.wm,
+            );
+        }
+        // Second loop, oldest to newest, starting from z = γ q with γ = ⟨s, y⟩_M/⟨y, y⟩_M:
+        // β_i = ρ_i ⟨y_i, z⟩_M, z ← z + (α_i − β_i) s_i.
+        let gamma = self.pairs.back().map_or(1.0, |p| 1.0 / (p.rho * p.yy));
+        let mut scale = gamma;
+        dot *= gamma;
         for i in 0..n {
-            let p = &self.pairs[n - 1 - i];
-            let a = p.rho * self.dot_m(&p.s, &self.dir);
-            self.alphas[n - 1 - i] = a;
-            axpy(&mut self.dir, -a, &p.y);
+            let b = self.pairs[i].rho * dot;
+            let next = if i + 1 < n {
+                Some(&self.pairs[i + 1].y)
+            } else if project {
+                Some(&self.area_dir)
+            } else {
+                None
+            };
+            let coeff = self.alphas[i] - b;
+            dot = scale_axpy_dot(
+                &mut self.dir,
+                scale,
+                coeff,
+                &self.pairs[i].s,
+                next,
+                &self.wm,
+            );
+            scale = 1.0;
         }
-        if let Some(p) = self.pairs.back() {
-            let gamma = 1.0 / (p.rho * self.dot_m(&p.y, &p.y));
-            self.dir.par_mapv_inplace(|z| z * gamma);
+        if n == 0 && project {
+            dot = self.dot_m(&self.area_dir, &self.dir);
         }
-        for i in 0..n {
-            let p = &self.pairs[i];
-            let b = p.rho * self.dot_m(&p.y, &self.dir);
-            axpy(&mut self.dir, self.alphas[i] - b, &p.s);
-        }
-        self.dir.par_mapv_inplace(|z| -z);
-        self.project_tangent();
-    }
-
-    /// d ← d − (⟨â, d⟩ / ⟨â, M⁻¹â⟩) M⁻¹â: no first-order change of A.
-    fn project_tangent(&mut self) {
-        if self.area.method == AreaMethod::None {
-            return;
-        }
-        // ⟨â, d⟩ = ⟨q, d⟩_M and ⟨â, M⁻¹â⟩ = ⟨q, q⟩_M with q = M⁻¹â.
-        let qd = self.dot_m(&self.area_dir, &self.dir);
-        let qq = self.dot_m(&self.area_dir, &self.area_dir);
-        if qq > 0.0 {
-            axpy(&mut self.dir, -qd / qq, &self.area_dir);
-        }
+        // d = −z, minus its component along M⁻¹â.
+        let c = if project { dot / self.qq } else { 0.0 };
+        scale_axpy_dot(&mut self.dir, -scale, c, &self.area_dir, None, &self.wm);
     }
 
     /// Trial state φ̂ + α d, retracted onto A = A0 along M⁻¹â. `None` if no real root.
     fn retract(&mut self, alpha: f64) -> Option<()> {
-        Zip::from(&mut self.trial.hat)
-            .and(&self.cur.hat)
-            .and(&self.dir)
-            .par_for_each(|t, &x, &d| *t = x + d * alpha);
+        let (x, d) = (
+            self.cur.hat.as_slice().expect("std"),
+            self.dir.as_slice().expect("std"),
+        );
+        let q = self.area_dir.as_slice().expect("std");
+        let aw = &self.ev.symbols.area_weight;
+        // t = x + α d, with the sums of A(t + τq) = A_PP + 2τ A_PQ + τ² A_QQ in the same pass.
+        let (app, apq, aqq) = self
+            .trial
+            .hat
+            .as_slice_mut()
+            .expect("std")
+            .par_iter_mut()
+            .with_min_len(PAR_CHUNK)
+            .enumerate()
+            .map(|(i, t)| {
+                *t = x[i] + d[i] * alpha;
+                let (a, b) = (*t, q[i]);
+                (
+                    aw[i] * a.norm_sqr(),
+                    aw[i] * (a.re * b.re + a.im * b.im),
+                    aw[i] * b.norm_sqr(),
+                )
+            })
+            .reduce(|| (0.0, 0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1, x.2 + y.2));
         if self.area.method == AreaMethod::None {
             return Some(());
         }
-        let aw = &self.ev.symbols.area_weight;
-        let (app, apq, aqq) = quadratic(aw, &self.trial.hat, &self.area_dir);
         let tau = nearest_root(aqq, apq, app - self.area.target, 0.0)?;
-        axpy(&mut self.trial.hat, tau, &self.area_dir);
+        scale_axpy_dot(
+            &mut self.trial.hat,
+            1.0,
+            tau,
+            &self.area_dir,
+            None,
+            &self.wm,
+        );
         Some(())
     }
 
@@ -181,20 +246,36 @@ impl RelaxEngine {
                 s: Array3::zeros(self.dir.raw_dim()),
                 y: Array3::zeros(self.dir.raw_dim()),
                 rho: 0.0,
+                yy: 0.0,
             },
             None => self.pairs.pop_front().expect("memory is full"),
         };
-        Zip::from(&mut pair.s)
-            .and(&self.trial.hat)
-            .and(&self.cur.hat)
-            .par_for_each(|s, &a, &b| *s = a - b);
-        Zip::from(&mut pair.y)
-            .and(&self.grad_trial)
-            .and(&self.grad)
-            .par_for_each(|y, &a, &b| *y = a - b);
-        let ys = self.dot_m(&pair.y, &pair.s);
+        let (xs, xo) = (
+            self.trial.hat.as_slice().expect("std"),
+            self.cur.hat.as_slice().expect("std"),
+        );
+        let (rs, ro) = (
+            self.grad_trial.as_slice().expect("std"),
+            self.grad.as_slice().expect("std"),
+        );
+        let wm = &self.wm;
+        let (ys, yy) = pair
+            .s
+            .as_slice_mut()
+            .expect("std")
+            .par_iter_mut()
+            .zip(pair.y.as_slice_mut().expect("std").par_iter_mut())
+            .with_min_len(PAR_CHUNK)
+            .enumerate()
+            .map(|(i, (s, y))| {
+                *s = xs[i] - xo[i];
+                *y = rs[i] - ro[i];
+                (wm[i] * (y.re * s.re + y.im * s.im), wm[i] * y.norm_sqr())
+            })
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
         if ys > 0.0 {
             pair.rho = 1.0 / ys;
+            pair.yy = yy;
             self.pairs.push_back(pair);
         } else {
             self.spare_pairs.push(pair);
@@ -207,16 +288,17 @@ impl RelaxEngine {
 }
 
 /// For `state`: q = M⁻¹â into `area_dir`, σ = −⟨ĝ, q⟩/⟨q, q⟩_M (0 without an area
-/// constraint), r = M⁻¹ĝ + σq into `grad` with r(0) = 0; returns σ and the residual
-/// RMS(μ − mean μ) = (Σ_{k≠0} w |ĝ + σâ|² / |box|)^½.
+/// constraint), r = M⁻¹ĝ + σq into `grad` with r(0) = 0; returns σ, the residual
+/// RMS(μ − mean μ) = (Σ_{k≠0} w |ĝ + σâ|² / |box|)^½ and ⟨q, q⟩_M.
 fn gradient(
     ev: &Evaluator,
     metric: &[f64],
+    wm: &[f64],
     method: AreaMethod,
     state: &State,
     area_dir: &mut Array3<Complex64>,
     grad: &mut Array3<Complex64>,
-) -> (f64, f64) {
+) -> (f64, f64, f64) {
     let c_sigma = 3.0 / std::f64::consts::SQRT_2 * ev.eps;
     let k2 = &ev.symbols.k2;
     let weight = &ev.symbols.weight;
@@ -225,19 +307,15 @@ fn gradient(
         .as_slice_mut()
         .expect("standard layout")
         .par_iter_mut()
+        .with_min_len(PAR_CHUNK)
         .enumerate()
         .for_each(|(i, q)| *q = hat[i] * (c_sigma * k2[i] / metric[i]));
-    let sigma = if method == AreaMethod::None {
+    // ⟨â, M⁻¹â⟩ = ⟨q, q⟩_M and ⟨ĝ, M⁻¹â⟩ = ⟨ĝ, q⟩.
+    let qq = weighted_dot(wm, area_dir, area_dir);
+    let sigma = if method == AreaMethod::None || qq <= 0.0 {
         0.0
     } else {
-        // ⟨â, M⁻¹â⟩ = ⟨q, q⟩_M and ⟨ĝ, M⁻¹â⟩ = ⟨ĝ, q⟩.
-        let qq = weighted_dot(weight, Some(metric), area_dir, area_dir);
-        let gq = weighted_dot(weight, None, &state.nonlinear, area_dir);
-        if qq > 0.0 {
-            -gq / qq
-        } else {
-            0.0
-        }
+        -weighted_dot(weight, &state.nonlinear, area_dir) / qq
     };
     let g = state.nonlinear.as_slice().expect("standard layout");
     let q = area_dir.as_slice().expect("standard layout");
@@ -245,6 +323,7 @@ fn gradient(
         .as_slice_mut()
         .expect("standard layout")
         .par_iter_mut()
+        .with_min_len(PAR_CHUNK)
         .enumerate()
         .map(|(i, r)| {
             if k2[i] == 0.0 {
@@ -256,39 +335,62 @@ fn gradient(
         })
         .sum();
     let box_volume = ev.grid.len() as f64 * ev.grid.cell_volume();
-    (sigma, (sum_sq / box_volume).sqrt())
+    (sigma, (sum_sq / box_volume).sqrt(), qq)
 }
 
-/// Σ w [M] Re(u v*).
-fn weighted_dot(w: &[f64], m: Option<&[f64]>, u: &Array3<Complex64>, v: &Array3<Complex64>) -> f64 {
+/// Σ w Re(u v*).
+fn weighted_dot(w: &[f64], u: &Array3<Complex64>, v: &Array3<Complex64>) -> f64 {
     let (u, v) = (u.as_slice().expect("std"), v.as_slice().expect("std"));
-    (0..u.len())
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| w[i] * m.map_or(1.0, |m| m[i]) * (u[i].re * v[i].re + u[i].im * v[i].im))
+    u.par_chunks(PAR_CHUNK)
+        .zip(v.par_chunks(PAR_CHUNK))
+        .zip(w.par_chunks(PAR_CHUNK))
+        .map(|((u, v), w)| {
+            u.iter()
+                .zip(v)
+                .zip(w)
+                .map(|((u, v), w)| w * (u.re * v.re + u.im * v.im))
+                .sum::<f64>()
+        })
         .sum()
 }
 
-/// y ← y + a x.
-fn axpy(y: &mut Array3<Complex64>, a: f64, x: &Array3<Complex64>) {
-    Zip::from(y).and(x).par_for_each(|y, &x| *y += x * a);
-}
-
-/// (A_PP, A_PQ, A_QQ) with A(p + τq) = A_PP + 2τ A_PQ + τ² A_QQ.
-pub fn quadratic(aw: &[f64], p: &Array3<Complex64>, q: &Array3<Complex64>) -> (f64, f64, f64) {
-    let (p, q) = (p.as_slice().expect("std"), q.as_slice().expect("std"));
-    (0..p.len())
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| {
-            let (a, b) = (p[i], q[i]);
-            (
-                aw[i] * a.norm_sqr(),
-                aw[i] * (a.re * b.re + a.im * b.im),
-                aw[i] * b.norm_sqr(),
-            )
-        })
-        .reduce(|| (0.0, 0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1, x.2 + y.2))
+/// t ← c t + a x, returning Σ w Re(t next*) of the updated t (0 without `next`).
+fn scale_axpy_dot(
+    t: &mut Array3<Complex64>,
+    c: f64,
+    a: f64,
+    x: &Array3<Complex64>,
+    next: Option<&Array3<Complex64>>,
+    w: &[f64],
+) -> f64 {
+    let (t, x) = (t.as_slice_mut().expect("std"), x.as_slice().expect("std"));
+    let update = |t: &mut [Complex64], x: &[Complex64]| {
+        for (t, x) in t.iter_mut().zip(x) {
+            *t = *t * c + *x * a;
+        }
+    };
+    match next {
+        None => {
+            t.par_chunks_mut(PAR_CHUNK)
+                .zip(x.par_chunks(PAR_CHUNK))
+                .for_each(|(t, x)| update(t, x));
+            0.0
+        }
+        Some(n) => t
+            .par_chunks_mut(PAR_CHUNK)
+            .zip(x.par_chunks(PAR_CHUNK))
+            .zip(n.as_slice().expect("std").par_chunks(PAR_CHUNK))
+            .zip(w.par_chunks(PAR_CHUNK))
+            .map(|(((t, x), n), w)| {
+                update(t, x);
+                t.iter()
+                    .zip(n)
+                    .zip(w)
+                    .map(|((t, n), w)| w * (t.re * n.re + t.im * n.im))
+                    .sum::<f64>()
+            })
+            .sum(),
+    }
 }
 
 /// The root of a x² + 2b x + c = 0 nearest `near` (numerically stable), `None` if not real.
@@ -359,9 +461,10 @@ impl Engine for RelaxEngine {
                 });
             }
         }
-        let (sigma, residual) = gradient(
+        let (sigma, residual, qq) = gradient(
             &self.ev,
             &self.metric,
+            &self.wm,
             self.area.method,
             &self.trial,
             &mut self.area_dir,
@@ -370,8 +473,7 @@ impl Engine for RelaxEngine {
         self.remember();
         std::mem::swap(&mut self.cur, &mut self.trial);
         std::mem::swap(&mut self.grad, &mut self.grad_trial);
-        self.sigma = sigma;
-        self.residual = residual;
+        (self.sigma, self.residual, self.qq) = (sigma, residual, qq);
         Ok(StepReport {
             dt,
             residual,

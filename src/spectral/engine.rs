@@ -19,10 +19,12 @@
 //! nearest the last σ and rejects a step with no real root.
 
 use super::evaluator::{axis_symbol, Evaluator, ExplicitTerm, State};
+use super::PAR_CHUNK;
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
+use crate::relax::nearest_root;
 use ndarray::{Array3, Zip};
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -161,6 +163,7 @@ impl SpectralEngine {
         p_out
             .par_iter_mut()
             .zip(q_out.par_iter_mut())
+            .with_min_len(PAR_CHUNK)
             .enumerate()
             .map(|(i, (p, q))| {
                 let k = k2[i];
@@ -189,25 +192,7 @@ impl SpectralEngine {
         match self.area.method {
             AreaMethod::None => Some(0.0),
             AreaMethod::Lagrangian => Some(self.sigma),
-            AreaMethod::Projection => {
-                let c = app - self.area.target;
-                if aqq <= 0.0 {
-                    return (apq != 0.0).then(|| -c / (2.0 * apq));
-                }
-                let disc = apq * apq - aqq * c;
-                if disc < 0.0 {
-                    return None;
-                }
-                // Stable roots of aqq σ² + 2 apq σ + c = 0.
-                let q = -(apq + apq.signum() * disc.sqrt());
-                let r1 = q / aqq;
-                let r2 = if q != 0.0 { c / q } else { r1 };
-                Some(if (r1 - self.sigma).abs() <= (r2 - self.sigma).abs() {
-                    r1
-                } else {
-                    r2
-                })
-            }
+            AreaMethod::Projection => nearest_root(aqq, apq, app - self.area.target, self.sigma),
         }
     }
 

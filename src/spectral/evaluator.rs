@@ -2,6 +2,7 @@
 //! with two inverse and two forward real transforms (planned once, no allocation per call).
 
 use super::transform::Transform;
+use super::PAR_CHUNK;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
 use crate::grid::Grid;
@@ -114,7 +115,7 @@ impl Evaluator {
             .as_slice_mut()
             .expect("standard layout")
             .par_iter_mut()
-            .with_min_len(4096)
+            .with_min_len(PAR_CHUNK)
             .enumerate()
             .map(|(i, s)| {
                 *s = hat[i] * (-k2[i]);
@@ -139,7 +140,7 @@ impl Evaluator {
                     .expect("standard layout")
                     .par_iter_mut(),
             )
-            .with_min_len(4096)
+            .with_min_len(PAR_CHUNK)
             .enumerate()
             .map(|(i, (w, w2))| {
                 let p = phi[i];
