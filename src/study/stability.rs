@@ -129,7 +129,7 @@ pub fn stability(
     for x in &samples {
         let _ = writeln!(
             csv,
-            "{},{},{},{}",
+            "\"{}\",{},{},{}",
             x.stepper,
             x.dt,
             x.outcome.as_str(),

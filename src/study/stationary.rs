@@ -275,7 +275,7 @@ fn csv(routes: &[Route]) -> String {
     for r in routes {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{}",
+            "\"{}\",{},{},{},{},{},{},{}",
             r.name, r.steps, r.evaluations, r.t, r.wall, r.energy, r.reduced_energy, r.max_dphi
         );
     }

@@ -1,0 +1,135 @@
+//! The comparison and study commands, end to end on tiny scenes.
+
+use std::path::Path;
+use std::process::Command;
+
+fn vesicle(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_vesicle"))
+        .args(args)
+        .output()
+        .expect("run vesicle")
+}
+
+/// Data rows of a CSV whose first column may be quoted (and hold commas).
+fn csv_rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let (first, rest) = match l.strip_prefix('"') {
+                Some(q) => q.split_once("\",").unwrap(),
+                None => l.split_once(',').unwrap(),
+            };
+            std::iter::once(first)
+                .chain(rest.split(','))
+                .map(str::to_string)
+                .collect()
+        })
+        .collect()
+}
+
+/// `compare` starts both engines from the same field (difference 0 at t = 0) and writes one
+/// row per common time.
+#[test]
+fn compare_writes_the_table() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cmp");
+    let o = vesicle(&[
+        "compare",
+        "runs/compare2d.json",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "t_end=0.05",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = csv_rows(&out.join("compare.csv"));
+    assert_eq!(rows.len(), 11);
+    let dphi0: f64 = rows[0][13].parse().unwrap();
+    let dphi_end: f64 = rows[10][13].parse().unwrap();
+    assert!(dphi0 < 1e-12, "initial fields differ by {dphi0}");
+    assert!(
+        dphi_end > 0.0 && dphi_end < 0.1,
+        "final difference {dphi_end}"
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("wall-time ratio"));
+}
+
+/// `study stability` finds the FD scheme stable below its bound (DESIGN.md §2: 1.25e-3 in 2D
+/// with ε = h = 1) and failing within a factor 2 above it; the stabilised SBDF1 stays stable
+/// three decades beyond it.
+#[test]
+fn stability_study_brackets_the_fd_bound() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("stab");
+    let o = vesicle(&[
+        "study",
+        "stability",
+        "runs/stability2d.json",
+        "--out",
+        out.to_str().unwrap(),
+        "--steps",
+        "60",
+        "--dt-min",
+        "1e-4",
+        "--dt-max",
+        "3",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = csv_rows(&out.join("stability.csv"));
+    let bound = 1.25e-3;
+    let of = |name: &str| -> Vec<(f64, String)> {
+        rows.iter()
+            .filter(|r| r[0] == name)
+            .map(|r| (r[1].parse().unwrap(), r[2].clone()))
+            .collect()
+    };
+    for (dt, outcome) in of("fd explicit Euler") {
+        if dt < bound {
+            assert_eq!(outcome, "stable", "fd at dt {dt}");
+        } else if dt > 2.0 * bound {
+            assert_ne!(outcome, "stable", "fd at dt {dt}");
+        }
+    }
+    let stabilised = of("spectral SBDF1, S");
+    assert!(stabilised
+        .iter()
+        .filter(|(dt, _)| *dt <= 1.0)
+        .all(|(_, o)| o == "stable"));
+    assert!(out.join("stability.png").exists());
+}
+
+/// `study stationary` on a small 2D ellipse: the L-BFGS route reaches the conserved flow's
+/// end energy (1e-6) and field (1e-3) with fewer evaluations.
+#[test]
+fn stationary_study_relaxational_route_arrives() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("stat");
+    let o = vesicle(&[
+        "study",
+        "stationary",
+        "runs/ellipse2d.json",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "n=[64,64]",
+        "--set",
+        "initial.r0=10",
+        "--set",
+        "stop_residual=1e-9",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = csv_rows(&out.join("stationary.csv"));
+    let num = |r: usize, c: usize| -> f64 { rows[r][c].parse().unwrap() };
+    let (f_conserved, f_relax) = (num(0, 5), num(1, 5));
+    assert!((f_relax - f_conserved).abs() / f_conserved < 1e-6);
+    assert!(num(1, 7) <= 1e-3, "max|dphi| {}", num(1, 7));
+    assert!(
+        num(1, 2) < num(0, 2),
+        "evaluations {} vs {}",
+        num(1, 2),
+        num(0, 2)
+    );
+    assert!(out.join("convergence.png").exists());
+}
