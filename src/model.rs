@@ -72,6 +72,16 @@ impl C0 {
         self.ramp_time.is_some() && !self.is_zero()
     }
 
+    /// The two forms of εC0 at ramp factor `r`: the uniform value (0 when c0 = 0 or a field
+    /// is given) and the unramped field (multiply by `r`).
+    pub fn parts(&self, r: f64) -> (f64, Option<&[f64]>) {
+        match &self.shape {
+            SpontaneousCurvature::Zero => (0.0, None),
+            SpontaneousCurvature::Uniform(v) => (r * v, None),
+            SpontaneousCurvature::Field(a) => (0.0, Some(a.as_slice().expect("standard layout"))),
+        }
+    }
+
     /// εC0 at flat index `i` and time factor `r`.
     #[inline]
     pub fn at(&self, i: usize, r: f64) -> f64 {

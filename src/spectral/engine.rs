@@ -146,45 +146,79 @@ impl SpectralEngine {
         let e2 = self.ev.eps * self.ev.eps;
         let (s2, s4) = (self.stabilizer.s2, self.stabilizer.s4);
         let c_sigma = 3.0 / std::f64::consts::SQRT_2 * self.ev.eps;
-        let zero = (Complex64::default(), Complex64::default());
+        let c = PAR_CHUNK;
         let cur_hat = self.cur.hat.as_slice().expect("standard layout");
         let cur_n = self.cur.nonlinear.as_slice().expect("standard layout");
-        let (prev_hat, prev_n) = match &self.prev {
-            Some((h, n)) if a2 != 0.0 => (
-                Some(h.as_slice().expect("std")),
-                Some(n.as_slice().expect("std")),
-            ),
-            _ => (None, None),
+        let prev = match &self.prev {
+            Some((h, n)) if a2 != 0.0 => {
+                Some((h.as_slice().expect("std"), n.as_slice().expect("std")))
+            }
+            _ => None,
         };
         let p_out = self.next.hat.as_slice_mut().expect("standard layout");
         let q_out = self.ev.spare.as_slice_mut().expect("standard layout");
-        let k2 = &self.ev.symbols.k2;
-        let aw = &self.ev.symbols.area_weight;
+        let (k2, aw) = (&self.ev.symbols.k2, &self.ev.symbols.area_weight);
+        // P = [−a1 φ̂ⁿ − a2 φ̂ⁿ⁻¹ + Δt(b1(N̂ⁿ + Sφ̂ⁿ) + b2(N̂ⁿ⁻¹ + Sφ̂ⁿ⁻¹))]/D,
+        // Q = −Δt c_σ k⁴ (b1 φ̂ⁿ + b2 φ̂ⁿ⁻¹)/D, D = a0 + Δt(2ε⁴k⁶ + S); returns w k²-weighted
+        // |P|², Re(P Q*), |Q|².
+        let body = |k: f64,
+                    w: f64,
+                    h1: Complex64,
+                    n1: Complex64,
+                    h0: Complex64,
+                    n0: Complex64,
+                    p: &mut Complex64,
+                    q: &mut Complex64| {
+            let s = s2 * k + s4 * e2 * k * k;
+            let inv = 1.0 / (a0 + dt * (2.0 * e2 * e2 * k * k * k + s));
+            let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * dt;
+            *p = rhs * inv;
+            *q = (h1 * b1 + h0 * b2) * (-dt * c_sigma * k * k * inv);
+            (
+                w * p.norm_sqr(),
+                w * (p.re * q.re + p.im * q.im),
+                w * q.norm_sqr(),
+            )
+        };
+        let add = |x: (f64, f64, f64), y: (f64, f64, f64)| (x.0 + y.0, x.1 + y.1, x.2 + y.2);
         p_out
-            .par_iter_mut()
-            .zip(q_out.par_iter_mut())
-            .with_min_len(PAR_CHUNK)
+            .par_chunks_mut(c)
+            .zip(q_out.par_chunks_mut(c))
             .enumerate()
-            .map(|(i, (p, q))| {
-                let k = k2[i];
-                let s = s2 * k + s4 * e2 * k * k;
-                let den = a0 + dt * (2.0 * e2 * e2 * k * k * k + s);
-                let (h1, n1) = (cur_hat[i], cur_n[i]);
-                let (h0, n0) = match (prev_hat, prev_n) {
-                    (Some(h), Some(n)) => (h[i], n[i]),
-                    _ => zero,
-                };
-                let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * dt;
-                *p = rhs / den;
-                *q = (h1 * b1 + h0 * b2) * (-dt * c_sigma * k * k / den);
-                let w = aw[i];
-                (
-                    w * p.norm_sqr(),
-                    w * (p.re * q.re + p.im * q.im),
-                    w * q.norm_sqr(),
-                )
+            .map(|(j, (p, q))| {
+                let r = j * c..j * c + p.len();
+                let (k, w, h1, n1) = (
+                    &k2[r.clone()],
+                    &aw[r.clone()],
+                    &cur_hat[r.clone()],
+                    &cur_n[r.clone()],
+                );
+                let rows = p.iter_mut().zip(q.iter_mut()).zip(k).zip(w).zip(h1).zip(n1);
+                match prev {
+                    Some((h0, n0)) => rows
+                        .zip(&h0[r.clone()])
+                        .zip(&n0[r])
+                        .map(|(((((((p, q), &k), &w), &h1), &n1), &h0), &n0)| {
+                            body(k, w, h1, n1, h0, n0, p, q)
+                        })
+                        .fold((0.0, 0.0, 0.0), add),
+                    None => rows
+                        .map(|(((((p, q), &k), &w), &h1), &n1)| {
+                            body(
+                                k,
+                                w,
+                                h1,
+                                n1,
+                                Complex64::default(),
+                                Complex64::default(),
+                                p,
+                                q,
+                            )
+                        })
+                        .fold((0.0, 0.0, 0.0), add),
+                }
             })
-            .reduce(|| (0.0, 0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1, x.2 + y.2))
+            .reduce(|| (0.0, 0.0, 0.0), add)
     }
 
     /// σ^{n+1} for this step, or `None` if the projection has no real root.

@@ -126,36 +126,52 @@ impl Evaluator {
         // Φ = f − ε²∇²φ, F = ∫Φ²; work ← f, work2 ← f'Φ
         let r = self.c0.ramp(t);
         let e2 = self.eps * self.eps;
-        let c0 = &self.c0;
+        let (uniform, field) = self.c0.parts(r);
         let phi = state.phi.as_slice().expect("standard layout");
-        let old = previous.map(|p| p.as_slice().expect("standard layout"));
+        let old = previous.map_or(phi, |p| p.as_slice().expect("standard layout"));
+        let c = PAR_CHUNK;
+        // Per point: f, Φ = f − ε²∇²φ, f'Φ; sums Φ², max|φ|, Σφ, max|φ − φ_old|.
+        let body = |p: f64, ec0: f64, lap: &mut f64, fphi: &mut f64, o: f64| {
+            let f = bulk(p, ec0);
+            let big = f - e2 * *lap;
+            *lap = f;
+            *fphi = bulk_derivative(p, ec0) * big;
+            (big * big, p.abs(), p, (p - o).abs())
+        };
+        let add = |a: (f64, f64, f64, f64), b: (f64, f64, f64, f64)| {
+            (a.0 + b.0, a.1.max(b.1), a.2 + b.2, a.3.max(b.3))
+        };
+        let zero = (0.0, 0.0, 0.0, 0.0);
         let (energy, max_abs, sum_phi, change) = self
             .work
             .as_slice_mut()
             .expect("standard layout")
-            .par_iter_mut()
+            .par_chunks_mut(c)
             .zip(
                 self.work2
                     .as_slice_mut()
                     .expect("standard layout")
-                    .par_iter_mut(),
+                    .par_chunks_mut(c),
             )
-            .with_min_len(PAR_CHUNK)
             .enumerate()
-            .map(|(i, (w, w2))| {
-                let p = phi[i];
-                let ec0 = c0.at(i, r);
-                let f = bulk(p, ec0);
-                let big = f - e2 * *w;
-                *w = f;
-                *w2 = bulk_derivative(p, ec0) * big;
-                let change = old.map_or(0.0, |o| (p - o[i]).abs());
-                (big * big, p.abs(), p, change)
+            .map(|(j, (w, w2))| {
+                let range = j * c..j * c + w.len();
+                let points = phi[range.clone()]
+                    .iter()
+                    .zip(&old[range.clone()])
+                    .zip(w.iter_mut())
+                    .zip(w2.iter_mut());
+                match field {
+                    Some(ec0) => points
+                        .zip(&ec0[range])
+                        .map(|((((&p, &o), lap), fphi), &e)| body(p, r * e, lap, fphi, o))
+                        .fold(zero, add),
+                    None => points
+                        .map(|(((&p, &o), lap), fphi)| body(p, uniform, lap, fphi, o))
+                        .fold(zero, add),
+                }
             })
-            .reduce(
-                || (0.0, 0.0, 0.0, 0.0),
-                |a, b| (a.0 + b.0, a.1.max(b.1), a.2 + b.2, a.3.max(b.3)),
-            );
+            .reduce(|| zero, add);
         let dv = self.grid.cell_volume() * self.grid.mirror_factor();
         state.measures = Measures {
             energy: energy * dv,
