@@ -70,7 +70,8 @@ pub fn stability_bound(scene: &Scene, grid: &Grid) -> Option<f64> {
     match (scene.method, scene.dynamics) {
         (Method::Fd, _) => Some(fd::stability_bound(grid, scene.eps, 0.0)),
         (Method::Spectral, Dynamics::Conserved) => {
-            let b = spectral::stability_bound(grid, scene.eps, &scene.stabilizer, scene.laplacian);
+            let b =
+                spectral::stability_bound(grid, scene.eps, &scene.stabilizer(), scene.laplacian);
             b.is_finite().then_some(b)
         }
         (Method::Spectral, Dynamics::Relaxational) => None,
@@ -193,6 +194,11 @@ pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
             .collect(),
     );
     s.threads = Some(rayon::current_num_threads());
+    let st = scene.stabilizer();
+    s.stabilizer = crate::config::StabilizerSpec {
+        s2: Some(st.s2),
+        s4: Some(st.s4),
+    };
     s
 }
 

@@ -109,7 +109,7 @@ impl SpectralEngine {
             next: ev.blank(),
             cur,
             ev,
-            stabilizer: scene.stabilizer.clone(),
+            stabilizer: scene.stabilizer(),
             scheme: scene.scheme,
             adaptive,
             prev: None,

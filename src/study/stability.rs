@@ -8,7 +8,7 @@
 //! spectral frozen-coefficient bound; `stability.csv` has every run, `stability.png` charts
 //! log10 max|φ| after the run against log10 Δt.
 
-use crate::config::{AdaptiveSpec, AreaMethod, Method, Scene, Scheme, Stabilizer};
+use crate::config::{AdaptiveSpec, AreaMethod, Method, Scene, Scheme, Stabilizer, StabilizerSpec};
 use crate::error::Result;
 use crate::fd;
 use crate::output;
@@ -57,7 +57,7 @@ pub struct Sample {
 
 /// The steppers compared: name and how to set up the scene.
 fn steppers(scene: &Scene) -> Vec<(&'static str, Scene)> {
-    let base = |method, scheme, stabilizer: Stabilizer| {
+    let base = |method, scheme, stabilizer: StabilizerSpec| {
         let mut s = scene.clone();
         s.method = method;
         s.scheme = scheme;
@@ -68,11 +68,14 @@ fn steppers(scene: &Scene) -> Vec<(&'static str, Scene)> {
         s.area.alpha = None;
         s
     };
-    let none = Stabilizer { s2: 0.0, s4: 0.0 };
+    let none = StabilizerSpec {
+        s2: Some(0.0),
+        s4: Some(0.0),
+    };
     vec![
         (
             "fd explicit Euler",
-            base(Method::Fd, Scheme::Sbdf1, scene.stabilizer.clone()),
+            base(Method::Fd, Scheme::Sbdf1, StabilizerSpec::default()),
         ),
         (
             "spectral SBDF1, S = 0",
