@@ -13,8 +13,10 @@ use crate::config::AreaMethod;
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, C0, PHI_BLOWUP};
+use crate::spectral::PAR_CHUNK;
 use crate::stencil;
-use ndarray::{Array3, Zip};
+use ndarray::Array3;
+use rayon::prelude::*;
 
 /// Explicit-Euler stability bound of the FD scheme at tension σ:
 /// `Δt < 1 / (λ (2 + ε²λ)² + (3/√2) ε σ λ²/2)`, λ = 4d/h² (linearisation about φ = ±1).
@@ -80,24 +82,36 @@ impl FdEngine {
         stencil::laplacian(&self.grid, &self.phi, &mut self.lap_phi);
         let r = self.c0.ramp(t);
         let e2 = self.eps * self.eps;
-        let c0 = &self.c0;
+        let (uniform, field) = self.c0.parts(r);
         let phi = self.phi.as_slice().expect("standard layout");
         let lap = self.lap_phi.as_slice().expect("standard layout");
         let big = self.big_phi.as_slice_mut().expect("standard layout");
-        let mut sum_sq = 0.0;
-        let mut max_abs = 0.0f64;
-        for i in 0..phi.len() {
-            let p = phi[i];
-            let b = bulk(p, c0.at(i, r)) - e2 * lap[i];
-            big[i] = b;
-            sum_sq += b * b;
-            max_abs = max_abs.max(p.abs());
-        }
+        // Φ_h = f(φ) − ε²∇²_h φ, with Σ Φ², max|φ| and Σ φ.
+        let (sum_sq, max_abs, sum_phi) = big
+            .par_chunks_mut(PAR_CHUNK)
+            .enumerate()
+            .map(|(j, b)| {
+                let start = j * PAR_CHUNK;
+                let mut acc = (0.0, 0.0f64, 0.0);
+                for (k, b) in b.iter_mut().enumerate() {
+                    let i = start + k;
+                    let p = phi[i];
+                    let ec0 = field.map_or(uniform, |f| r * f[i]);
+                    *b = bulk(p, ec0) - e2 * lap[i];
+                    acc = (acc.0 + *b * *b, acc.1.max(p.abs()), acc.2 + p);
+                }
+                acc
+            })
+            .reduce(
+                || (0.0, 0.0, 0.0),
+                |a, b| (a.0 + b.0, a.1.max(b.1), a.2 + b.2),
+            );
         let dv = self.grid.cell_volume() * self.grid.mirror_factor();
         self.measures = Measures {
             energy: sum_sq * dv,
             area: stencil::area(&self.grid, self.eps, &self.phi),
-            volume: model::volume(&self.grid, &self.phi),
+            // V = Σ (1 + φ)/2 h^d
+            volume: 0.5 * (phi.len() as f64 + sum_phi) * dv,
         };
         if model::diverged(max_abs, self.measures.energy) {
             return Err(Diverged(format!(
@@ -125,16 +139,20 @@ impl FdEngine {
         let r = self.c0.ramp(t);
         let e2 = self.eps * self.eps;
         let tension = 3.0 / std::f64::consts::SQRT_2 * self.eps * self.sigma;
-        let c0 = &self.c0;
+        let (uniform, field) = self.c0.parts(r);
         let phi = self.phi.as_slice().expect("standard layout");
         let big = self.big_phi.as_slice().expect("standard layout");
         let lap_big = self.work.as_slice().expect("standard layout");
         let lap = self.lap_phi.as_slice().expect("standard layout");
         let mu = self.mu.as_slice_mut().expect("standard layout");
-        for i in 0..phi.len() {
-            let fp = bulk_derivative(phi[i], c0.at(i, r));
-            mu[i] = 2.0 * (fp * big[i] - e2 * lap_big[i]) - tension * lap[i];
-        }
+        mu.par_chunks_mut(PAR_CHUNK).enumerate().for_each(|(j, m)| {
+            let start = j * PAR_CHUNK;
+            for (k, m) in m.iter_mut().enumerate() {
+                let i = start + k;
+                let fp = bulk_derivative(phi[i], field.map_or(uniform, |f| r * f[i]));
+                *m = 2.0 * (fp * big[i] - e2 * lap_big[i]) - tension * lap[i];
+            }
+        });
     }
 }
 
@@ -165,14 +183,25 @@ impl Engine for FdEngine {
         stencil::laplacian(&self.grid, &self.mu, &mut self.work);
         // Keep φ^n in `mu` (no longer needed) so a blow-up can restore it.
         std::mem::swap(&mut self.mu, &mut self.phi);
-        let mut residual = 0.0f64;
-        Zip::from(&mut self.phi)
-            .and(&self.mu)
-            .and(&self.work)
-            .for_each(|new, &old, &lap_mu| {
-                *new = old + dt * lap_mu;
-                residual = residual.max(lap_mu.abs());
-            });
+        // φ^{n+1} = φ^n + Δt ∇²_h μ; residual = max|∇²_h μ|.
+        let old = self.mu.as_slice().expect("standard layout");
+        let lap_mu = self.work.as_slice().expect("standard layout");
+        let residual = self
+            .phi
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_chunks_mut(PAR_CHUNK)
+            .zip(old.par_chunks(PAR_CHUNK))
+            .zip(lap_mu.par_chunks(PAR_CHUNK))
+            .map(|((new, old), lap_mu)| {
+                let mut m = 0.0f64;
+                for ((n, &o), &l) in new.iter_mut().zip(old).zip(lap_mu) {
+                    *n = o + dt * l;
+                    m = m.max(l.abs());
+                }
+                m
+            })
+            .reduce(|| 0.0, f64::max);
         let area_before = self.measures.area;
         if let Err(e) = self.refresh(t + dt) {
             std::mem::swap(&mut self.mu, &mut self.phi);

@@ -81,16 +81,6 @@ impl C0 {
             SpontaneousCurvature::Field(a) => (0.0, Some(a.as_slice().expect("standard layout"))),
         }
     }
-
-    /// εC0 at flat index `i` and time factor `r`.
-    #[inline]
-    pub fn at(&self, i: usize, r: f64) -> f64 {
-        match &self.shape {
-            SpontaneousCurvature::Zero => 0.0,
-            SpontaneousCurvature::Uniform(v) => r * v,
-            SpontaneousCurvature::Field(a) => r * a.as_slice().expect("standard layout")[i],
-        }
-    }
 }
 
 /// εC0(x) = k [outside + (inside − outside)(1 − tanh((|x − c| − R)/w))/2], k = ε/√2.
@@ -157,12 +147,6 @@ impl Measures {
             }
         }
     }
-}
-
-/// V = Σ (1 + φ)/2 · h^d · (mirror factor).
-pub fn volume(grid: &Grid, phi: &Array3<f64>) -> f64 {
-    let s: f64 = phi.iter().map(|p| 0.5 * (1.0 + p)).sum();
-    s * grid.cell_volume() * grid.mirror_factor()
 }
 
 /// Largest |φ| a state may reach before the run counts as blown up.
