@@ -25,7 +25,7 @@ use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::relax::nearest_root;
-use ndarray::{Array3, Zip};
+use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
@@ -236,9 +236,14 @@ impl SpectralEngine {
         let sigma = self
             .choose_sigma(sums)
             .ok_or_else(|| "the area projection has no real root".to_string())?;
-        Zip::from(&mut self.next.hat)
-            .and(&self.ev.spare)
-            .par_for_each(|p, &q| *p += q * sigma);
+        let q = self.ev.spare.as_slice().expect("standard layout");
+        self.next
+            .hat
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_chunks_mut(PAR_CHUNK)
+            .zip(q.par_chunks(PAR_CHUNK))
+            .for_each(|(p, q)| p.iter_mut().zip(q).for_each(|(p, q)| *p += q * sigma));
         self.max_change = self
             .ev
             .evaluate(&mut self.next, t + dt, Some(&self.cur.phi))

@@ -7,7 +7,7 @@ use crate::config::Laplacian;
 use crate::engine::Diverged;
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, AREA_PREFACTOR, C0};
-use ndarray::{Array3, Zip};
+use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
@@ -110,16 +110,22 @@ impl Evaluator {
         // ∇²φ = IFT[−k² φ̂], and A = Σ area_weight |φ̂|² in the same pass.
         let (k2, aw) = (&self.symbols.k2, &self.symbols.area_weight);
         let hat = state.hat.as_slice().expect("standard layout");
+        let c = PAR_CHUNK;
         let area: f64 = self
             .spare
             .as_slice_mut()
             .expect("standard layout")
-            .par_iter_mut()
-            .with_min_len(PAR_CHUNK)
-            .enumerate()
-            .map(|(i, s)| {
-                *s = hat[i] * (-k2[i]);
-                aw[i] * hat[i].norm_sqr()
+            .par_chunks_mut(c)
+            .zip(hat.par_chunks(c))
+            .zip(k2.par_chunks(c))
+            .zip(aw.par_chunks(c))
+            .map(|(((s, h), k), w)| {
+                let mut a = 0.0;
+                for (((s, h), k), w) in s.iter_mut().zip(h).zip(k).zip(w) {
+                    *s = h * (-k);
+                    a += w * h.norm_sqr();
+                }
+                a
             })
             .sum();
         self.transform.inverse(&mut self.spare, &mut self.work);
@@ -187,22 +193,34 @@ impl Evaluator {
         }
         self.transform.forward(&self.work2, &mut state.nonlinear);
         self.transform.forward(&self.work, &mut self.spare);
-        let k2 = k2_view(&self.symbols.k2, &state.hat);
-        match self.explicit {
+        let explicit = self.explicit;
+        let combine = |n: &mut Complex64, g: Complex64, h: Complex64, k: f64| match explicit {
             // N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f]
-            ExplicitTerm::ConservedRhs => Zip::from(&mut state.nonlinear)
-                .and(&self.spare)
-                .and(k2)
-                .par_for_each(|n, &g, &k| *n = *n * (-2.0 * k) + g * (-2.0 * e2 * k * k)),
+            ExplicitTerm::ConservedRhs => *n = *n * (-2.0 * k) + g * (-2.0 * e2 * k * k),
             // ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂
-            ExplicitTerm::Gradient => Zip::from(&mut state.nonlinear)
-                .and(&self.spare)
-                .and(&state.hat)
-                .and(k2)
-                .par_for_each(|n, &g, &h, &k| {
-                    *n = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k)
-                }),
-        }
+            ExplicitTerm::Gradient => {
+                *n = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k)
+            }
+        };
+        let hat = state.hat.as_slice().expect("standard layout");
+        state
+            .nonlinear
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_chunks_mut(c)
+            .zip(
+                self.spare
+                    .as_slice()
+                    .expect("standard layout")
+                    .par_chunks(c),
+            )
+            .zip(hat.par_chunks(c))
+            .zip(self.symbols.k2.par_chunks(c))
+            .for_each(|(((n, g), h), k)| {
+                for (((n, &g), &h), &k) in n.iter_mut().zip(g).zip(h).zip(k) {
+                    combine(n, g, h, k);
+                }
+            });
         Ok(change)
     }
 }
@@ -246,9 +264,4 @@ pub fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Sy
         weight,
         area_weight,
     }
-}
-
-/// View the flat |k|² table with the spectral array's shape.
-pub fn k2_view<'a>(k2: &'a [f64], like: &Array3<Complex64>) -> ndarray::ArrayView3<'a, f64> {
-    ndarray::ArrayView3::from_shape(like.raw_dim(), k2).expect("table matches spectral shape")
 }
