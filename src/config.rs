@@ -236,57 +236,141 @@ impl<'de> Deserialize<'de> for Initial {
 
 /// Initial shapes: φ = tanh(d/(√2 ε)) with d the (approximate) signed distance, positive inside.
 /// `center` defaults to the box centre; `axis` (symmetry axis) defaults to the last axis.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
+/// Written `{"shape": "<kind>", ...fields of the kind}`.
+#[derive(Clone, Debug, Serialize)]
+#[serde(tag = "shape", rename_all = "lowercase")]
 pub enum Shape {
-    /// Sphere (circle in 2D) of radius `radius`.
-    Sphere {
-        radius: f64,
-        #[serde(default)]
-        center: Option<Vec<f64>>,
-    },
-    /// Ellipsoid (ellipse in 2D) with semi-axes `axes`.
-    Ellipsoid {
-        axes: Vec<f64>,
-        #[serde(default)]
-        center: Option<Vec<f64>>,
-    },
-    /// Spheroid (ellipse in 2D) with reduced volume (area) `reduced_volume` and
-    /// `R0 = √(A/4π)` (2D: perimeter/2π); `kind` prolate (long along `axis`) or oblate.
-    Spheroid {
-        reduced_volume: f64,
-        r0: f64,
-        #[serde(default)]
-        kind: SpheroidKind,
-        #[serde(default)]
-        axis: Option<String>,
-        #[serde(default)]
-        center: Option<Vec<f64>>,
-    },
-    /// Stomatocyte-like cup: a ball of `radius` minus a ball of `inner_radius` whose centre is
-    /// shifted by `offset` along `axis`.
-    Cup {
-        radius: f64,
-        inner_radius: f64,
-        offset: f64,
-        #[serde(default)]
-        axis: Option<String>,
-        #[serde(default)]
-        center: Option<Vec<f64>>,
-    },
-    /// Capsule (tube with round caps): radius `radius`, straight part `length` along `axis`.
-    Capsule {
-        radius: f64,
-        length: f64,
-        #[serde(default)]
-        axis: Option<String>,
-        #[serde(default)]
-        center: Option<Vec<f64>>,
-    },
+    /// Sphere (circle in 2D).
+    Sphere(Sphere),
+    /// Ellipsoid (ellipse in 2D).
+    Ellipsoid(Ellipsoid),
+    /// Spheroid given by reduced volume and size.
+    Spheroid(Spheroid),
+    /// Stomatocyte-like cup.
+    Cup(Cup),
+    /// Tube with round caps.
+    Capsule(Capsule),
     /// Union of shapes: d = max d_i.
-    Union { of: Vec<Shape> },
+    Union(Union),
     /// `base` with `minus` removed: d = min(d_base, −d_minus).
-    Difference { base: Box<Shape>, minus: Box<Shape> },
+    Difference(Difference),
+}
+
+/// Sphere (circle in 2D) of radius `radius`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    pub radius: f64,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Ellipsoid (ellipse in 2D) with semi-axes `axes`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ellipsoid {
+    pub axes: Vec<f64>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Spheroid (ellipse in 2D) with reduced volume (area) `reduced_volume` and `R0 = √(A/4π)`
+/// (2D: perimeter/2π); `kind` prolate (long along `axis`) or oblate.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spheroid {
+    pub reduced_volume: f64,
+    pub r0: f64,
+    #[serde(default)]
+    pub kind: SpheroidKind,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Stomatocyte-like cup: a ball of `radius` minus a ball of `inner_radius` whose centre is
+/// shifted by `offset` along `axis`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cup {
+    pub radius: f64,
+    pub inner_radius: f64,
+    pub offset: f64,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Capsule (tube with round caps): radius `radius`, straight part `length` along `axis`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Capsule {
+    pub radius: f64,
+    pub length: f64,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Union of shapes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Union {
+    pub of: Vec<Shape>,
+}
+
+/// `base` with `minus` removed.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Difference {
+    pub base: Box<Shape>,
+    pub minus: Box<Shape>,
+}
+
+/// Marks the inner path of a shape's error inside its message (serde keeps no path inside a
+/// hand-written deserializer); [`from_value`] turns it back into a dotted field.
+const PATH_MARK: char = '\u{1f}';
+
+impl<'de> Deserialize<'de> for Shape {
+    /// Reads the `"shape"` tag, then the kind's struct with path tracking, so an error names
+    /// the inner key (`initial.radius`, `initial.of[1].axes`).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        fn kind<T: serde::de::DeserializeOwned>(v: Value) -> std::result::Result<T, String> {
+            serde_path_to_error::deserialize(v).map_err(|e| {
+                let path = e.path().to_string();
+                let inner = e.into_inner().to_string();
+                match (path.as_str(), inner.strip_prefix(PATH_MARK)) {
+                    (".", _) => inner,
+                    (_, Some(rest)) => format!("{PATH_MARK}{path}.{rest}"),
+                    (_, None) => format!("{PATH_MARK}{path}{PATH_MARK}{inner}"),
+                }
+            })
+        }
+        let mut v = Value::deserialize(d)?;
+        let tag = v
+            .as_object_mut()
+            .ok_or_else(|| D::Error::custom("expected a shape object"))?
+            .remove("shape")
+            .ok_or_else(|| D::Error::missing_field("shape"))?;
+        let shape = match tag.as_str().unwrap_or_default() {
+            "sphere" => kind(v).map(Shape::Sphere),
+            "ellipsoid" => kind(v).map(Shape::Ellipsoid),
+            "spheroid" => kind(v).map(Shape::Spheroid),
+            "cup" => kind(v).map(Shape::Cup),
+            "capsule" => kind(v).map(Shape::Capsule),
+            "union" => kind(v).map(Shape::Union),
+            "difference" => kind(v).map(Shape::Difference),
+            _ => Err(format!(
+                "{PATH_MARK}shape{PATH_MARK}unknown variant {tag}, expected one of `sphere`, \
+                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `union`, `difference`"
+            )),
+        };
+        shape.map_err(D::Error::custom)
+    }
 }
 
 /// Which way a spheroid is stretched.
@@ -537,7 +621,15 @@ pub fn from_value(value: Value) -> Result<Scene> {
         } else {
             path
         };
-        Error::config(field, e.into_inner().to_string())
+        let reason = e.into_inner().to_string();
+        // A shape's error carries its inner path: "\u{1f}radius\u{1f}invalid type ...".
+        match reason
+            .strip_prefix(PATH_MARK)
+            .and_then(|r| r.split_once(PATH_MARK))
+        {
+            Some((inner, rest)) => Error::config(format!("{field}.{inner}"), rest),
+            None => Error::config(field, reason),
+        }
     })
 }
 
@@ -559,7 +651,6 @@ fn refine(path: &str, scene: &Value) -> Option<Error> {
         return None;
     }
     match path {
-        "initial" if v.get("file").is_none() => inner::<Shape>(path, v),
         "c0" => inner::<C0Field>(path, v),
         "adaptive" => inner::<AdaptiveSettings>(path, v),
         _ => None,
@@ -888,89 +979,72 @@ fn check_axis(field: &str, axis: &Option<String>, dim: usize) -> Result<()> {
 fn validate_shape(s: &Shape, at: &str, dim: usize) -> Result<()> {
     let f = |k: &str| format!("{at}.{k}");
     match s {
-        Shape::Sphere { radius, center } => {
-            positive(&f("radius"), *radius)?;
-            check_center(&f("center"), center, dim)
+        Shape::Sphere(s) => {
+            positive(&f("radius"), s.radius)?;
+            check_center(&f("center"), &s.center, dim)
         }
-        Shape::Ellipsoid { axes, center } => {
-            if axes.len() != dim {
+        Shape::Ellipsoid(s) => {
+            if s.axes.len() != dim {
                 return Err(Error::config(
                     f("axes"),
-                    format!("needs {dim} entries, got {}", axes.len()),
+                    format!("needs {dim} entries, got {}", s.axes.len()),
                 ));
             }
-            for a in axes {
+            for a in &s.axes {
                 positive(&f("axes"), *a)?;
             }
-            check_center(&f("center"), center, dim)
+            check_center(&f("center"), &s.center, dim)
         }
-        Shape::Spheroid {
-            reduced_volume,
-            r0,
-            axis,
-            center,
-            ..
-        } => {
-            if !(*reduced_volume > 0.0 && *reduced_volume <= 1.0) {
+        Shape::Spheroid(s) => {
+            if !(s.reduced_volume > 0.0 && s.reduced_volume <= 1.0) {
                 return Err(Error::config(
                     f("reduced_volume"),
-                    format!("must lie in (0, 1], got {reduced_volume}"),
+                    format!("must lie in (0, 1], got {}", s.reduced_volume),
                 ));
             }
-            positive(&f("r0"), *r0)?;
-            check_axis(&f("axis"), axis, dim)?;
-            check_center(&f("center"), center, dim)
+            positive(&f("r0"), s.r0)?;
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
         }
-        Shape::Cup {
-            radius,
-            inner_radius,
-            offset,
-            axis,
-            center,
-        } => {
-            positive(&f("radius"), *radius)?;
-            positive(&f("inner_radius"), *inner_radius)?;
-            finite(&f("offset"), *offset)?;
-            if inner_radius + offset.abs() <= *radius {
+        Shape::Cup(s) => {
+            positive(&f("radius"), s.radius)?;
+            positive(&f("inner_radius"), s.inner_radius)?;
+            finite(&f("offset"), s.offset)?;
+            if s.inner_radius + s.offset.abs() <= s.radius {
                 return Err(Error::config(
                     f("offset"),
                     "the inner ball lies inside the outer one (no opening): need inner_radius + |offset| > radius",
                 ));
             }
-            if offset.abs() - inner_radius >= *radius {
+            if s.offset.abs() - s.inner_radius >= s.radius {
                 return Err(Error::config(
                     f("offset"),
                     "the inner ball misses the outer one",
                 ));
             }
-            check_axis(&f("axis"), axis, dim)?;
-            check_center(&f("center"), center, dim)
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
         }
-        Shape::Capsule {
-            radius,
-            length,
-            axis,
-            center,
-        } => {
-            positive(&f("radius"), *radius)?;
-            if !(*length >= 0.0 && length.is_finite()) {
+        Shape::Capsule(s) => {
+            positive(&f("radius"), s.radius)?;
+            if !(s.length >= 0.0 && s.length.is_finite()) {
                 return Err(Error::config(f("length"), "must be finite and ≥ 0"));
             }
-            check_axis(&f("axis"), axis, dim)?;
-            check_center(&f("center"), center, dim)
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
         }
-        Shape::Union { of } => {
-            if of.is_empty() {
+        Shape::Union(u) => {
+            if u.of.is_empty() {
                 return Err(Error::config(f("of"), "needs at least one shape"));
             }
-            for (i, s) in of.iter().enumerate() {
+            for (i, s) in u.of.iter().enumerate() {
                 validate_shape(s, &format!("{at}.of[{i}]"), dim)?;
             }
             Ok(())
         }
-        Shape::Difference { base, minus } => {
-            validate_shape(base, &f("base"), dim)?;
-            validate_shape(minus, &f("minus"), dim)
+        Shape::Difference(d) => {
+            validate_shape(&d.base, &f("base"), dim)?;
+            validate_shape(&d.minus, &f("minus"), dim)
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Initial shapes as signed distances (positive inside) and the tanh profile
 //! φ = tanh(d / (√2 ε)) built from them (DESIGN.md §4).
 
-use crate::config::{axis_index, Shape, SpheroidKind};
+use crate::config::{axis_index, Difference, Ellipsoid, Shape, SpheroidKind, Union};
 use std::f64::consts::PI;
 
 /// Signed distance of `p` (scene coordinates, 3 entries, z = 0 in 2D) to the shape's surface,
@@ -9,56 +9,35 @@ use std::f64::consts::PI;
 /// min/max approximation; first-order (d ≈ (1 − F)/|∇F|) for ellipsoids.
 pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
     match shape {
-        Shape::Sphere { radius, center } => radius - norm(sub(p, center.as_deref())),
-        Shape::Ellipsoid { axes, center } => {
+        Shape::Sphere(s) => s.radius - norm(sub(p, s.center.as_deref())),
+        Shape::Ellipsoid(s) => {
             let mut a = [1.0; 3];
-            a[..dim].copy_from_slice(axes);
-            ellipsoid_distance(sub(p, center.as_deref()), a, dim)
+            a[..dim].copy_from_slice(&s.axes);
+            ellipsoid_distance(sub(p, s.center.as_deref()), a, dim)
         }
-        Shape::Spheroid {
-            reduced_volume,
-            r0,
-            kind,
-            axis,
-            center,
-        } => {
-            let (equatorial, polar) = spheroid_axes(*reduced_volume, *r0, *kind, dim);
-            let mut a = [equatorial; 3];
-            a[axis_of(axis, dim)] = polar;
-            ellipsoid_distance(sub(p, center.as_deref()), a, dim)
-        }
-        Shape::Cup {
-            radius,
-            inner_radius,
-            offset,
-            axis,
-            center,
-        } => {
-            let q = sub(p, center.as_deref());
+        Shape::Spheroid(_) => signed_distance(&resolve(shape, dim), p, dim),
+        Shape::Cup(s) => {
+            let q = sub(p, s.center.as_deref());
             let mut inner_center = [0.0; 3];
-            inner_center[axis_of(axis, dim)] = *offset;
-            let outer = radius - norm(q);
-            let inner = inner_radius - norm(sub(q, Some(&inner_center)));
+            inner_center[axis_of(&s.axis, dim)] = s.offset;
+            let outer = s.radius - norm(q);
+            let inner = s.inner_radius - norm(sub(q, Some(&inner_center)));
             outer.min(-inner)
         }
-        Shape::Capsule {
-            radius,
-            length,
-            axis,
-            center,
-        } => {
-            let q = sub(p, center.as_deref());
-            let ax = axis_of(axis, dim);
+        Shape::Capsule(s) => {
+            let q = sub(p, s.center.as_deref());
+            let ax = axis_of(&s.axis, dim);
             let mut r = q;
-            r[ax] = (q[ax].abs() - length / 2.0).max(0.0);
-            radius - norm(r)
+            r[ax] = (q[ax].abs() - s.length / 2.0).max(0.0);
+            s.radius - norm(r)
         }
-        Shape::Union { of } => of
-            .iter()
-            .map(|s| signed_distance(s, p, dim))
-            .fold(f64::NEG_INFINITY, f64::max),
-        Shape::Difference { base, minus } => {
-            signed_distance(base, p, dim).min(-signed_distance(minus, p, dim))
+        Shape::Union(u) => {
+            u.of.iter()
+                .map(|s| signed_distance(s, p, dim))
+                .fold(f64::NEG_INFINITY, f64::max)
+        }
+        Shape::Difference(d) => {
+            signed_distance(&d.base, p, dim).min(-signed_distance(&d.minus, p, dim))
         }
     }
 }
@@ -67,28 +46,22 @@ pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
 /// evaluate the distance at every grid point).
 pub fn resolve(shape: &Shape, dim: usize) -> Shape {
     match shape {
-        Shape::Spheroid {
-            reduced_volume,
-            r0,
-            kind,
-            axis,
-            center,
-        } => {
-            let (equatorial, polar) = spheroid_axes(*reduced_volume, *r0, *kind, dim);
+        Shape::Spheroid(s) => {
+            let (equatorial, polar) = spheroid_axes(s.reduced_volume, s.r0, s.kind, dim);
             let mut axes = vec![equatorial; dim];
-            axes[axis_of(axis, dim)] = polar;
-            Shape::Ellipsoid {
+            axes[axis_of(&s.axis, dim)] = polar;
+            Shape::Ellipsoid(Ellipsoid {
                 axes,
-                center: center.clone(),
-            }
+                center: s.center.clone(),
+            })
         }
-        Shape::Union { of } => Shape::Union {
-            of: of.iter().map(|s| resolve(s, dim)).collect(),
-        },
-        Shape::Difference { base, minus } => Shape::Difference {
-            base: Box::new(resolve(base, dim)),
-            minus: Box::new(resolve(minus, dim)),
-        },
+        Shape::Union(u) => Shape::Union(Union {
+            of: u.of.iter().map(|s| resolve(s, dim)).collect(),
+        }),
+        Shape::Difference(d) => Shape::Difference(Difference {
+            base: Box::new(resolve(&d.base, dim)),
+            minus: Box::new(resolve(&d.minus, dim)),
+        }),
         other => other.clone(),
     }
 }

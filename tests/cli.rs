@@ -3,8 +3,6 @@
 //! field, and no output folder), `--set` overrides, tiny runs of the example scenes and their
 //! output files, the output-folder rules, a blow-up (exit 3 with the last good state written),
 //! and the help texts.
-//!
-//! Tests marked `#[ignore = "bug: ..."]` assert the correct behaviour of a known bug in `src/`.
 
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -17,23 +15,6 @@ use tempfile::TempDir;
 // ---------------------------------------------------------------------------------------------
 // Helpers
 // ---------------------------------------------------------------------------------------------
-
-/// Corpus files whose correct behaviour is asserted by an ignored bug test instead of
-/// [`corpus_is_rejected_with_exit_2_and_no_output`].
-const KNOWN_BUGS: &[&str] = &[
-    // bug_nonfinite_number_in_scene_file_does_not_name_field
-    "h_nonfinite.json",
-    "eps_nonfinite.json",
-    "dt_nonfinite.json",
-    "c0_nonfinite.json",
-    "c0_field_inside_nonfinite.json",
-    "c0_field_outside_nonfinite.json",
-    // bug_wrong_type_inside_shape_or_c0_field_loses_the_key
-    "type_initial_radius_string.json",
-    "type_c0_inside_string.json",
-    // bug_unknown_key_in_adaptive_settings_is_not_named
-    "unknown_key_adaptive.json",
-];
 
 /// The CSV columns every run writes first, in this order.
 const CONTRACT_COLUMNS: &[&str] = &[
@@ -217,24 +198,6 @@ fn rejection_failures(scene: &Path, extra: &[&str], expect: &str, tmp: &Path) ->
     failures
 }
 
-fn assert_corpus_files_rejected(files: &[&str]) {
-    let corpus = staged_corpus();
-    let expected = manifest();
-    let mut failures = Vec::new();
-    for f in files {
-        let expect = expected
-            .get(*f)
-            .unwrap_or_else(|| panic!("{f} missing from the manifest"));
-        failures.extend(rejection_failures(
-            &corpus.path().join(f),
-            &[],
-            expect,
-            corpus.path(),
-        ));
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
-}
-
 /// Parse an npy file: (descr, fortran_order, shape, values).
 fn read_npy(path: &Path) -> (String, bool, Vec<usize>, Vec<f64>) {
     let bytes = fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -325,9 +288,6 @@ fn corpus_manifest_matches_the_files() {
     for (f, s) in &expected {
         assert!(!s.is_empty(), "{f}: empty expected substring");
     }
-    for f in KNOWN_BUGS {
-        assert!(expected.contains_key(*f), "known bug {f} not in the corpus");
-    }
 }
 
 #[test]
@@ -337,9 +297,6 @@ fn corpus_is_rejected_with_exit_2_and_no_output() {
     let mut failures = Vec::new();
     let mut checked = 0;
     for (file, expect) in &expected {
-        if KNOWN_BUGS.contains(&file.as_str()) {
-            continue;
-        }
         failures.extend(rejection_failures(
             &corpus.path().join(file),
             &[],
@@ -843,36 +800,4 @@ fn help_texts_have_examples() {
     for sub in ["run", "check", "compare"] {
         assert!(stdout(&o).contains(sub), "--help lists {sub}");
     }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Known bugs in the corpus
-// ---------------------------------------------------------------------------------------------
-
-#[test]
-fn nonfinite_number_in_scene_file_names_the_field() {
-    assert_corpus_files_rejected(&[
-        "h_nonfinite.json",
-        "eps_nonfinite.json",
-        "dt_nonfinite.json",
-        "c0_nonfinite.json",
-        "c0_field_inside_nonfinite.json",
-        "c0_field_outside_nonfinite.json",
-    ]);
-}
-
-#[test]
-#[ignore = "bug: a wrong type inside an `initial` shape is reported as `initial`, without the key (internally tagged enum)"]
-fn bug_wrong_type_inside_shape_loses_the_key() {
-    assert_corpus_files_rejected(&["type_initial_radius_string.json"]);
-}
-
-#[test]
-fn wrong_type_inside_c0_field_names_the_key() {
-    assert_corpus_files_rejected(&["type_c0_inside_string.json"]);
-}
-
-#[test]
-fn unknown_key_in_adaptive_settings_is_named() {
-    assert_corpus_files_rejected(&["unknown_key_adaptive.json"]);
 }
