@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 const RUN_EXAMPLE: &str = "Examples:
   vesicle run runs/ellipse2d.json --out out/ellipse2d
-  vesicle run runs/prolate3d.json --out out/p --set method=fd --set dt=4e-4 --set max_steps=500
+  vesicle run runs/prolate3d_fd.json --out out/p --set t_end=1 --set output.record_every=100
   vesicle run runs/sphere3d.json --out out/s --set area.method=lagrangian --set area.alpha=0.002";
 
 /// Phase-field simulation of lipid vesicle shapes (Campelo & Hernández-Machado model).
@@ -33,6 +33,29 @@ struct SceneArgs {
     set: Vec<String>,
 }
 
+/// Where a command writes.
+#[derive(clap::Args, Debug)]
+struct OutArgs {
+    /// Output folder (default: out/<scene name>[-<command>]); never overwritten without --force.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Replace an existing output folder.
+    #[arg(long)]
+    force: bool,
+}
+
+impl OutArgs {
+    /// The folder: `--out`, or `out/<scene stem><suffix>`.
+    fn folder(&self, scene: &Path, suffix: &str) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| {
+            let stem = scene
+                .file_stem()
+                .map_or("run".into(), |s| s.to_string_lossy().to_string());
+            PathBuf::from("out").join(format!("{stem}{suffix}"))
+        })
+    }
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run a scene: writes timeseries.csv, summary.json, phi_final.npy/.vti and PNG images.
@@ -40,12 +63,8 @@ enum Command {
     Run {
         #[command(flatten)]
         scene: SceneArgs,
-        /// Output folder (default: out/<scene name>); never overwritten without --force.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Replace an existing output folder.
-        #[arg(long)]
-        force: bool,
+        #[command(flatten)]
+        output: OutArgs,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -65,12 +84,8 @@ enum Command {
     Compare {
         #[command(flatten)]
         scene: SceneArgs,
-        /// Output folder (default: out/<scene name>-compare).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Replace an existing output folder.
-        #[arg(long)]
-        force: bool,
+        #[command(flatten)]
+        output: OutArgs,
     },
 }
 
@@ -84,12 +99,8 @@ enum Study {
     Stationary {
         #[command(flatten)]
         scene: SceneArgs,
-        /// Output folder (default: out/<scene name>-stationary).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Replace an existing output folder.
-        #[arg(long)]
-        force: bool,
+        #[command(flatten)]
+        output: OutArgs,
     },
     /// Map where each time stepper fails: a sweep of fixed Δt for FD, spectral SBDF1 with and
     /// without stabiliser, and SBDF2, with the FD bound on the chart.
@@ -99,12 +110,8 @@ enum Study {
     Stability {
         #[command(flatten)]
         scene: SceneArgs,
-        /// Output folder (default: out/<scene name>-stability).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Replace an existing output folder.
-        #[arg(long)]
-        force: bool,
+        #[command(flatten)]
+        output: OutArgs,
         /// Fixed steps per run.
         #[arg(long, default_value_t = 200)]
         steps: usize,
@@ -148,13 +155,6 @@ fn load(args: &SceneArgs) -> Result<Scene, Error> {
     config::load(&args.scene, &args.set)
 }
 
-fn default_out(scene: &Path, suffix: &str) -> PathBuf {
-    let stem = scene
-        .file_stem()
-        .map_or("run".into(), |s| s.to_string_lossy().to_string());
-    PathBuf::from("out").join(format!("{stem}{suffix}"))
-}
-
 /// Computed points below which one thread is faster than two on this machine kind (the
 /// 24³ eighth box of the 48³ prolate: 5.6 s on one thread, 9.1 s on two).
 const SERIAL_BELOW: usize = 1 << 17;
@@ -186,15 +186,14 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
     match cli.command {
         Command::Run {
             scene: args,
-            out,
-            force,
+            output,
             quiet,
         } => {
             let scene = load(&args)?;
-            let out = out.unwrap_or_else(|| default_out(&args.scene, ""));
+            let out = output.folder(&args.scene, "");
             let opts = RunOptions {
                 out: out.clone(),
-                force,
+                force: output.force,
                 progress: !quiet && std::io::stderr().is_terminal(),
             };
             let outcome = with_threads(&scene, || run::run(&scene, &opts))?;
@@ -231,20 +230,18 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
         }
         Command::Study(Study::Stationary {
             scene: args,
-            out,
-            force,
+            output,
         }) => {
             let scene = load(&args)?;
-            let out = out.unwrap_or_else(|| default_out(&args.scene, "-stationary"));
+            let out = output.folder(&args.scene, "-stationary");
             with_threads(&scene, || {
-                crate::study::stationary::stationary(&scene, &out, force)
+                crate::study::stationary::stationary(&scene, &out, output.force)
             })?;
             Ok(())
         }
         Command::Study(Study::Stability {
             scene: args,
-            out,
-            force,
+            output,
             steps,
             dt_min,
             dt_max,
@@ -256,20 +253,28 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
                     "need 0 < --dt-min < --dt-max and --steps ≥ 1",
                 ));
             }
-            let out = out.unwrap_or_else(|| default_out(&args.scene, "-stability"));
+            let out = output.folder(&args.scene, "-stability");
             with_threads(&scene, || {
-                crate::study::stability::stability(&scene, &out, force, steps, dt_min, dt_max)
+                crate::study::stability::stability(
+                    &scene,
+                    &out,
+                    output.force,
+                    steps,
+                    dt_min,
+                    dt_max,
+                )
             })?;
             Ok(())
         }
         Command::Compare {
             scene: args,
-            out,
-            force,
+            output,
         } => {
             let scene = load(&args)?;
-            let out = out.unwrap_or_else(|| default_out(&args.scene, "-compare"));
-            with_threads(&scene, || crate::compare::compare(&scene, &out, force))
+            let out = output.folder(&args.scene, "-compare");
+            with_threads(&scene, || {
+                crate::compare::compare(&scene, &out, output.force)
+            })
         }
     }
 }

@@ -59,7 +59,7 @@ fn advance(
     steps: &mut usize,
 ) -> Result<()> {
     let mut dt_try = dt;
-    while *t < t_target * (1.0 - 1e-13) {
+    while *t < t_target - 1e-6 * dt {
         let h = engine.next_dt(dt_try).min(t_target - *t);
         let r = engine.step(*t, h).map_err(|d| Error::Blowup {
             step: *steps + 1,

@@ -364,7 +364,7 @@ fn time_loop(
         let stop = if engine.stalled() {
             Some(Stopped::Stalled)
         } else {
-            stop_rule(scene, t, step, report.residual)
+            stop_rule(scene, t, dt, step, report.residual)
         };
         if step % scene.output.record_every == 0 || stop.is_some() {
             last = record(step, t, dt, engine);
@@ -387,10 +387,12 @@ fn time_loop(
     Ok((last, stopped, start.elapsed().as_secs_f64()))
 }
 
-fn stop_rule(scene: &Scene, t: f64, step: usize, residual: f64) -> Option<Stopped> {
+/// The stop rules; `t_end` counts as reached within 1e-6 of the last step (the sum of many
+/// steps carries round-off, which must not cost an extra step of ~1e-13).
+fn stop_rule(scene: &Scene, t: f64, dt: f64, step: usize, residual: f64) -> Option<Stopped> {
     if scene.stop_residual.is_some_and(|tol| residual < tol) {
         Some(Stopped::Stationary)
-    } else if scene.t_end.is_some_and(|te| t >= te * (1.0 - 1e-12)) {
+    } else if scene.t_end.is_some_and(|te| t >= te - 1e-6 * dt) {
         Some(Stopped::TimeEnd)
     } else if scene.max_steps.is_some_and(|m| step >= m) {
         Some(Stopped::MaxSteps)
