@@ -143,41 +143,16 @@ fn force_sigma(e: &mut FdEngine, sigma: f64, _s: &vesicle::config::Scene) {
     assert!(rel(e.sigma(), sigma) < 1e-12);
 }
 
-/// Relaxed reduced energy of a sphere of radius 6ε on a grid of spacing `h` with the given
-/// Laplacian. The FD-discrete energy is relaxed with the semi-implicit engine using the
-/// stencil's symbol (`"laplacian": "fd"`): the same discrete energy as the explicit FD
-/// reference, whose stability bound (∝ h⁶) makes relaxing at h = ε/4 impractical.
-fn relaxed_sphere_energy(h: f64, laplacian: &str) -> f64 {
-    let n = (22.0 / h).round() as usize;
-    let s = scene(json!({
-        "dim": 3, "n": [n, n, n], "h": h, "eps": 1.0, "method": "spectral",
-        "laplacian": laplacian, "dt": 1e-3, "adaptive": {"dt_max": 50.0},
-        "max_steps": 5000, "stop_residual": 1e-8,
-        "initial": {"shape": "sphere", "radius": 6.0}, "symmetry": ["x", "y", "z"]
-    }));
-    let (_, mut e) = engine(&s);
-    let (mut t, mut dt) = (0.0, s.dt);
-    for _ in 0..5000 {
-        dt = e.next_dt(dt);
-        let r = e.step(t, dt).unwrap();
-        t += r.dt;
-        if r.residual < 1e-8 {
-            return e.measures().reduced(3, 1.0).energy;
-        }
-    }
-    panic!("sphere at h = {h} did not relax");
-}
-
 /// A relaxed sphere's reduced energy approaches 1 as the interface is resolved (h = ε, ε/2,
 /// ε/4 at R = 6ε): at h = ε the FD discretisation reads about 0.95 (DESIGN.md §1), and its error
 /// against the converged spectral value falls as h² (observed order of the finest pair within
 /// ±0.15 of 2; measured 1.86 and 1.95).
 #[test]
 fn relaxed_sphere_energy_converges_as_h_squared() {
-    let e_ref = relaxed_sphere_energy(0.5, "spectral");
+    let e_ref = common::relaxed_sphere_energy(0.5, "spectral");
     let e: Vec<f64> = [1.0, 0.5, 0.25]
         .iter()
-        .map(|&h| relaxed_sphere_energy(h, "fd"))
+        .map(|&h| common::relaxed_sphere_energy(h, "fd"))
         .collect();
     let err: Vec<f64> = e.iter().map(|x| (e_ref - x).abs()).collect();
     let orders = [(err[0] / err[1]).log2(), (err[1] / err[2]).log2()];

@@ -209,3 +209,43 @@ fn reduced_box_matches_full_box() {
         );
     }
 }
+
+/// A flat tanh interface (a slab through the periodic box) is an exact stationary state of the
+/// continuous equation; the spectral engine keeps it to its discretisation error, which falls
+/// faster than any low power of h: the drift over t = 0.05 falls more than 32-fold from h = ε to
+/// h = ε/2 (order above 5; FD gains 4) and is below 1e-4 at h = ε/2 (measured 1.2e-3 → 8.8e-6).
+#[test]
+fn flat_interface_stationary_spectral() {
+    let drift = |h: f64| {
+        let n = (32.0 / h) as usize;
+        let s = scene(json!({
+            "dim": 2, "n": [4, n], "h": h, "eps": 1.0, "method": "spectral", "scheme": "sbdf2",
+            "dt": 1e-3, "t_end": 0.05,
+            "initial": {"shape": "capsule", "radius": 8.0, "length": 1000.0, "axis": "x"},
+            "area": {"method": "none"}
+        }));
+        let (_, mut e) = engine(&s);
+        let phi0 = e.phi().clone();
+        advance(e.as_mut(), s.dt, 0.05);
+        max_diff(&phi0, e.phi())
+    };
+    let (d1, d2) = (drift(1.0), drift(0.5));
+    eprintln!("spectral slab drift: h = ε: {d1:.3e}, h = ε/2: {d2:.3e}");
+    assert!(d2 < 1e-4, "drift at h = ε/2 is {d2}");
+    assert!(d1 / d2 > 32.0, "drift ratio {}", d1 / d2);
+}
+
+/// Spatial convergence of the spectral engine at fixed ε (ladder rung 5): the relaxed sphere's
+/// energy error against h = ε/4 falls from h = ε to h = ε/2 by more than 2⁶ (observed order
+/// above 6, where FD shows 2; measured 8.6e-4 → 1.2e-8, order 16).
+#[test]
+fn spectral_sphere_energy_converges_faster_than_any_low_power() {
+    let e_ref = common::relaxed_sphere_energy(0.25, "spectral");
+    let errors: Vec<f64> = [1.0, 0.5]
+        .iter()
+        .map(|&h| (common::relaxed_sphere_energy(h, "spectral") - e_ref).abs())
+        .collect();
+    let order = (errors[0] / errors[1]).log2();
+    eprintln!("spectral sphere R = 6ε: e(h = ε/4) = {e_ref:.8}; errors {errors:?}; observed order {order:.2}");
+    assert!(order > 6.0, "observed order {order}");
+}
