@@ -5,7 +5,6 @@ mod common;
 use common::{rel, scene};
 use proptest::prelude::*;
 use serde_json::json;
-use vesicle::engine::Engine;
 use vesicle::{run, setup};
 
 /// A circle of radius 7 with a perturbation Σ a_m cos(m θ + b_m) of its radius, as a `.npy`.
@@ -34,7 +33,7 @@ proptest! {
     /// step, FD at half its bound (Lagrangian area) and spectral SBDF1 at Δt = 0.5 (projection).
     #[test]
     fn volume_conserved_and_energy_non_increasing(
-        modes in prop::collection::vec((-1.0f64..1.0, 0.0f64..6.28), 1..4),
+        modes in prop::collection::vec((-1.0f64..1.0, 0.0f64..std::f64::consts::TAU), 1..4),
         c0 in -0.2f64..0.2,
     ) {
         let dir = tempfile::tempdir().unwrap();
