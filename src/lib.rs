@@ -9,6 +9,7 @@ pub mod engine;
 pub mod error;
 pub mod fd;
 pub mod grid;
+pub mod levelset;
 pub mod model;
 pub mod output;
 pub mod record;

@@ -491,6 +491,7 @@ fn write_final(
     let summary = json!({
         "spec": resolved,
         "final": last,
+        "levelset": crate::levelset::measure(&full, resolved.dim, resolved.h),
         "steps": last.step,
         "rejected_steps": last.rejected,
         "wall_seconds": end.wall,
