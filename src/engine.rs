@@ -66,6 +66,11 @@ pub trait Engine {
     fn stalled(&self) -> bool {
         false
     }
+    /// The largest Δt / (stability bound at the current σ) taken so far, for engines with a
+    /// bound (FD); `None` otherwise.
+    fn max_dt_over_bound(&self) -> Option<f64> {
+        None
+    }
     /// Short name for logs and tables.
     fn name(&self) -> &'static str;
 }

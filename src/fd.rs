@@ -49,7 +49,7 @@ pub struct FdEngine {
     area: AreaConstraint,
     measures: Measures,
     /// Largest Δt / bound(σ) seen.
-    pub max_bound_ratio: f64,
+    max_bound_ratio: f64,
 }
 
 impl FdEngine {
@@ -216,6 +216,10 @@ impl Engine for FdEngine {
             residual,
             rejected: 0,
         })
+    }
+
+    fn max_dt_over_bound(&self) -> Option<f64> {
+        Some(self.max_bound_ratio)
     }
 
     fn name(&self) -> &'static str {

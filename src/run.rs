@@ -258,7 +258,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
                 wall: 0.0,
                 history: &[last],
             };
-            write_final(&opts.out, &problem.grid, engine.phi(), &resolved, &end)?;
+            write_final(&opts.out, &problem.grid, engine.as_ref(), &resolved, &end)?;
             return Err(e);
         }
     };
@@ -291,7 +291,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
         wall,
         history: &history,
     };
-    write_final(&opts.out, &problem.grid, engine.phi(), &resolved, &end)?;
+    write_final(&opts.out, &problem.grid, engine.as_ref(), &resolved, &end)?;
     match (stopped, error) {
         (Ok(stopped), _) => Ok(Outcome {
             last,
@@ -467,12 +467,12 @@ fn write_snapshot(
 fn write_final(
     out: &Path,
     grid: &Grid,
-    phi: &ndarray::Array3<f64>,
+    engine: &dyn Engine,
     resolved: &Scene,
     end: &End,
 ) -> Result<()> {
     let (last, stopped) = (end.last, end.stopped);
-    let full = grid.unfold(phi);
+    let full = grid.unfold(engine.phi());
     output::npy::write_npy(&out.join("phi_final.npy"), &full, resolved.dim)?;
     if resolved.output.vti {
         output::vti::write_vti(
@@ -492,6 +492,7 @@ fn write_final(
         "spec": resolved,
         "final": last,
         "levelset": crate::levelset::measure(&full, resolved.dim, resolved.h),
+        "max_dt_over_bound": engine.max_dt_over_bound(),
         "steps": last.step,
         "rejected_steps": last.rejected,
         "wall_seconds": end.wall,

@@ -79,10 +79,6 @@ pub struct SpectralEngine {
     area: AreaConstraint,
     volume0: f64,
     dt_next: Option<f64>,
-    /// Accepted and rejected steps.
-    pub accepted: usize,
-    /// Rejected attempts.
-    pub rejected: usize,
 }
 
 impl SpectralEngine {
@@ -118,8 +114,6 @@ impl SpectralEngine {
             sigma: 0.0,
             area: AreaConstraint::none(),
             dt_next: None,
-            accepted: 0,
-            rejected: 0,
         })
     }
 
@@ -300,7 +294,6 @@ impl SpectralEngine {
             }
             _ => sigma,
         };
-        self.accepted += 1;
     }
 
     /// Energy-based proposal for the next step (Qiao–Zhang–Tang), limited by `growth`:
@@ -355,15 +348,11 @@ impl Engine for SpectralEngine {
                     });
                 }
                 Err(reason) => {
-                    if std::env::var_os("VESICLE_DEBUG").is_some() {
-                        eprintln!("rejected dt {dt:.3e}: {reason}");
-                    }
                     let Some(a) = &self.adaptive else {
                         return Err(Diverged(reason));
                     };
                     let dt_min = a.dt_min.unwrap_or(dt);
                     rejected += 1;
-                    self.rejected += 1;
                     if dt <= dt_min {
                         return Err(Diverged(format!(
                             "step rejected at the smallest step dt_min = {dt_min:.3e}: {reason}"
