@@ -76,7 +76,10 @@ enum Command {
         scene: SceneArgs,
     },
     /// Studies that compare methods in one run and print ratios (tables, CSV, charts).
-    #[command(subcommand)]
+    #[command(
+        subcommand,
+        after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/stability2d.json --out out/stability"
+    )]
     Study(Study),
     /// Run the finite-difference reference and the spectral engine on the same initial field;
     /// print and write a table of both at common times.
