@@ -35,6 +35,35 @@ pub const ENERGY_RISE_TOL: f64 = 1e-11;
 /// Largest relative drift of V (and of A under projection) before the run counts as broken.
 pub const CONSTRAINT_TOL: f64 = 1e-9;
 
+/// Why an attempted step was rejected (no allocation: adaptive runs reject routinely).
+#[derive(Debug)]
+enum Rejection {
+    /// A(φ^{n+1}(σ)) = A0 has no real root.
+    NoRealRoot,
+    /// The new state is not finite or |φ| is too large.
+    Diverged(Diverged),
+    /// V drifted by this relative amount.
+    VolumeDrift(f64),
+    /// A is off its target by this relative amount (projection).
+    AreaDrift(f64),
+    /// F_eff rose (adaptive steps).
+    EnergyRise { before: f64, after: f64 },
+}
+
+impl std::fmt::Display for Rejection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Rejection::NoRealRoot => write!(f, "the area projection has no real root"),
+            Rejection::Diverged(d) => write!(f, "{}", d.0),
+            Rejection::VolumeDrift(d) => write!(f, "volume drifted by {d:.2e} (relative)"),
+            Rejection::AreaDrift(d) => write!(f, "area off its target by {d:.2e} (relative)"),
+            Rejection::EnergyRise { before, after } => {
+                write!(f, "F_eff rose from {before:.12e} to {after:.12e}")
+            }
+        }
+    }
+}
+
 /// Frozen-coefficient stability bound of the semi-implicit step at σ = 0:
 /// with the bulk linearisation −2k²(2 + ε²k²)² split into implicit b = 2ε⁴k⁶ + S and explicit
 /// a = 8k² + 8ε²k⁴, the amplification (1 + Δt(S − a))/(1 + Δt(b + S)) stays in [−1, 1] for
@@ -225,11 +254,9 @@ impl SpectralEngine {
     }
 
     /// Try one step of size `dt`: on success `next` holds the new state and its σ is returned.
-    fn attempt(&mut self, t: f64, dt: f64) -> Result<f64, String> {
+    fn attempt(&mut self, t: f64, dt: f64) -> Result<f64, Rejection> {
         let sums = self.affine_update(dt);
-        let sigma = self
-            .choose_sigma(sums)
-            .ok_or_else(|| "the area projection has no real root".to_string())?;
+        let sigma = self.choose_sigma(sums).ok_or(Rejection::NoRealRoot)?;
         let q = self.ev.spare.as_slice().expect("standard layout");
         self.next
             .hat
@@ -241,22 +268,22 @@ impl SpectralEngine {
         self.max_change = self
             .ev
             .evaluate(&mut self.next, t + dt, Some(&self.cur.phi))
-            .map_err(|d| d.0)?;
+            .map_err(Rejection::Diverged)?;
         self.check_constraints(sigma)?;
         Ok(sigma)
     }
 
     /// Volume (and area under projection) held; under adaptive steps F_eff must not rise.
-    fn check_constraints(&self, sigma: f64) -> Result<(), String> {
+    fn check_constraints(&self, sigma: f64) -> Result<(), Rejection> {
         let m = self.next.measures;
         let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
         if dv > CONSTRAINT_TOL {
-            return Err(format!("volume drifted by {dv:.2e} (relative)"));
+            return Err(Rejection::VolumeDrift(dv));
         }
         if self.area.method == AreaMethod::Projection {
             let da = (m.area - self.area.target).abs() / self.area.target;
             if da > CONSTRAINT_TOL {
-                return Err(format!("area off its target by {da:.2e} (relative)"));
+                return Err(Rejection::AreaDrift(da));
             }
         }
         if self.adaptive.is_some() && !self.ev.c0.is_ramped() {
@@ -268,7 +295,7 @@ impl SpectralEngine {
             let before = self.cur.measures.energy + s * self.cur.measures.area;
             let after = m.energy + s * m.area;
             if after > before + ENERGY_RISE_TOL * before.abs() {
-                return Err(format!("F_eff rose from {before:.12e} to {after:.12e}"));
+                return Err(Rejection::EnergyRise { before, after });
             }
         }
         Ok(())
@@ -349,7 +376,7 @@ impl Engine for SpectralEngine {
                 }
                 Err(reason) => {
                     let Some(a) = &self.adaptive else {
-                        return Err(Diverged(reason));
+                        return Err(Diverged(reason.to_string()));
                     };
                     let dt_min = a.dt_min.unwrap_or(dt);
                     rejected += 1;

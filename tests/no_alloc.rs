@@ -1,0 +1,78 @@
+//! The time-step loop allocates nothing (DESIGN.md §3: plans and scratch are made once): after
+//! a warm-up, steps of the spectral engine (SBDF1 and SBDF2, fixed and adaptive Δt, with the
+//! projection and a c0 field), of the FD engine and of the L-BFGS relaxation make zero heap
+//! allocations, on one thread and on two.
+//! One test in its own binary, so no other test allocates meanwhile.
+
+mod common;
+use common::scene;
+use serde_json::json;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use vesicle::{run, setup};
+
+struct CountingAlloc;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for CountingAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAlloc = CountingAlloc;
+
+#[test]
+fn step_loop_allocates_nothing() {
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for extra in [
+            json!({"method": "spectral", "scheme": "sbdf1", "dt": 0.5}),
+            json!({"method": "spectral", "scheme": "sbdf2", "dt": 0.5}),
+            json!({"method": "spectral", "scheme": "sbdf2", "dt": 0.1, "adaptive": {"dt_max": 5.0}}),
+            json!({"method": "fd", "dt": 4e-4}),
+            json!({"method": "spectral", "dynamics": "relaxational", "dt": 1.0}),
+        ] {
+            let mut v = json!({
+                "dim": 3, "n": [24, 24, 24], "max_steps": 1,
+                "initial": {"shape": "spheroid", "reduced_volume": 0.9, "r0": 6.0},
+                "c0": {"inside": 0.2, "radius": 4.0}
+            });
+            v.as_object_mut()
+                .unwrap()
+                .extend(extra.as_object().unwrap().clone());
+            let s = scene(v);
+            pool.install(|| {
+                let problem = setup::build(&s).unwrap();
+                let (mut e, _) = run::start(&s, &problem).unwrap();
+                let (mut t, mut dt) = (0.0, s.dt);
+                let mut step = |e: &mut Box<dyn vesicle::engine::Engine + Send>| {
+                    dt = e.next_dt(dt);
+                    t += e.step(t, dt).unwrap().dt;
+                };
+                // Warm-up: SBDF2 keeps its previous state, L-BFGS fills its memory (5 pairs).
+                for _ in 0..8 {
+                    step(&mut e);
+                }
+                let before = ALLOCATIONS.load(Ordering::SeqCst);
+                for _ in 0..10 {
+                    step(&mut e);
+                }
+                let made = ALLOCATIONS.load(Ordering::SeqCst) - before;
+                assert_eq!(
+                    made, 0,
+                    "{threads} thread(s), {extra}: {made} allocations in 10 steps"
+                );
+            });
+        }
+    }
+}
