@@ -105,6 +105,17 @@ enum Study {
         #[command(flatten)]
         output: OutArgs,
     },
+    /// Work against precision of the time steppers: FD, SBDF1 and SBDF2 over a ladder of Δt to
+    /// `t_end`, errors against a fine SBDF2 run, charted against wall time.
+    #[command(
+        after_help = "Example:\n  vesicle study precision runs/compare2d.json --out out/precision --set t_end=1"
+    )]
+    Precision {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[command(flatten)]
+        output: OutArgs,
+    },
     /// Map where each time stepper fails: a sweep of fixed Δt for FD, spectral SBDF1 with and
     /// without stabiliser, and SBDF2, with the FD bound on the chart.
     #[command(
@@ -239,6 +250,17 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
             let out = output.folder(&args.scene, "-stationary");
             with_threads(&scene, || {
                 crate::study::stationary::stationary(&scene, &out, output.force)
+            })?;
+            Ok(())
+        }
+        Command::Study(Study::Precision {
+            scene: args,
+            output,
+        }) => {
+            let scene = load(&args)?;
+            let out = output.folder(&args.scene, "-precision");
+            with_threads(&scene, || {
+                crate::study::precision::precision(&scene, &out, output.force)
             })?;
             Ok(())
         }

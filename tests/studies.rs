@@ -133,3 +133,42 @@ fn stationary_study_relaxational_route_arrives() {
     );
     assert!(out.join("convergence.png").exists());
 }
+
+/// `study precision`: SBDF2's error falls as Δt² down the ladder (order within 2 ± 0.2 over
+/// four halvings), SBDF1's as Δt (1 ± 0.1), and FD's is its spatial error, the same at every Δt
+/// (within 1%) and above both spectral steppers'.
+#[test]
+fn precision_study_shows_the_orders() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("prec");
+    let o = vesicle(&[
+        "study",
+        "precision",
+        "runs/compare2d.json",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "t_end=1",
+        "--set",
+        "dt=0.02",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = csv_rows(&out.join("precision.csv"));
+    let errors = |name: &str| -> Vec<f64> {
+        rows.iter()
+            .filter(|r| r[0] == name)
+            .map(|r| r[4].parse().unwrap())
+            .collect()
+    };
+    let order = |e: &[f64]| (e[0] / e[e.len() - 1]).log2() / (e.len() - 1) as f64;
+    let (fd, s1, s2) = (
+        errors("fd explicit Euler"),
+        errors("spectral SBDF1"),
+        errors("spectral SBDF2"),
+    );
+    assert!((order(&s2) - 2.0).abs() < 0.2, "SBDF2 order {}", order(&s2));
+    assert!((order(&s1) - 1.0).abs() < 0.1, "SBDF1 order {}", order(&s1));
+    assert!((fd[0] - fd[2]).abs() < 0.01 * fd[0], "FD errors {fd:?}");
+    assert!(fd[2] > s1[0] && fd[2] > s2[0]);
+    assert!(out.join("precision.png").exists());
+}
