@@ -235,12 +235,14 @@ pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
 /// box, asymmetric mirror planes, unstable Δt, existing output folder), in which case nothing
 /// is written; `Error::Blowup` after writing the last good state and the summary.
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
-    let problem = setup::build(scene)?;
+    let mut problem = setup::build(scene)?;
     check_stability(scene, &problem.grid)?;
     if opts.out.exists() && !opts.force {
         make_out_dir(&opts.out, false)?;
     }
     let (mut engine, a0) = prepared(scene, &problem)?;
+    // The engine holds its own copy of φ: free the initial field for the run.
+    problem.phi = ndarray::Array3::zeros((0, 0, 0));
     make_out_dir(&opts.out, opts.force)?;
     let a0 = match a0 {
         Ok(a0) => a0,

@@ -35,6 +35,38 @@ pub const ENERGY_RISE_TOL: f64 = 1e-11;
 /// Largest relative drift of V (and of A under projection) before the run counts as broken.
 pub const CONSTRAINT_TOL: f64 = 1e-9;
 
+/// Per wavenumber: S(k), 1/D(k) with D = a0 + Δt(2ε⁴k⁶ + S) and −Δt c_σ k⁴/D, recomputed only
+/// when Δt or a0 change (every step of a fixed-Δt run reuses them).
+#[derive(Default)]
+struct UpdateTables {
+    coef: Vec<[f64; 3]>,
+    key: Option<(f64, f64)>,
+}
+
+impl UpdateTables {
+    fn update(&mut self, k2: &[f64], eps: f64, st: &Stabilizer, dt: f64, a0: f64) {
+        if self.key == Some((dt, a0)) {
+            return;
+        }
+        let e2 = eps * eps;
+        let c_sigma = 3.0 / std::f64::consts::SQRT_2 * eps;
+        if self.coef.len() != k2.len() {
+            self.coef = vec![[0.0; 3]; k2.len()];
+        }
+        self.coef
+            .par_chunks_mut(PAR_CHUNK)
+            .zip(k2.par_chunks(PAR_CHUNK))
+            .for_each(|(c, k)| {
+                for (c, &k) in c.iter_mut().zip(k) {
+                    let s = st.s2 * k + st.s4 * e2 * k * k;
+                    let inv = 1.0 / (a0 + dt * (2.0 * e2 * e2 * k * k * k + s));
+                    *c = [s, inv, -dt * c_sigma * k * k * inv];
+                }
+            });
+        self.key = Some((dt, a0));
+    }
+}
+
 /// Why an attempted step was rejected (no allocation: adaptive runs reject routinely).
 #[derive(Debug)]
 enum Rejection {
@@ -99,6 +131,8 @@ pub struct SpectralEngine {
     adaptive: Option<AdaptiveSettings>,
     cur: State,
     next: State,
+    /// Per-wavenumber coefficients of the update for the current Δt.
+    tables: UpdateTables,
     /// φ̂^{n−1} and N̂^{n−1} (SBDF2).
     prev: Option<(Array3<Complex64>, Array3<Complex64>)>,
     dt_prev: f64,
@@ -140,6 +174,7 @@ impl SpectralEngine {
             prev: None,
             dt_prev: scene.dt,
             max_change: 0.0,
+            tables: UpdateTables::default(),
             sigma: 0.0,
             area: AreaConstraint::none(),
             dt_next: None,
@@ -166,9 +201,6 @@ impl SpectralEngine {
     /// Write P̂ into `next.hat` and Q̂ into `spare`; return (A_PP, A_PQ, A_QQ).
     fn affine_update(&mut self, dt: f64) -> (f64, f64, f64) {
         let [a0, a1, a2, b1, b2] = self.coefficients(dt);
-        let e2 = self.ev.eps * self.ev.eps;
-        let (s2, s4) = (self.stabilizer.s2, self.stabilizer.s4);
-        let c_sigma = 3.0 / std::f64::consts::SQRT_2 * self.ev.eps;
         let c = PAR_CHUNK;
         let cur_hat = self.cur.hat.as_slice().expect("standard layout");
         let cur_n = self.cur.nonlinear.as_slice().expect("standard layout");
@@ -178,13 +210,16 @@ impl SpectralEngine {
             }
             _ => None,
         };
+        self.tables
+            .update(&self.ev.symbols.k2, self.ev.eps, &self.stabilizer, dt, a0);
+        let coef = &self.tables.coef;
         let p_out = self.next.hat.as_slice_mut().expect("standard layout");
         let q_out = self.ev.spare.as_slice_mut().expect("standard layout");
-        let (k2, aw) = (&self.ev.symbols.k2, &self.ev.symbols.area_weight);
+        let aw = &self.ev.symbols.area_weight;
         // P = [−a1 φ̂ⁿ − a2 φ̂ⁿ⁻¹ + Δt(b1(N̂ⁿ + Sφ̂ⁿ) + b2(N̂ⁿ⁻¹ + Sφ̂ⁿ⁻¹))]/D,
         // Q = −Δt c_σ k⁴ (b1 φ̂ⁿ + b2 φ̂ⁿ⁻¹)/D, D = a0 + Δt(2ε⁴k⁶ + S); returns w k²-weighted
         // |P|², Re(P Q*), |Q|².
-        let body = |k: f64,
+        let body = |[s, inv, qc]: [f64; 3],
                     w: f64,
                     h1: Complex64,
                     n1: Complex64,
@@ -192,11 +227,9 @@ impl SpectralEngine {
                     n0: Complex64,
                     p: &mut Complex64,
                     q: &mut Complex64| {
-            let s = s2 * k + s4 * e2 * k * k;
-            let inv = 1.0 / (a0 + dt * (2.0 * e2 * e2 * k * k * k + s));
             let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * dt;
             *p = rhs * inv;
-            *q = (h1 * b1 + h0 * b2) * (-dt * c_sigma * k * k * inv);
+            *q = (h1 * b1 + h0 * b2) * qc;
             (
                 w * p.norm_sqr(),
                 w * (p.re * q.re + p.im * q.im),
@@ -211,7 +244,7 @@ impl SpectralEngine {
             .map(|(j, (p, q))| {
                 let r = j * c..j * c + p.len();
                 let (k, w, h1, n1) = (
-                    &k2[r.clone()],
+                    &coef[r.clone()],
                     &aw[r.clone()],
                     &cur_hat[r.clone()],
                     &cur_n[r.clone()],

@@ -32,7 +32,9 @@ pub struct State {
 pub struct Symbols {
     /// |k|² (or the FD symbol).
     pub k2: Vec<f64>,
-    /// Parseval weight × cell volume: ∫ u v dx = Σ_k weight Re(û v̂*).
+    /// Parseval weight × cell volume: ∫ u v dx = Σ_k weight Re(û v̂*). Kept only for the
+    /// gradient (relaxational) evaluator; empty for the conserved one, which needs no inner
+    /// products (half a value per grid point saved).
     pub weight: Vec<f64>,
     /// (3/(2√2)) ε |k|² × weight: A = Σ_k area_weight |φ̂|².
     pub area_weight: Vec<f64>,
@@ -59,7 +61,13 @@ impl Evaluator {
     pub fn new(grid: Grid, eps: f64, c0: C0, laplacian: Laplacian, explicit: ExplicitTerm) -> Self {
         let transform = Transform::new(grid.shape, grid.kinds, rayon::current_num_threads());
         Evaluator {
-            symbols: symbols(&transform, &grid, eps, laplacian),
+            symbols: symbols(
+                &transform,
+                &grid,
+                eps,
+                laplacian,
+                explicit == ExplicitTerm::Gradient,
+            ),
             spare: Array3::zeros(transform.spectral_shape()),
             work: grid.zeros(),
             work2: grid.zeros(),
@@ -236,7 +244,13 @@ pub fn axis_symbol(k: f64, h: f64, laplacian: Laplacian) -> f64 {
 
 /// |k|² (or the FD symbol) and the area weights of every spectral index (flattened, standard
 /// layout).
-pub fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Symbols {
+pub fn symbols(
+    t: &Transform,
+    grid: &Grid,
+    eps: f64,
+    laplacian: Laplacian,
+    keep_weight: bool,
+) -> Symbols {
     let k = t.wavenumbers(grid.h).map(|ks| {
         ks.iter()
             .map(|&k| axis_symbol(k, grid.h, laplacian))
@@ -246,7 +260,7 @@ pub fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Sy
     let [s0, s1, s2] = t.spectral_shape();
     let mut k2 = Vec::with_capacity(s0 * s1 * s2);
     let mut area_weight = Vec::with_capacity(s0 * s1 * s2);
-    let mut weight = Vec::with_capacity(s0 * s1 * s2);
+    let mut weight = Vec::with_capacity(if keep_weight { s0 * s1 * s2 } else { 0 });
     let dv = grid.cell_volume() * grid.mirror_factor();
     for i in 0..s0 {
         for j in 0..s1 {
@@ -254,7 +268,9 @@ pub fn symbols(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Sy
                 let kk = k[0][i] + k[1][j] + k[2][l];
                 k2.push(kk);
                 let wt = dv * w[0][i] * w[1][j] * w[2][l];
-                weight.push(wt);
+                if keep_weight {
+                    weight.push(wt);
+                }
                 area_weight.push(AREA_PREFACTOR * eps * kk * wt);
             }
         }
