@@ -1,6 +1,30 @@
 //! `vesicle`: shapes and shape instabilities of lipid vesicles with the phase-field model of
 //! Campelo & Hernández-Machado (Canham–Helfrich bending energy with spontaneous curvature,
-//! conserved dynamics, area held by a Lagrange multiplier).
+//! conserved dynamics, area held by a Lagrange multiplier), as fixed in DESIGN.md:
+//!
+//! ```text
+//! Φ = (φ + εC0)(φ² − 1) − ε²∇²φ,   F_sc = ∫Φ²,   A = (3/(2√2)) ε ∫|∇φ|²,   V = ∫(1 + φ)/2
+//! ∂φ/∂t = ∇²μ,   μ = 2[f'(φ)Φ − ε²∇²Φ] − (3/√2) ε σ ∇²φ
+//! ```
+//!
+//! Module map:
+//! * scene → problem: [`config`] (the strict scene file), [`setup`] (grid, initial field, c0),
+//!   [`grid`], [`shapes`], [`model`] (f, f', reduced quantities, c0 fields);
+//! * engines behind [`engine::Engine`]: [`fd`] (explicit Euler on [`stencil`], the paper's
+//!   reference), [`spectral`] (semi-implicit SBDF1/2 with the exact area projection, on
+//!   [`spectral::transform`]), [`relax`] (preconditioned L-BFGS to stationary states);
+//! * driving and output: [`run`] (the time loop, stop rules, outputs), [`record`],
+//!   [`output`] (npy, vti, png), [`levelset`] (sharp φ = 0 measures);
+//! * comparisons: [`compare`], [`study`] (stationary routes, stability map, work–precision);
+//! * [`cli`]: the `vesicle` command line.
+//!
+//! ```no_run
+//! let scene = vesicle::config::load(std::path::Path::new("runs/ellipse2d.json"), &[]).unwrap();
+//! let problem = vesicle::setup::build(&scene).unwrap();
+//! let (mut engine, _a0) = vesicle::run::start(&scene, &problem).unwrap();
+//! let report = engine.step(0.0, scene.dt).unwrap();
+//! println!("F = {}, residual = {}", engine.measures().energy, report.residual);
+//! ```
 
 pub mod cli;
 pub mod compare;
