@@ -60,8 +60,8 @@ impl OutputError {
 /// Font family name under which the embedded DejaVu Sans is registered with plotters.
 pub(crate) const FONT_FAMILY: &str = "dejavu-sans";
 
-/// DejaVu Sans (Bitstream Vera licence, see `assets/DejaVuSans-LICENSE.txt`).
-const FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+/// DejaVu Sans (Bitstream Vera licence, see `src/output/assets/DejaVuSans-LICENSE.txt`).
+const FONT_BYTES: &[u8] = include_bytes!("assets/DejaVuSans.ttf");
 
 /// Register the embedded font with plotters once; later calls return the first outcome.
 pub(crate) fn ensure_font(path: &Path) -> Result<(), OutputError> {
