@@ -1,7 +1,7 @@
 //! `vesicle compare`: the finite-difference reference and the spectral engine from the same
 //! (prepared) initial field, side by side at common times.
 
-use crate::config::{AreaMethod, Method, Scene};
+use crate::config::{Method, Scene};
 use crate::engine::Engine;
 use crate::error::{Error, Result};
 use crate::fd;
@@ -94,19 +94,12 @@ pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
     let (prepared_engine, a0) = run::start(&fd_scene, &problem)?;
     let mut prepared = problem.clone();
     prepared.phi = prepared_engine.phi().clone();
+    // Both engines hold the area the same way (the scene's method, default projection).
     let method = scene.area_method();
-    let fd_method = if method == AreaMethod::Projection {
-        AreaMethod::Lagrangian
-    } else {
-        method
-    };
-    for (s, m) in [(&mut sp_scene, method), (&mut fd_scene, fd_method)] {
+    for s in [&mut sp_scene, &mut fd_scene] {
         s.prepare_steps = 0;
-        s.area.method = Some(m);
+        s.area.method = Some(method);
         s.area.target = Some(a0);
-        if m != AreaMethod::Lagrangian {
-            s.area.alpha = None;
-        }
     }
     let (mut fd_engine, _) = run::start(&fd_scene, &prepared)?;
     let (mut sp_engine, _) = run::start(&sp_scene, &prepared)?;

@@ -13,6 +13,7 @@ use crate::config::AreaMethod;
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, C0, PHI_BLOWUP};
+use crate::relax::nearest_root;
 use crate::spectral::PAR_CHUNK;
 use crate::stencil;
 use ndarray::Array3;
@@ -50,6 +51,8 @@ pub struct FdEngine {
     measures: Measures,
     /// Largest Δt / bound(σ) seen.
     max_bound_ratio: f64,
+    /// Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ of the exact projection (allocated when it is chosen).
+    projection: Option<Array3<f64>>,
 }
 
 impl FdEngine {
@@ -71,6 +74,7 @@ impl FdEngine {
             area: AreaConstraint::none(),
             measures: Measures::default(),
             max_bound_ratio: 0.0,
+            projection: None,
             grid,
         };
         e.refresh(t)?;
@@ -122,6 +126,45 @@ impl FdEngine {
         Ok(())
     }
 
+    /// With the exact projection: `phi` holds P (φⁿ in `mu`); add σQ for the σ that restores
+    /// A_h = A0 and return the residual max|φ^{n+1} − φⁿ|/Δt. `None` without projection.
+    fn project(&mut self, dt: f64) -> Result<Option<f64>, Diverged> {
+        let Some(q) = self.projection.as_mut() else {
+            return Ok(None);
+        };
+        stencil::laplacian(&self.grid, &self.lap_phi, q);
+        let scale = -dt * 3.0 / std::f64::consts::SQRT_2 * self.eps;
+        q.par_mapv_inplace(|v| v * scale);
+        let form = |u, v| stencil::area_form(&self.grid, self.eps, u, v);
+        let (app, apq, aqq) = (form(&self.phi, &self.phi), form(&self.phi, q), form(q, q));
+        let sigma =
+            nearest_root(aqq, apq, app - self.area.target, self.sigma).ok_or_else(|| {
+                Diverged(
+                    "the area projection has no real root (Δt too large for the constraint)".into(),
+                )
+            })?;
+        let old = self.mu.as_slice().expect("standard layout");
+        let q = q.as_slice().expect("standard layout");
+        let change = self
+            .phi
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_chunks_mut(PAR_CHUNK)
+            .zip(q.par_chunks(PAR_CHUNK))
+            .zip(old.par_chunks(PAR_CHUNK))
+            .map(|((p, q), o)| {
+                let mut m = 0.0f64;
+                for ((p, &q), &o) in p.iter_mut().zip(q).zip(o) {
+                    *p += sigma * q;
+                    m = m.max((*p - o).abs());
+                }
+                m
+            })
+            .reduce(|| 0.0, f64::max);
+        self.sigma = sigma;
+        Ok(Some(change / dt))
+    }
+
     /// The FD stability bound at the current σ.
     pub fn bound(&self) -> f64 {
         stability_bound(&self.grid, self.eps, self.sigma)
@@ -129,16 +172,16 @@ impl FdEngine {
 
     /// μ_h(φ, σ) of the current state at time `t` (the discrete δF_eff/δφ divided by h^d).
     pub fn chemical_potential(&mut self, t: f64) -> &Array3<f64> {
-        self.compute_mu(t);
+        self.compute_mu(t, self.sigma);
         &self.mu
     }
 
-    /// `mu = μ_h(φ, σ)` from the cached ∇²_h φ and Φ_h.
-    fn compute_mu(&mut self, t: f64) {
+    /// `mu = μ_h(φ, sigma)` from the cached ∇²_h φ and Φ_h.
+    fn compute_mu(&mut self, t: f64, sigma: f64) {
         stencil::laplacian(&self.grid, &self.big_phi, &mut self.work);
         let r = self.c0.ramp(t);
         let e2 = self.eps * self.eps;
-        let tension = 3.0 / std::f64::consts::SQRT_2 * self.eps * self.sigma;
+        let tension = 3.0 / std::f64::consts::SQRT_2 * self.eps * sigma;
         let (uniform, field) = self.c0.parts(r);
         let phi = self.phi.as_slice().expect("standard layout");
         let big = self.big_phi.as_slice().expect("standard layout");
@@ -173,13 +216,22 @@ impl Engine for FdEngine {
         if area.method == AreaMethod::None {
             self.sigma = 0.0;
         }
+        self.projection = (area.method == AreaMethod::Projection).then(|| self.grid.zeros());
         self.area = area;
     }
 
-    /// One explicit Euler step; σ^{n+1} from the area of the state before the step.
+    /// One explicit Euler step. Lagrangian: σ^{n+1} from the area of the state before the step.
+    /// Projection: φ^{n+1} = P + σQ with P the step at σ = 0 and Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ,
+    /// σ the root of A_h(P + σQ) = A0 nearest σⁿ (the same exact projection as the spectral
+    /// engine, on the FD area).
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
         self.max_bound_ratio = self.max_bound_ratio.max(dt / self.bound());
-        self.compute_mu(t);
+        let sigma = if self.projection.is_some() {
+            0.0
+        } else {
+            self.sigma
+        };
+        self.compute_mu(t, sigma);
         stencil::laplacian(&self.grid, &self.mu, &mut self.work);
         // Keep φ^n in `mu` (no longer needed) so a blow-up can restore it.
         std::mem::swap(&mut self.mu, &mut self.phi);
@@ -202,6 +254,14 @@ impl Engine for FdEngine {
                 m
             })
             .reduce(|| 0.0, f64::max);
+        let residual = match self.project(dt) {
+            Ok(Some(r)) => r,
+            Ok(None) => residual,
+            Err(e) => {
+                std::mem::swap(&mut self.mu, &mut self.phi);
+                return Err(e);
+            }
+        };
         let area_before = self.measures.area;
         if let Err(e) = self.refresh(t + dt) {
             std::mem::swap(&mut self.mu, &mut self.phi);

@@ -97,27 +97,36 @@ fn add_along_row(c: &[f64], kind: AxisKind, o: &mut [f64]) {
 /// A_h = (3/(2√2)) ε Σ_i Σ_axes ((u_{i+e} − u_i)/h)² h^d, full-box value (× mirror factor).
 /// Its exact variation is −(3/√2) ε ∇²_h u (with the same walls).
 pub fn area(grid: &Grid, eps: f64, u: &Array3<f64>) -> f64 {
+    area_form(grid, eps, u, u)
+}
+
+/// The symmetric bilinear form of A_h: (3/(2√2)) ε Σ_i Σ_axes (u_{i+e} − u_i)(v_{i+e} − v_i)
+/// h^{d−2} (× mirror factor), so that A_h(u + σv) = B(u,u) + 2σ B(u,v) + σ² B(v,v).
+pub fn area_form(grid: &Grid, eps: f64, u: &Array3<f64>, v: &Array3<f64>) -> f64 {
     let [n0, n1, n2] = grid.shape;
     let kinds = grid.kinds;
     let us = u.as_slice().expect("standard layout");
+    let vs = v.as_slice().expect("standard layout");
     let sum: f64 = (0..n0 * n1)
         .into_par_iter()
         .with_min_len(8)
         .map(|row| {
             let (i, j) = (row / n1, row % n1);
-            let at = |i: usize, j: usize| &us[(i * n1 + j) * n2..(i * n1 + j + 1) * n2];
-            let c = at(i, j);
+            let line = |i: usize, j: usize| (i * n1 + j) * n2..(i * n1 + j + 1) * n2;
+            let (cu, cv) = (&us[line(i, j)], &vs[line(i, j)]);
             let mut s = 0.0;
             if n0 > 1 {
-                s += squared_difference(c, at(above(i, n0, kinds[0]), j));
+                let r = line(above(i, n0, kinds[0]), j);
+                s += difference_product(cu, &us[r.clone()], cv, &vs[r]);
             }
             if n1 > 1 {
-                s += squared_difference(c, at(i, above(j, n1, kinds[1])));
+                let r = line(i, above(j, n1, kinds[1]));
+                s += difference_product(cu, &us[r.clone()], cv, &vs[r]);
             }
             if n2 > 1 {
                 for k in 0..n2 {
-                    let d = c[above(k, n2, kinds[2])] - c[k];
-                    s += d * d;
+                    let up = above(k, n2, kinds[2]);
+                    s += (cu[up] - cu[k]) * (cv[up] - cv[k]);
                 }
             }
             s
@@ -126,8 +135,13 @@ pub fn area(grid: &Grid, eps: f64, u: &Array3<f64>) -> f64 {
     AREA_PREFACTOR * eps * sum * grid.h.powi(grid.dim as i32 - 2) * grid.mirror_factor()
 }
 
-fn squared_difference(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (y - x) * (y - x)).sum()
+/// Σ_k (nu_k − cu_k)(nv_k − cv_k).
+fn difference_product(cu: &[f64], nu: &[f64], cv: &[f64], nv: &[f64]) -> f64 {
+    cu.iter()
+        .zip(nu)
+        .zip(cv.iter().zip(nv))
+        .map(|((a, b), (c, d))| (b - a) * (d - c))
+        .sum()
 }
 
 /// Largest eigenvalue of −∇²_h used in the stability bound: λ_max = 4d/h².

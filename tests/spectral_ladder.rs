@@ -324,6 +324,9 @@ fn stationary_energies_of_fd_and_spectral_agree_as_h_squared() {
     };
     let gap = |h: f64| (stationary(h, "fd") - stationary(h, "spectral")).abs();
     let (g1, g2) = (gap(1.0), gap(0.5));
-    eprintln!("stationary e, |fd − spectral|: h = ε: {g1:.3e}, h = ε/2: {g2:.3e}, ratio {:.2}", g1 / g2);
+    eprintln!(
+        "stationary e, |fd − spectral|: h = ε: {g1:.3e}, h = ε/2: {g2:.3e}, ratio {:.2}",
+        g1 / g2
+    );
     assert!(g1 / g2 >= 3.5, "gap ratio {}", g1 / g2);
 }

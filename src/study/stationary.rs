@@ -212,9 +212,7 @@ fn fd_route(scene: &Scene, problem: &Problem, t_star: f64) -> Result<Route> {
     s.dynamics = Dynamics::Conserved;
     s.adaptive = AdaptiveSpec::Flag(false);
     s.dt = 0.95 * bound;
-    if s.area_method() == AreaMethod::Projection {
-        s.area.method = Some(AreaMethod::Lagrangian);
-    }
+    s.area.method = Some(scene.area_method());
     let (mut e, _) = run::start(&s, problem)?;
     let clock = Instant::now();
     for n in 0..FD_TIMED_STEPS {
