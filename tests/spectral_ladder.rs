@@ -163,17 +163,10 @@ fn sphere_is_stationary() {
     }));
     let (_, mut e) = engine(&s);
     let phi0 = e.phi().clone();
-    let (mut t, mut dt, mut residual) = (0.0, s.dt, f64::INFINITY);
-    for _ in 0..2000 {
-        dt = e.next_dt(dt);
-        let r = e.step(t, dt).unwrap();
-        t += r.dt;
-        residual = r.residual;
-        if residual < 1e-9 {
-            break;
-        }
-    }
-    assert!(residual < 1e-9, "residual {residual}");
+    assert!(
+        common::relax(e.as_mut(), s.dt, 1e-9, 2000).is_some(),
+        "residual stays above 1e-9"
+    );
     let moved = max_diff(&phi0, e.phi());
     let energy = e.measures().reduced(3, 1.0).energy;
     eprintln!("sphere R = 8, h = ε/2: max|Δφ| = {moved:.3e}, e = {energy:.6}");
@@ -311,16 +304,8 @@ fn stationary_energies_of_fd_and_spectral_agree_as_h_squared() {
             "symmetry": ["x", "y"]
         }));
         let (_, mut e) = engine(&s);
-        let (mut t, mut dt) = (0.0, s.dt);
-        for _ in 0..40_000 {
-            dt = e.next_dt(dt);
-            let r = e.step(t, dt).unwrap();
-            t += r.dt;
-            if r.residual < 1e-10 {
-                return e.measures().reduced(2, 1.0).energy;
-            }
-        }
-        panic!("no stationary state at h = {h} ({laplacian})");
+        common::relax(e.as_mut(), s.dt, 1e-10, 40_000).expect("a stationary state");
+        e.measures().reduced(2, 1.0).energy
     };
     let gap = |h: f64| (stationary(h, "fd") - stationary(h, "spectral")).abs();
     let (g1, g2) = (gap(1.0), gap(0.5));
