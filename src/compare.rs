@@ -125,11 +125,7 @@ pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
             &mut n_sp,
         )?;
         w_sp += clock.elapsed().as_secs_f64();
-        let max_dphi = fd_engine
-            .phi()
-            .iter()
-            .zip(sp_engine.phi())
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let max_dphi = crate::model::max_abs_diff(fd_engine.phi(), sp_engine.phi());
         let sample = |e: &dyn Engine, steps, wall| Sample {
             measures: e.measures(),
             sigma: e.sigma(),

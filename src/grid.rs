@@ -101,11 +101,6 @@ impl Grid {
         s
     }
 
-    /// The full box shape as the scene writes it (`dim` entries).
-    pub fn scene_shape(&self) -> Vec<usize> {
-        self.full_shape()[3 - self.dim..].to_vec()
-    }
-
     /// Coordinates of the computed points along internal axis `a`, centred on the full box:
     /// `x_i = (i + 1/2 − N/2) h` with `N` the full-box length (the reduced box keeps `x > 0`).
     pub fn coords(&self, a: usize) -> Vec<f64> {

@@ -149,6 +149,16 @@ impl Measures {
     }
 }
 
+/// max|a − b| over two fields of the same shape (views allowed).
+pub fn max_abs_diff<'a>(
+    a: impl IntoIterator<Item = &'a f64>,
+    b: impl IntoIterator<Item = &'a f64>,
+) -> f64 {
+    a.into_iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+}
+
 /// Largest |φ| a state may reach before the run counts as blown up.
 pub const PHI_BLOWUP: f64 = 5.0;
 

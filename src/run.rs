@@ -277,16 +277,17 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
         opts,
     );
     series.flush()?;
-    let (last, stopped, wall, error) = match result {
-        Ok((last, stopped, wall)) => (last, Ok(stopped), wall, None),
+    let (last, wall, ended) = match result {
+        Ok((last, stopped, wall)) => (last, wall, Ok(stopped)),
         Err(failed) => {
             let (last, wall, e) = *failed;
-            (last, Err(format!("blew up: {e}")), wall, Some(e))
+            (last, wall, Err(e))
         }
     };
-    let text = stopped
-        .as_ref()
-        .map_or_else(|s| s.clone(), |s| s.as_str().to_string());
+    let text = match &ended {
+        Ok(stopped) => stopped.as_str().to_string(),
+        Err(e) => format!("blew up: {e}"),
+    };
     let end = End {
         last: &last,
         stopped: &text,
@@ -294,15 +295,11 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
         history: &history,
     };
     write_final(&opts.out, &problem.grid, engine.as_ref(), &resolved, &end)?;
-    match (stopped, error) {
-        (Ok(stopped), _) => Ok(Outcome {
-            last,
-            stopped,
-            wall_seconds: wall,
-        }),
-        (Err(_), Some(e)) => Err(e),
-        (Err(reason), None) => unreachable!("a failed loop carries its error: {reason}"),
-    }
+    ended.map(|stopped| Outcome {
+        last,
+        stopped,
+        wall_seconds: wall,
+    })
 }
 
 /// How a run ended, for the final outputs.

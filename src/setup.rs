@@ -117,9 +117,7 @@ fn invariant_along(phi: &Array3<f64>, a: usize) -> bool {
 fn asymmetry(u: &Array3<f64>, a: usize) -> f64 {
     let mut flipped = u.view();
     flipped.invert_axis(Axis(a));
-    u.iter()
-        .zip(flipped.iter())
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+    crate::model::max_abs_diff(u, flipped)
 }
 
 fn c0_asymmetry(c0: &C0, a: usize) -> f64 {

@@ -58,10 +58,7 @@ pub fn precision(scene: &Scene, out: &Path, force: bool) -> Result<Vec<Point>> {
     let mut ladder = |name: &'static str, method, scheme, dts: Vec<f64>| -> Result<()> {
         for dt in dts {
             let (phi, steps, wall) = advance(&variant(scene, method, scheme, dt), &problem, t_end)?;
-            let error = phi
-                .iter()
-                .zip(&reference)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            let error = crate::model::max_abs_diff(&phi, &reference);
             points.push(Point {
                 stepper: name,
                 dt,

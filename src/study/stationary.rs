@@ -175,7 +175,7 @@ fn relax_route(
     let mut trace = Vec::new();
     let arrived = |e: &dyn crate::engine::Engine| {
         (e.measures().energy - f_star).abs() / f_star < ENERGY_TOL
-            && max_diff(e.phi(), phi_star) <= PHI_TOL
+            && crate::model::max_abs_diff(e.phi(), phi_star) <= PHI_TOL
     };
     while !arrived(e.as_ref()) && steps < max_steps && !e.stalled() {
         let r = e
@@ -198,7 +198,7 @@ fn relax_route(
         wall: clock.elapsed().as_secs_f64(),
         energy: m.energy,
         reduced_energy: m.reduced(scene.dim, scene.eps).energy,
-        max_dphi: max_diff(e.phi(), phi_star),
+        max_dphi: crate::model::max_abs_diff(e.phi(), phi_star),
         trace,
     })
 }
@@ -232,12 +232,6 @@ fn fd_route(scene: &Scene, problem: &Problem, t_star: f64) -> Result<Route> {
         max_dphi: f64::NAN,
         trace: Vec::new(),
     })
-}
-
-fn max_diff(a: &Array3<f64>, b: &Array3<f64>) -> f64 {
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
 }
 
 fn table(routes: &[Route], scene: &Scene) -> String {
