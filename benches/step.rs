@@ -8,7 +8,8 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use serde_json::json;
 use vesicle::config;
 use vesicle::engine::Engine;
-use vesicle::{run, setup};
+use vesicle::setup;
+use vesicle::simulation::Simulation;
 
 /// A prepared engine for a prolate (v = 0.85, R0 = n/4) on an n³ box.
 fn engine(method: &str, n: usize, symmetry: serde_json::Value) -> Box<dyn Engine + Send> {
@@ -20,7 +21,10 @@ fn engine(method: &str, n: usize, symmetry: serde_json::Value) -> Box<dyn Engine
     }))
     .expect("scene");
     let problem = setup::build(&scene).expect("problem");
-    run::start(&scene, &problem).expect("engine").0
+    Simulation::of_scene(&scene, &problem)
+        .expect("engine")
+        .0
+        .into_engine()
 }
 
 fn bench_steps(c: &mut Criterion) {

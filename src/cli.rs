@@ -229,7 +229,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
         Command::Check { scene: args } => {
             let scene = load(&args)?;
             let problem = crate::setup::build(&scene)?;
-            run::check_stability(&scene, &problem.grid)?;
+            crate::simulation::check_stability(&scene, &problem.grid)?;
             let resolved = run::resolved_scene(
                 &scene,
                 scene.area.target.unwrap_or(f64::NAN),

@@ -2,15 +2,14 @@
 //! (prepared) initial field, side by side at common times.
 
 use crate::config::{Method, Scene};
-use crate::engine::Engine;
 use crate::error::{Error, Result};
 use crate::fd;
 use crate::model::Measures;
 use crate::run;
 use crate::setup;
+use crate::simulation::{check_stability, Simulation, StopRules};
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 /// Rows of the comparison table.
 pub const ROWS: usize = 10;
@@ -50,29 +49,6 @@ pub fn fd_dt(scene: &Scene, grid: &crate::grid::Grid) -> f64 {
     }
 }
 
-/// Advance `engine` from `t` to exactly `t_target` with steps of at most `dt`.
-fn advance(
-    engine: &mut dyn Engine,
-    t: &mut f64,
-    t_target: f64,
-    dt: f64,
-    steps: &mut usize,
-) -> Result<()> {
-    let mut dt_try = dt;
-    while *t < t_target - 1e-6 * dt {
-        let h = engine.next_dt(dt_try).min(t_target - *t);
-        let r = engine.step(*t, h).map_err(|d| Error::Blowup {
-            step: *steps + 1,
-            t: *t,
-            reason: format!("{} engine: {}", engine.name(), d.0),
-        })?;
-        *t += r.dt;
-        dt_try = engine.next_dt(r.dt);
-        *steps += 1;
-    }
-    Ok(())
-}
-
 /// Run both engines over `[0, t_end]` and compare them at `ROWS` common times.
 ///
 /// # Errors
@@ -89,11 +65,11 @@ pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
     fd_scene.method = Method::Fd;
     fd_scene.adaptive = crate::config::AdaptiveSpec::Flag(false);
     fd_scene.dt = fd_dt(scene, &problem.grid);
-    run::check_stability(&fd_scene, &problem.grid)?;
+    check_stability(&fd_scene, &problem.grid)?;
     // Prepare once (FD), then both engines start from the same field and A0.
-    let (prepared_engine, a0) = run::start(&fd_scene, &problem)?;
+    let (prepared_fd, a0) = Simulation::of_scene(&fd_scene, &problem)?;
     let mut prepared = problem.clone();
-    prepared.phi = prepared_engine.phi().clone();
+    prepared.phi = prepared_fd.engine().phi().clone();
     // Both engines hold the area the same way (the scene's method, default projection).
     let method = scene.area_method();
     for s in [&mut sp_scene, &mut fd_scene] {
@@ -101,41 +77,33 @@ pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
         s.area.method = Some(method);
         s.area.target = Some(a0);
     }
-    let (mut fd_engine, _) = run::start(&fd_scene, &prepared)?;
-    let (mut sp_engine, _) = run::start(&sp_scene, &prepared)?;
-    let (mut t_fd, mut t_sp, mut n_fd, mut n_sp, mut w_fd, mut w_sp) = (0.0, 0.0, 0, 0, 0.0, 0.0);
+    let (mut fd_sim, _) = Simulation::of_scene(&fd_scene, &prepared)?;
+    let (mut sp_sim, _) = Simulation::of_scene(&sp_scene, &prepared)?;
     let mut rows = Vec::with_capacity(ROWS + 1);
     for j in 0..=ROWS {
         let target = t_end * j as f64 / ROWS as f64;
-        let clock = Instant::now();
-        advance(
-            fd_engine.as_mut(),
-            &mut t_fd,
-            target,
-            fd_scene.dt,
-            &mut n_fd,
-        )?;
-        w_fd += clock.elapsed().as_secs_f64();
-        let clock = Instant::now();
-        advance(
-            sp_engine.as_mut(),
-            &mut t_sp,
-            target,
-            sp_scene.dt,
-            &mut n_sp,
-        )?;
-        w_sp += clock.elapsed().as_secs_f64();
-        let max_dphi = crate::model::max_abs_diff(fd_engine.phi(), sp_engine.phi());
-        let sample = |e: &dyn Engine, steps, wall| Sample {
-            measures: e.measures(),
-            sigma: e.sigma(),
-            steps,
-            wall,
+        for (name, sim) in [("fd", &mut fd_sim), ("spectral", &mut sp_sim)] {
+            sim.run(&StopRules::until(target), &mut [])
+                .map_err(|e| match e {
+                    Error::Blowup { step, t, reason } => Error::Blowup {
+                        step,
+                        t,
+                        reason: format!("{name} engine: {reason}"),
+                    },
+                    other => other,
+                })?;
+        }
+        let max_dphi = crate::model::max_abs_diff(fd_sim.engine().phi(), sp_sim.engine().phi());
+        let sample = |sim: &Simulation| Sample {
+            measures: sim.engine().measures(),
+            sigma: sim.engine().sigma(),
+            steps: sim.clock.step,
+            wall: sim.clock.wall_seconds,
         };
         rows.push(Row {
             t: target,
-            fd: sample(fd_engine.as_ref(), n_fd, w_fd),
-            spectral: sample(sp_engine.as_ref(), n_sp, w_sp),
+            fd: sample(&fd_sim),
+            spectral: sample(&sp_sim),
             max_dphi,
         });
     }

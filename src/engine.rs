@@ -1,4 +1,15 @@
-//! What the run driver needs from an engine (finite differences, spectral, relaxational).
+//! What the simulation driver needs from an engine (finite differences, spectral,
+//! relaxational).
+//!
+//! Every engine reports the same stationarity measure of its current state (DESIGN.md §6):
+//!
+//! ```text
+//! residual = ( ∫_Ω (μ − μ̄)² dx / |Ω| )^½,   μ = 2[f'(φ)Φ − ε²∇²Φ] − (3/√2) ε σ ∇²φ,
+//! ```
+//!
+//! over the full box Ω (the same on a reduced box), with σ the engine's current multiplier. It
+//! vanishes exactly at the stationary states of the conserved and relaxational flows alike and,
+//! unlike max|φ^{n+1} − φ^n|/Δt, it does not shrink as Δt grows.
 
 use crate::config::AreaMethod;
 use crate::model::Measures;
@@ -31,8 +42,9 @@ impl AreaConstraint {
 pub struct StepReport {
     /// The step taken (an adaptive engine may take less than it was offered).
     pub dt: f64,
-    /// Stationarity residual max|φ^{n+1} − φ^n| / Δt.
-    pub residual: f64,
+    /// max|φ^{n+1} − φ^n| / Δt of the step (the `rate` column; not a stationarity measure: it
+    /// falls as Δt grows).
+    pub rate: f64,
     /// Attempts rejected before this step was accepted.
     pub rejected: usize,
 }
@@ -49,6 +61,9 @@ pub trait Engine {
     fn sigma(&self) -> f64;
     /// F_sc, A, V of the current state (full-box values).
     fn measures(&self) -> Measures;
+    /// The stationarity residual RMS_Ω(μ − μ̄) of the current state at the current σ (module
+    /// docs).
+    fn residual(&self) -> f64;
     /// Replace the area constraint (σ is reset to 0 when the method changes to none).
     fn set_area(&mut self, area: AreaConstraint);
     /// Advance from time `t` by at most `dt`.

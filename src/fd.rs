@@ -8,13 +8,15 @@
 //!
 //! with the paper's Lagrangian area update σ^{n+1} = σ^n + α (A_h^n − A0) (σ^0 = 0).
 //! Stable for Δt < 1 / (λ (2 + ε²λ)² + (3/√2) ε σ λ²/2), λ = 4d/h² ([`stability_bound`]).
+//!
+//! The engine keeps μ_h of its current state at its current σ: the stationarity residual
+//! RMS(μ_h − mean μ_h) is read from it, and the next step uses it.
 
 use crate::config::AreaMethod;
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, C0, PHI_BLOWUP};
-use crate::relax::nearest_root;
-use crate::spectral::PAR_CHUNK;
+use crate::numerics::{nearest_root, PAR_CHUNK};
 use crate::stencil;
 use ndarray::Array3;
 use rayon::prelude::*;
@@ -42,13 +44,17 @@ pub struct FdEngine {
     lap_phi: Array3<f64>,
     /// Φ_h of the current state.
     big_phi: Array3<f64>,
-    /// Work: μ_h, then the previous φ after a step.
+    /// μ_h(φ, σ) of the current state (the previous φ during a step).
     mu: Array3<f64>,
     /// Work: ∇²_h Φ_h, then ∇²_h μ_h.
     work: Array3<f64>,
     sigma: f64,
     area: AreaConstraint,
     measures: Measures,
+    /// Time of the current state (for a ramped C0).
+    t: f64,
+    /// RMS of μ_h − mean μ_h of the current state.
+    residual: f64,
     /// Largest Δt / bound(σ) seen.
     max_bound_ratio: f64,
     /// Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ of the exact projection (allocated when it is chosen).
@@ -73,11 +79,14 @@ impl FdEngine {
             sigma: 0.0,
             area: AreaConstraint::none(),
             measures: Measures::default(),
+            t,
+            residual: f64::NAN,
             max_bound_ratio: 0.0,
             projection: None,
             grid,
         };
         e.refresh(t)?;
+        e.refresh_mu();
         Ok(e)
     }
 
@@ -126,8 +135,9 @@ impl FdEngine {
         Ok(())
     }
 
-    /// With the exact projection: `phi` holds P (φⁿ in `mu`); add σQ for the σ that restores
-    /// A_h = A0 and return the residual max|φ^{n+1} − φⁿ|/Δt. `None` without projection.
+    /// With the exact projection: `phi` holds P = φⁿ + Δt ∇²_h μ_h(φⁿ, σⁿ) (φⁿ in `mu`); add
+    /// δQ, Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ, for the δ nearest 0 that restores A_h = A0, so that
+    /// σ^{n+1} = σⁿ + δ. Returns max|φ^{n+1} − φⁿ|/Δt, or `None` without projection.
     fn project(&mut self, dt: f64) -> Result<Option<f64>, Diverged> {
         let Some(q) = self.projection.as_mut() else {
             return Ok(None);
@@ -137,12 +147,11 @@ impl FdEngine {
         q.par_mapv_inplace(|v| v * scale);
         let form = |u, v| stencil::area_form(&self.grid, self.eps, u, v);
         let (app, apq, aqq) = (form(&self.phi, &self.phi), form(&self.phi, q), form(q, q));
-        let sigma =
-            nearest_root(aqq, apq, app - self.area.target, self.sigma).ok_or_else(|| {
-                Diverged(
-                    "the area projection has no real root (Δt too large for the constraint)".into(),
-                )
-            })?;
+        let delta = nearest_root(aqq, apq, app - self.area.target, 0.0).ok_or_else(|| {
+            Diverged(
+                "the area projection has no real root (Δt too large for the constraint)".into(),
+            )
+        })?;
         let old = self.mu.as_slice().expect("standard layout");
         let q = q.as_slice().expect("standard layout");
         let change = self
@@ -155,13 +164,13 @@ impl FdEngine {
             .map(|((p, q), o)| {
                 let mut m = 0.0f64;
                 for ((p, &q), &o) in p.iter_mut().zip(q).zip(o) {
-                    *p += sigma * q;
+                    *p += delta * q;
                     m = m.max((*p - o).abs());
                 }
                 m
             })
             .reduce(|| 0.0, f64::max);
-        self.sigma = sigma;
+        self.sigma += delta;
         Ok(Some(change / dt))
     }
 
@@ -170,32 +179,55 @@ impl FdEngine {
         stability_bound(&self.grid, self.eps, self.sigma)
     }
 
-    /// μ_h(φ, σ) of the current state at time `t` (the discrete δF_eff/δφ divided by h^d).
-    pub fn chemical_potential(&mut self, t: f64) -> &Array3<f64> {
-        self.compute_mu(t, self.sigma);
+    /// Back to the state before a failed step (φⁿ is in `mu`, σⁿ given).
+    fn restore(&mut self, sigma: f64) -> Result<(), Diverged> {
+        std::mem::swap(&mut self.mu, &mut self.phi);
+        self.sigma = sigma;
+        self.refresh(self.t)?;
+        self.refresh_mu();
+        Ok(())
+    }
+
+    /// μ_h(φ, σ) of the current state at its σ (the discrete δF_eff/δφ divided by h^d).
+    pub fn chemical_potential(&self) -> &Array3<f64> {
         &self.mu
     }
 
-    /// `mu = μ_h(φ, sigma)` from the cached ∇²_h φ and Φ_h.
-    fn compute_mu(&mut self, t: f64, sigma: f64) {
+    /// `mu = μ_h(φ, σ)` from the cached ∇²_h φ and Φ_h, and the residual
+    /// (mean over the box of (μ_h − mean μ_h)²)^½, in two passes (the mean first: near
+    /// stationarity μ_h − mean μ_h is many orders below μ_h).
+    fn refresh_mu(&mut self) {
         stencil::laplacian(&self.grid, &self.big_phi, &mut self.work);
-        let r = self.c0.ramp(t);
+        let r = self.c0.ramp(self.t);
         let e2 = self.eps * self.eps;
-        let tension = 3.0 / std::f64::consts::SQRT_2 * self.eps * sigma;
+        let tension = 3.0 / std::f64::consts::SQRT_2 * self.eps * self.sigma;
         let (uniform, field) = self.c0.parts(r);
         let phi = self.phi.as_slice().expect("standard layout");
         let big = self.big_phi.as_slice().expect("standard layout");
         let lap_big = self.work.as_slice().expect("standard layout");
         let lap = self.lap_phi.as_slice().expect("standard layout");
         let mu = self.mu.as_slice_mut().expect("standard layout");
-        mu.par_chunks_mut(PAR_CHUNK).enumerate().for_each(|(j, m)| {
-            let start = j * PAR_CHUNK;
-            for (k, m) in m.iter_mut().enumerate() {
-                let i = start + k;
-                let fp = bulk_derivative(phi[i], field.map_or(uniform, |f| r * f[i]));
-                *m = 2.0 * (fp * big[i] - e2 * lap_big[i]) - tension * lap[i];
-            }
-        });
+        let sum: f64 = mu
+            .par_chunks_mut(PAR_CHUNK)
+            .enumerate()
+            .map(|(j, m)| {
+                let start = j * PAR_CHUNK;
+                let mut sum = 0.0;
+                for (k, m) in m.iter_mut().enumerate() {
+                    let i = start + k;
+                    let fp = bulk_derivative(phi[i], field.map_or(uniform, |f| r * f[i]));
+                    *m = 2.0 * (fp * big[i] - e2 * lap_big[i]) - tension * lap[i];
+                    sum += *m;
+                }
+                sum
+            })
+            .sum();
+        let mean = sum / mu.len() as f64;
+        let sum_sq: f64 = mu
+            .par_chunks(PAR_CHUNK)
+            .map(|m| m.iter().map(|m| (m - mean) * (m - mean)).sum::<f64>())
+            .sum();
+        self.residual = (sum_sq / mu.len() as f64).sqrt();
     }
 }
 
@@ -212,33 +244,32 @@ impl Engine for FdEngine {
         self.measures
     }
 
+    fn residual(&self) -> f64 {
+        self.residual
+    }
+
     fn set_area(&mut self, area: AreaConstraint) {
-        if area.method == AreaMethod::None {
+        if area.method == AreaMethod::None && self.sigma != 0.0 {
             self.sigma = 0.0;
+            self.refresh_mu();
         }
         self.projection = (area.method == AreaMethod::Projection).then(|| self.grid.zeros());
         self.area = area;
     }
 
-    /// One explicit Euler step. Lagrangian: σ^{n+1} from the area of the state before the step.
-    /// Projection: φ^{n+1} = P + σQ with P the step at σ = 0 and Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ,
-    /// σ the root of A_h(P + σQ) = A0 nearest σⁿ (the same exact projection as the spectral
-    /// engine, on the FD area).
+    /// One explicit Euler step from the cached μ_h(φⁿ, σⁿ). Lagrangian: σ^{n+1} from the area of
+    /// the state before the step. Projection: φ^{n+1} = P + δQ with P the step at σⁿ and
+    /// Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ, σ^{n+1} = σⁿ + δ the root of A_h = A0 nearest σⁿ (the same
+    /// exact projection as the spectral engine, on the FD area).
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
         self.max_bound_ratio = self.max_bound_ratio.max(dt / self.bound());
-        let sigma = if self.projection.is_some() {
-            0.0
-        } else {
-            self.sigma
-        };
-        self.compute_mu(t, sigma);
         stencil::laplacian(&self.grid, &self.mu, &mut self.work);
-        // Keep φ^n in `mu` (no longer needed) so a blow-up can restore it.
+        // Keep φ^n in `mu` so a blow-up can restore it; μ is recomputed after the step.
         std::mem::swap(&mut self.mu, &mut self.phi);
-        // φ^{n+1} = φ^n + Δt ∇²_h μ; residual = max|∇²_h μ|.
+        // φ^{n+1} = φ^n + Δt ∇²_h μ; rate = max|∇²_h μ|.
         let old = self.mu.as_slice().expect("standard layout");
         let lap_mu = self.work.as_slice().expect("standard layout");
-        let residual = self
+        let rate = self
             .phi
             .as_slice_mut()
             .expect("standard layout")
@@ -254,26 +285,28 @@ impl Engine for FdEngine {
                 m
             })
             .reduce(|| 0.0, f64::max);
-        let residual = match self.project(dt) {
+        let sigma_before = self.sigma;
+        let rate = match self.project(dt) {
             Ok(Some(r)) => r,
-            Ok(None) => residual,
+            Ok(None) => rate,
             Err(e) => {
-                std::mem::swap(&mut self.mu, &mut self.phi);
+                self.restore(sigma_before)?;
                 return Err(e);
             }
         };
         let area_before = self.measures.area;
         if let Err(e) = self.refresh(t + dt) {
-            std::mem::swap(&mut self.mu, &mut self.phi);
-            self.refresh(t)?;
+            self.restore(sigma_before)?;
             return Err(e);
         }
         if self.area.method == AreaMethod::Lagrangian {
             self.sigma += self.area.alpha * (area_before - self.area.target);
         }
+        self.t = t + dt;
+        self.refresh_mu();
         Ok(StepReport {
             dt,
-            residual,
+            rate,
             rejected: 0,
         })
     }

@@ -90,6 +90,11 @@ impl Grid {
         (1u32 << m) as f64
     }
 
+    /// Volume (area in 2D) of the full box: computed points × h^d × 2^(mirrored axes).
+    pub fn full_volume(&self) -> f64 {
+        self.len() as f64 * self.cell_volume() * self.mirror_factor()
+    }
+
     /// Points of the full (unreduced) box along each internal axis.
     pub fn full_shape(&self) -> [usize; 3] {
         let mut s = self.shape;

@@ -12,18 +12,23 @@
 //!   [`grid`], [`shapes`], [`model`] (f, f', reduced quantities, c0 fields);
 //! * engines behind [`engine::Engine`]: [`fd`] (explicit Euler on [`stencil`], the paper's
 //!   reference), [`spectral`] (semi-implicit SBDF1/2 with the exact area projection, on
-//!   [`spectral::transform`]), [`relax`] (preconditioned L-BFGS to stationary states);
-//! * driving and output: [`run`] (the time loop, stop rules, outputs), [`record`],
-//!   [`output`] (npy, vti, png), [`levelset`] (sharp φ = 0 measures);
-//! * comparisons: [`compare`], [`study`] (stationary routes, stability map, work–precision);
-//! * [`cli`]: the `vesicle` command line.
+//!   [`spectral::transform`]), [`relax`] (preconditioned L-BFGS to stationary states), with
+//!   shared pieces in [`numerics`]; every engine reports the same Δt-free stationarity
+//!   residual RMS(μ − μ̄);
+//! * driving: [`simulation`] (the one step loop: clock, stop rules, observers), [`observers`]
+//!   (time-series recorder, progress bar, snapshots), [`record`];
+//! * commands and output: [`run`] (a scene wired to the driver and its writers), [`output`]
+//!   (npy, vti, png), [`levelset`] (sharp φ = 0 measures), [`compare`], [`study`]
+//!   (stationary routes, stability map, work–precision), [`cli`].
 //!
 //! ```no_run
+//! use vesicle::simulation::{Simulation, StopRules};
 //! let scene = vesicle::config::load(std::path::Path::new("runs/ellipse2d.json"), &[]).unwrap();
 //! let problem = vesicle::setup::build(&scene).unwrap();
-//! let (mut engine, _a0) = vesicle::run::start(&scene, &problem).unwrap();
-//! let report = engine.step(0.0, scene.dt).unwrap();
-//! println!("F = {}, residual = {}", engine.measures().energy, report.residual);
+//! let (mut sim, _a0) = Simulation::of_scene(&scene, &problem).unwrap();
+//! let stopped = sim.run(&StopRules::of(&scene), &mut []).unwrap();
+//! let last = sim.record();
+//! println!("{}: F = {}, residual = {}", stopped.as_str(), last.energy, last.residual);
 //! ```
 
 pub mod cli;
@@ -35,12 +40,15 @@ pub mod fd;
 pub mod grid;
 pub mod levelset;
 pub mod model;
+pub mod numerics;
+pub mod observers;
 pub mod output;
 pub mod record;
 pub mod relax;
 pub mod run;
 pub mod setup;
 pub mod shapes;
+pub mod simulation;
 pub mod spectral;
 pub mod stencil;
 pub mod study;

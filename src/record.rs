@@ -1,8 +1,8 @@
 //! The time series of a run: one [`Record`] per recorded step, written to `timeseries.csv`
 //! with the contract's columns first.
 
+use crate::engine::Engine;
 use crate::error::{Error, Result};
-use crate::model::Measures;
 use serde::Serialize;
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -29,8 +29,11 @@ pub struct Record {
     pub reduced_energy: f64,
     /// σ.
     pub sigma: f64,
-    /// max|φ^{n+1} − φ^n|/Δt of the step that produced this state (NaN for the initial one).
+    /// Stationarity residual: RMS over the full box of μ − μ̄ (DESIGN.md §6).
     pub residual: f64,
+    /// max|φ^{n+1} − φ^n|/Δt of the step that produced this state (NaN for the initial state
+    /// and for the relaxational engine, whose time is nominal).
+    pub rate: f64,
     /// Rejected attempts so far (adaptive stepping).
     pub rejected: usize,
     /// Wall-clock seconds since the time loop started.
@@ -38,16 +41,10 @@ pub struct Record {
 }
 
 impl Record {
-    /// A record of a state with `measures` in a scene of dimension `dim`, width `eps`.
-    pub fn new(
-        step: usize,
-        t: f64,
-        dt: f64,
-        m: Measures,
-        sigma: f64,
-        dim: usize,
-        eps: f64,
-    ) -> Self {
+    /// A record of the state `engine` holds at `step`, time `t`, reached by a step `dt`, in a
+    /// scene of dimension `dim`, width `eps` (`rate` NaN, counters 0).
+    pub fn of(step: usize, t: f64, dt: f64, engine: &dyn Engine, dim: usize, eps: f64) -> Self {
+        let m = engine.measures();
         let r = m.reduced(dim, eps);
         Record {
             step,
@@ -58,17 +55,19 @@ impl Record {
             volume: m.volume,
             reduced_volume: r.volume,
             reduced_energy: r.energy,
-            sigma,
-            residual: f64::NAN,
+            sigma: engine.sigma(),
+            residual: engine.residual(),
+            rate: f64::NAN,
             rejected: 0,
             wall_seconds: 0.0,
         }
     }
 }
 
-/// The CSV header: the contract's ten columns, then `rejected,wall_seconds`.
+/// The CSV header: the contract's ten columns, then `rate,rejected,wall_seconds`.
 pub const HEADER: &str =
-    "step,t,dt,energy,area,volume,reduced_volume,reduced_energy,sigma,residual,rejected,wall_seconds";
+    "step,t,dt,energy,area,volume,reduced_volume,reduced_energy,sigma,residual,\
+rate,rejected,wall_seconds";
 
 /// Writes `timeseries.csv` row by row (values in shortest round-trip form).
 pub struct TimeSeries {
@@ -98,7 +97,7 @@ impl TimeSeries {
     pub fn push(&mut self, r: &Record) -> Result<()> {
         writeln!(
             self.out,
-            "{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.step,
             r.t,
             r.dt,
@@ -109,6 +108,7 @@ impl TimeSeries {
             r.reduced_energy,
             r.sigma,
             r.residual,
+            r.rate,
             r.rejected,
             r.wall_seconds
         )

@@ -21,8 +21,8 @@ use crate::config::{AreaMethod, Scene};
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
+use crate::numerics::{nearest_root, PAR_CHUNK};
 use crate::spectral::evaluator::{Evaluator, ExplicitTerm, State};
-use crate::spectral::PAR_CHUNK;
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -238,18 +238,15 @@ impl RelaxEngine {
         Some(())
     }
 
-    /// Store the pair (s, y) = (x_new − x, r_new − r) if ⟨y, s⟩_M > 0.
+    /// Store the pair (s, y) = (x_new − x, r_new − r) if ⟨y, s⟩_M > 0, dropping the oldest pair
+    /// when the memory is full; a rejected pair leaves the memory as it was.
     fn remember(&mut self) {
-        let mut pair = match self.spare_pairs.pop() {
-            Some(p) => p,
-            None if self.pairs.len() < self.memory => Pair {
-                s: Array3::zeros(self.dir.raw_dim()),
-                y: Array3::zeros(self.dir.raw_dim()),
-                rho: 0.0,
-                yy: 0.0,
-            },
-            None => self.pairs.pop_front().expect("memory is full"),
-        };
+        let mut pair = self.spare_pairs.pop().unwrap_or_else(|| Pair {
+            s: Array3::zeros(self.dir.raw_dim()),
+            y: Array3::zeros(self.dir.raw_dim()),
+            rho: 0.0,
+            yy: 0.0,
+        });
         let (xs, xo) = (
             self.trial.hat.as_slice().expect("std"),
             self.cur.hat.as_slice().expect("std"),
@@ -273,13 +270,22 @@ impl RelaxEngine {
                 (wm[i] * (y.re * s.re + y.im * s.im), wm[i] * y.norm_sqr())
             })
             .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-        if ys > 0.0 {
-            pair.rho = 1.0 / ys;
-            pair.yy = yy;
-            self.pairs.push_back(pair);
-        } else {
+        if ys <= 0.0 {
             self.spare_pairs.push(pair);
+            return;
         }
+        pair.rho = 1.0 / ys;
+        pair.yy = yy;
+        if self.pairs.len() == self.memory {
+            let oldest = self.pairs.pop_front().expect("memory is full");
+            self.spare_pairs.push(oldest);
+        }
+        self.pairs.push_back(pair);
+    }
+
+    /// Pairs held in the memory (at most `lbfgs_memory`).
+    pub fn memory_len(&self) -> usize {
+        self.pairs.len()
     }
 
     fn reset_memory(&mut self) {
@@ -289,7 +295,8 @@ impl RelaxEngine {
 
 /// For `state`: q = M⁻¹â into `area_dir`, σ = −⟨ĝ, q⟩/⟨q, q⟩_M (0 without an area
 /// constraint), r = M⁻¹ĝ + σq into `grad` with r(0) = 0; returns σ, the residual
-/// RMS(μ − mean μ) = (Σ_{k≠0} w |ĝ + σâ|² / |box|)^½ and ⟨q, q⟩_M.
+/// RMS(μ − mean μ) = (Σ_{k≠0} w |ĝ + σâ|² / |Ω|)^½ (w the Parseval weights of the full box Ω,
+/// so a reduced box reads the same as the full one) and ⟨q, q⟩_M.
 fn gradient(
     ev: &Evaluator,
     metric: &[f64],
@@ -334,8 +341,7 @@ fn gradient(
             weight[i] * (*r * metric[i]).norm_sqr()
         })
         .sum();
-    let box_volume = ev.grid.len() as f64 * ev.grid.cell_volume();
-    (sigma, (sum_sq / box_volume).sqrt(), qq)
+    (sigma, (sum_sq / ev.grid.full_volume()).sqrt(), qq)
 }
 
 /// Σ w Re(u v*).
@@ -393,25 +399,6 @@ fn scale_axpy_dot(
     }
 }
 
-/// The root of a x² + 2b x + c = 0 nearest `near` (numerically stable), `None` if not real.
-pub fn nearest_root(a: f64, b: f64, c: f64, near: f64) -> Option<f64> {
-    if a <= 0.0 {
-        return (b != 0.0).then(|| -c / (2.0 * b));
-    }
-    let disc = b * b - a * c;
-    if disc < 0.0 {
-        return None;
-    }
-    let q = -(b + b.signum() * disc.sqrt());
-    let r1 = q / a;
-    let r2 = if q != 0.0 { c / q } else { r1 };
-    Some(if (r1 - near).abs() <= (r2 - near).abs() {
-        r1
-    } else {
-        r2
-    })
-}
-
 impl Engine for RelaxEngine {
     fn phi(&self) -> &Array3<f64> {
         &self.cur.phi
@@ -423,6 +410,10 @@ impl Engine for RelaxEngine {
 
     fn measures(&self) -> Measures {
         self.cur.measures
+    }
+
+    fn residual(&self) -> f64 {
+        self.residual
     }
 
     fn set_area(&mut self, area: AreaConstraint) {
@@ -444,7 +435,10 @@ impl Engine for RelaxEngine {
         let mut rejected = 0;
         loop {
             let accepted = self.retract(alpha).is_some()
-                && self.ev.evaluate(&mut self.trial, t + dt, None).is_ok()
+                && self
+                    .ev
+                    .evaluate(&mut self.trial, t + dt, None, None)
+                    .is_ok()
                 && self.trial.measures.energy <= f0 + ARMIJO * alpha * slope;
             if accepted {
                 break;
@@ -456,7 +450,7 @@ impl Engine for RelaxEngine {
                 self.reset_memory();
                 return Ok(StepReport {
                     dt,
-                    residual: self.residual,
+                    rate: f64::NAN,
                     rejected,
                 });
             }
@@ -474,9 +468,10 @@ impl Engine for RelaxEngine {
         std::mem::swap(&mut self.cur, &mut self.trial);
         std::mem::swap(&mut self.grad, &mut self.grad_trial);
         (self.sigma, self.residual, self.qq) = (sigma, residual, qq);
+        // `t` is nominal here, so max|Δφ|/Δt would mean nothing: the rate column is NaN.
         Ok(StepReport {
             dt,
-            residual,
+            rate: f64::NAN,
             rejected,
         })
     }

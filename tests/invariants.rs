@@ -5,7 +5,8 @@ mod common;
 use common::{rel, scene};
 use proptest::prelude::*;
 use serde_json::json;
-use vesicle::{run, setup};
+use vesicle::setup;
+use vesicle::simulation::Simulation;
 
 /// A circle of radius 7 with a perturbation Σ a_m cos(m θ + b_m) of its radius, as a `.npy`.
 fn perturbed_field(dir: &std::path::Path, modes: &[(f64, f64)]) -> std::path::PathBuf {
@@ -44,7 +45,7 @@ proptest! {
                 "initial": {"file": file}, "c0": c0
             }));
             let problem = setup::build(&s).unwrap();
-            let (mut e, _) = run::start(&s, &problem).unwrap();
+            let mut e = Simulation::of_scene(&s, &problem).unwrap().0.into_engine();
             let v0 = e.measures().volume;
             for n in 0..40 {
                 let (before, sigma) = (e.measures(), e.sigma());

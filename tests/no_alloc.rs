@@ -10,7 +10,8 @@ use common::scene;
 use serde_json::json;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use vesicle::{run, setup};
+use vesicle::setup;
+use vesicle::simulation::{Simulation, StopRules};
 
 struct CountingAlloc;
 
@@ -54,20 +55,11 @@ fn step_loop_allocates_nothing() {
             let s = scene(v);
             pool.install(|| {
                 let problem = setup::build(&s).unwrap();
-                let (mut e, _) = run::start(&s, &problem).unwrap();
-                let (mut t, mut dt) = (0.0, s.dt);
-                let mut step = |e: &mut Box<dyn vesicle::engine::Engine + Send>| {
-                    dt = e.next_dt(dt);
-                    t += e.step(t, dt).unwrap().dt;
-                };
+                let (mut sim, _) = Simulation::of_scene(&s, &problem).unwrap();
                 // Warm-up: SBDF2 keeps its previous state, L-BFGS fills its memory (5 pairs).
-                for _ in 0..8 {
-                    step(&mut e);
-                }
+                sim.run(&StopRules::steps(8), &mut []).unwrap();
                 let before = ALLOCATIONS.load(Ordering::SeqCst);
-                for _ in 0..10 {
-                    step(&mut e);
-                }
+                sim.run(&StopRules::steps(18), &mut []).unwrap();
                 let made = ALLOCATIONS.load(Ordering::SeqCst) - before;
                 assert_eq!(
                     made, 0,

@@ -3,18 +3,9 @@
 //! symmetry-reduced boxes.
 
 mod common;
-use common::{engine, log_slope, rel, scene};
+use common::{advance, engine, log_slope, rel, scene, simulation};
 use serde_json::{json, Value};
-use vesicle::engine::Engine;
-
-/// Run `e` to `t_end` with fixed steps `dt` (the last one shortened to land on `t_end`).
-fn advance(e: &mut dyn Engine, dt: f64, t_end: f64) {
-    let mut t = 0.0;
-    while t < t_end * (1.0 - 1e-12) {
-        let h = dt.min(t_end - t);
-        t += e.step(t, h).unwrap().dt;
-    }
-}
+use vesicle::simulation::Simulation;
 
 fn max_diff(a: &ndarray::Array3<f64>, b: &ndarray::Array3<f64>) -> f64 {
     a.iter()
@@ -100,11 +91,11 @@ fn fd_spectral_difference_falls_as_h_squared() {
             &base,
             json!({"method": "spectral", "scheme": "sbdf2", "dt": 2e-4}),
         ));
-        let (_, mut a) = engine(&fd);
-        let (_, mut b) = engine(&sp);
-        advance(a.as_mut(), fd.dt, t_end);
-        advance(b.as_mut(), sp.dt, t_end);
-        max_diff(a.phi(), b.phi())
+        let (_, mut a) = simulation(&fd);
+        let (_, mut b) = simulation(&sp);
+        advance(&mut a, t_end);
+        advance(&mut b, t_end);
+        max_diff(a.engine().phi(), b.engine().phi())
     };
     let d: Vec<f64> = [1.0, 0.5, 0.25].iter().map(|&h| diff(h)).collect();
     eprintln!("max|φ_fd − φ_sp| at t = {t_end}: h = 1: {:.3e}, 1/2: {:.3e}, 1/4: {:.3e}; ratios {:.2}, {:.2}",
@@ -135,9 +126,9 @@ fn sbdf_temporal_orders() {
             &base,
             json!({"scheme": scheme, "dt": dt, "prepare_steps": 0, "area": {"target": a0}}),
         ));
-        let (mut e, _) = vesicle::run::start(&s, &problem).unwrap();
-        advance(e.as_mut(), dt, 1.0);
-        e.phi().clone()
+        let (mut sim, _) = Simulation::of_scene(&s, &problem).unwrap();
+        advance(&mut sim, 1.0);
+        sim.engine().phi().clone()
     };
     let dts = [0.004, 0.002, 0.001];
     let reference = run("sbdf2", dts[0] / 32.0);
@@ -161,14 +152,14 @@ fn sphere_is_stationary() {
         "adaptive": {"dt_max": 20.0}, "max_steps": 1,
         "initial": {"shape": "sphere", "radius": 8.0}, "symmetry": ["x", "y", "z"]
     }));
-    let (_, mut e) = engine(&s);
-    let phi0 = e.phi().clone();
+    let (_, mut sim) = simulation(&s);
+    let phi0 = sim.engine().phi().clone();
     assert!(
-        common::relax(e.as_mut(), s.dt, 1e-9, 2000).is_some(),
+        common::relax(&mut sim, 1e-9, 2000).is_some(),
         "residual stays above 1e-9"
     );
-    let moved = max_diff(&phi0, e.phi());
-    let energy = e.measures().reduced(3, 1.0).energy;
+    let moved = max_diff(&phi0, sim.engine().phi());
+    let energy = sim.engine().measures().reduced(3, 1.0).energy;
     eprintln!("sphere R = 8, h = ε/2: max|Δφ| = {moved:.3e}, e = {energy:.6}");
     assert!(moved < 0.02, "the sphere moved by {moved}");
     assert!((energy - 1.0).abs() < 1e-3, "e = {energy}");
@@ -181,9 +172,9 @@ fn sphere_is_stationary() {
 fn reduced_box_matches_full_box() {
     let run = |sym: Value| {
         let s = scene(with(&prolate3d(), json!({"dt": 0.5, "symmetry": sym})));
-        let (_, mut e) = engine(&s);
-        advance(e.as_mut(), 0.5, 20.0);
-        (e.measures(), e.sigma())
+        let (_, mut sim) = simulation(&s);
+        advance(&mut sim, 20.0);
+        (sim.engine().measures(), sim.engine().sigma())
     };
     let (full, sigma_full) = run(json!([]));
     for sym in [json!(["x", "y", "z"]), json!(["x", "y"]), json!(["z"])] {
@@ -217,10 +208,10 @@ fn flat_interface_stationary_spectral() {
             "initial": {"shape": "capsule", "radius": 8.0, "length": 1000.0, "axis": "x"},
             "area": {"method": "none"}
         }));
-        let (_, mut e) = engine(&s);
-        let phi0 = e.phi().clone();
-        advance(e.as_mut(), s.dt, 0.05);
-        max_diff(&phi0, e.phi())
+        let (_, mut sim) = simulation(&s);
+        let phi0 = sim.engine().phi().clone();
+        advance(&mut sim, 0.05);
+        max_diff(&phi0, sim.engine().phi())
     };
     let (d1, d2) = (drift(1.0), drift(0.5));
     eprintln!("spectral slab drift: h = ε: {d1:.3e}, h = ε/2: {d2:.3e}");
@@ -303,9 +294,9 @@ fn stationary_energies_of_fd_and_spectral_agree_as_h_squared() {
             "area": {"target": 2.0 * std::f64::consts::PI * 8.0},
             "symmetry": ["x", "y"]
         }));
-        let (_, mut e) = engine(&s);
-        common::relax(e.as_mut(), s.dt, 1e-10, 40_000).expect("a stationary state");
-        e.measures().reduced(2, 1.0).energy
+        let (_, mut sim) = simulation(&s);
+        common::relax(&mut sim, 1e-10, 40_000).expect("a stationary state");
+        sim.engine().measures().reduced(2, 1.0).energy
     };
     let gap = |h: f64| (stationary(h, "fd") - stationary(h, "spectral")).abs();
     let (g1, g2) = (gap(1.0), gap(0.5));

@@ -19,12 +19,11 @@
 //! nearest the last σ and rejects a step with no real root.
 
 use super::evaluator::{axis_symbol, Evaluator, ExplicitTerm, State};
-use super::PAR_CHUNK;
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
-use crate::relax::nearest_root;
+use crate::numerics::{nearest_root, PAR_CHUNK};
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -277,7 +276,7 @@ impl SpectralEngine {
             .reduce(|| (0.0, 0.0, 0.0), add)
     }
 
-    /// σ^{n+1} for this step, or `None` if the projection has no real root.
+    /// σ used in this step's update, or `None` if the projection has no real root.
     fn choose_sigma(&self, (app, apq, aqq): (f64, f64, f64)) -> Option<f64> {
         match self.area.method {
             AreaMethod::None => Some(0.0),
@@ -286,8 +285,20 @@ impl SpectralEngine {
         }
     }
 
-    /// Try one step of size `dt`: on success `next` holds the new state and its σ is returned.
-    fn attempt(&mut self, t: f64, dt: f64) -> Result<f64, Rejection> {
+    /// σ of the state after a step that used `step_sigma`: the same, except under the Lagrangian
+    /// update σ^{n+1} = σ^n + α (A^n − A0).
+    fn sigma_after(&self, step_sigma: f64) -> f64 {
+        match self.area.method {
+            AreaMethod::Lagrangian => {
+                self.sigma + self.area.alpha * (self.cur.measures.area - self.area.target)
+            }
+            _ => step_sigma,
+        }
+    }
+
+    /// Try one step of size `dt`: on success `next` holds the new state (its residual at the
+    /// new σ) and the σ of the update and of the new state are returned.
+    fn attempt(&mut self, t: f64, dt: f64) -> Result<(f64, f64), Rejection> {
         let sums = self.affine_update(dt);
         let sigma = self.choose_sigma(sums).ok_or(Rejection::NoRealRoot)?;
         let q = self.ev.spare.as_slice().expect("standard layout");
@@ -298,15 +309,22 @@ impl SpectralEngine {
             .par_chunks_mut(PAR_CHUNK)
             .zip(q.par_chunks(PAR_CHUNK))
             .for_each(|(p, q)| p.iter_mut().zip(q).for_each(|(p, q)| *p += q * sigma));
+        let sigma_after = self.sigma_after(sigma);
         self.max_change = self
             .ev
-            .evaluate(&mut self.next, t + dt, Some(&self.cur.phi))
+            .evaluate(
+                &mut self.next,
+                t + dt,
+                Some(&self.cur.phi),
+                Some(sigma_after),
+            )
             .map_err(Rejection::Diverged)?;
         self.check_constraints(sigma)?;
-        Ok(sigma)
+        Ok((sigma, sigma_after))
     }
 
-    /// Volume (and area under projection) held; under adaptive steps F_eff must not rise.
+    /// Volume (and area under projection) held; under adaptive steps F_eff (at the σ of the
+    /// update) must not rise.
     fn check_constraints(&self, sigma: f64) -> Result<(), Rejection> {
         let m = self.next.measures;
         let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
@@ -320,13 +338,8 @@ impl SpectralEngine {
             }
         }
         if self.adaptive.is_some() && !self.ev.c0.is_ramped() {
-            let s = if self.area.method == AreaMethod::Lagrangian {
-                self.sigma
-            } else {
-                sigma
-            };
-            let before = self.cur.measures.energy + s * self.cur.measures.area;
-            let after = m.energy + s * m.area;
+            let before = self.cur.measures.energy + sigma * self.cur.measures.area;
+            let after = m.energy + sigma * m.area;
             if after > before + ENERGY_RISE_TOL * before.abs() {
                 return Err(Rejection::EnergyRise { before, after });
             }
@@ -334,9 +347,8 @@ impl SpectralEngine {
         Ok(())
     }
 
-    /// Make `next` the current state; keep the old one for SBDF2.
+    /// Make `next` the current state with multiplier `sigma`; keep the old one for SBDF2.
     fn accept(&mut self, sigma: f64, dt: f64) {
-        let area_before = self.cur.measures.area;
         std::mem::swap(&mut self.cur, &mut self.next);
         if self.scheme == Scheme::Sbdf2 {
             match &mut self.prev {
@@ -348,12 +360,7 @@ impl SpectralEngine {
             }
         }
         self.dt_prev = dt;
-        self.sigma = match self.area.method {
-            AreaMethod::Lagrangian => {
-                self.sigma + self.area.alpha * (area_before - self.area.target)
-            }
-            _ => sigma,
-        };
+        self.sigma = sigma;
     }
 
     /// Energy-based proposal for the next step (Qiao–Zhang–Tang), limited by `growth`:
@@ -381,6 +388,10 @@ impl Engine for SpectralEngine {
         self.cur.measures
     }
 
+    fn residual(&self) -> f64 {
+        self.cur.residual
+    }
+
     fn set_area(&mut self, area: AreaConstraint) {
         if area.method == AreaMethod::None {
             self.sigma = 0.0;
@@ -393,19 +404,15 @@ impl Engine for SpectralEngine {
         let mut rejected = 0;
         loop {
             match self.attempt(t, dt) {
-                Ok(sigma) => {
+                Ok((_, sigma_after)) => {
                     let f_old = self.cur.measures.energy;
-                    self.accept(sigma, dt);
-                    let residual = self.max_change / dt;
+                    self.accept(sigma_after, dt);
+                    let rate = self.max_change / dt;
                     if let Some(a) = &self.adaptive {
                         let f_new = self.cur.measures.energy;
                         self.dt_next = Some(Self::propose(a, dt, f_old, f_new));
                     }
-                    return Ok(StepReport {
-                        dt,
-                        residual,
-                        rejected,
-                    });
+                    return Ok(StepReport { dt, rate, rejected });
                 }
                 Err(reason) => {
                     let Some(a) = &self.adaptive else {

@@ -2,11 +2,11 @@
 //! with two inverse and two forward real transforms (planned once, no allocation per call).
 
 use super::transform::Transform;
-use super::PAR_CHUNK;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, AREA_PREFACTOR, C0};
+use crate::numerics::PAR_CHUNK;
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -26,6 +26,9 @@ pub struct State {
     pub nonlinear: Array3<Complex64>,
     pub phi: Array3<f64>,
     pub measures: Measures,
+    /// RMS over the full box of μ − μ̄ at the σ given to [`Evaluator::evaluate`] (NaN when none
+    /// was given).
+    pub residual: f64,
 }
 
 /// Per-wavenumber tables.
@@ -86,7 +89,7 @@ impl Evaluator {
     pub fn state_of(&mut self, phi: &Array3<f64>, t: f64) -> Result<State, Diverged> {
         let mut s = self.blank();
         self.transform.forward(phi, &mut s.hat);
-        self.evaluate(&mut s, t, None)?;
+        self.evaluate(&mut s, t, None, Some(0.0))?;
         Ok(s)
     }
 
@@ -97,6 +100,7 @@ impl Evaluator {
             nonlinear: Array3::zeros(self.transform.spectral_shape()),
             phi: self.grid.zeros(),
             measures: Measures::default(),
+            residual: f64::NAN,
         }
     }
 
@@ -104,12 +108,15 @@ impl Evaluator {
     /// (two inverse and two forward transforms).
     ///
     /// With `previous` (the state before a step) it also returns max|φ − φ_previous|, fused into
-    /// the pointwise pass; otherwise 0.
+    /// the pointwise pass; otherwise 0. With `sigma` it also sets `state.residual`, the RMS of
+    /// μ − μ̄ over the full box by Parseval, fused into the last spectral pass:
+    /// μ̂ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂ + (3/√2) ε σ k² φ̂ (k ≠ 0).
     pub fn evaluate(
         &mut self,
         state: &mut State,
         t: f64,
         previous: Option<&Array3<f64>>,
+        sigma: Option<f64>,
     ) -> Result<f64, Diverged> {
         self.transform.hermitian_symmetrize(&mut state.hat);
         // φ = IFT[φ̂]
@@ -202,16 +209,26 @@ impl Evaluator {
         self.transform.forward(&self.work2, &mut state.nonlinear);
         self.transform.forward(&self.work, &mut self.spare);
         let explicit = self.explicit;
-        let combine = |n: &mut Complex64, g: Complex64, h: Complex64, k: f64| match explicit {
-            // N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f]
-            ExplicitTerm::ConservedRhs => *n = *n * (-2.0 * k) + g * (-2.0 * e2 * k * k),
-            // ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂
-            ExplicitTerm::Gradient => {
-                *n = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k)
+        let tension = AREA_PREFACTOR * 2.0 * self.eps * sigma.unwrap_or(0.0);
+        // 1/weight = (3/(2√2)) ε k² / area_weight, so w|μ̂|² = area_weight |μ̂|² / ((3/(2√2)) ε k²).
+        let per_weight = AREA_PREFACTOR * self.eps;
+        // N̂ (or ĝ) from FT[f'Φ] (in n), FT[f] (g) and φ̂ (h); returns w|μ̂|² (0 at k = 0).
+        let combine = |n: &mut Complex64, g: Complex64, h: Complex64, k: f64, aw: f64| {
+            let gradient = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k);
+            *n = match explicit {
+                // N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f]
+                ExplicitTerm::ConservedRhs => *n * (-2.0 * k) + g * (-2.0 * e2 * k * k),
+                // ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂
+                ExplicitTerm::Gradient => gradient,
+            };
+            if k > 0.0 {
+                (gradient + h * (tension * k)).norm_sqr() * aw / (per_weight * k)
+            } else {
+                0.0
             }
         };
         let hat = state.hat.as_slice().expect("standard layout");
-        state
+        let weighted_sq: f64 = state
             .nonlinear
             .as_slice_mut()
             .expect("standard layout")
@@ -224,11 +241,19 @@ impl Evaluator {
             )
             .zip(hat.par_chunks(c))
             .zip(self.symbols.k2.par_chunks(c))
-            .for_each(|(((n, g), h), k)| {
-                for (((n, &g), &h), &k) in n.iter_mut().zip(g).zip(h).zip(k) {
-                    combine(n, g, h, k);
+            .zip(self.symbols.area_weight.par_chunks(c))
+            .map(|((((n, g), h), k), aw)| {
+                let mut sum = 0.0;
+                for ((((n, &g), &h), &k), &aw) in n.iter_mut().zip(g).zip(h).zip(k).zip(aw) {
+                    sum += combine(n, g, h, k, aw);
                 }
-            });
+                sum
+            })
+            .sum();
+        state.residual = match sigma {
+            Some(_) => (weighted_sq / self.grid.full_volume()).sqrt(),
+            None => f64::NAN,
+        };
         Ok(change)
     }
 }

@@ -396,16 +396,25 @@ impl Transform {
         })
     }
 
-    /// Project the self-conjugate planes of a real-to-complex spectrum onto Hermitian symmetry:
-    /// for `j2 = 0` (and `j2 = n2/2` when `n2` is even) set
-    /// `X(k0,k1) ← (X(k0,k1) + conj X(−k0,−k1)) / 2`, with `−k` taken mod `n` on periodic axes and
-    /// `−k = k` on mirror axes. A no-op when axis 2 is a mirror axis.
+    /// Project a spectrum onto the spectra of real fields, whose coefficients satisfy
+    /// `X(−k0, −k1, j2) = conj X(k0, k1, j2)` (`−k` taken mod `n` on periodic axes, `−k = k` on
+    /// mirror axes, where the cosine coefficients are real):
+    /// `X ← (X + conj X(−k0,−k1)) / 2` on every self-conjugate plane `j2`.
+    ///
+    /// * Periodic last axis (real-to-complex half spectrum): the planes `j2 = 0` and `j2 = n2/2`
+    ///   (even `n2`) are self-conjugate; the other planes hold independent coefficients.
+    /// * Mirror last axis: every plane is self-conjugate (the DCT along axis 2 is real).
+    ///
+    /// The inverse transform drops the part this removes, so a spectrum carried from step to step
+    /// must be projected, or the dropped part grows unseen where the explicit tension term is
+    /// anti-diffusive (DESIGN.md §3).
     ///
     /// # Panics
     /// If `a` does not have the spectral shape.
     pub fn hermitian_symmetrize(&self, a: &mut Array3<Complex64>) {
         assert_eq!(a.shape(), self.plan.spectral, "spectrum shape");
         if self.plan.kinds[2] == AxisKind::Mirror {
+            self.symmetrize_lanes(a);
             return;
         }
         let n2 = self.plan.shape[2];
@@ -415,22 +424,56 @@ impl Transform {
         }
     }
 
+    /// Index of `−k` on axis `a` for spectral index `j`.
+    fn negated(&self, j: usize, a: usize) -> usize {
+        let n = self.plan.shape[a];
+        match self.plan.kinds[a] {
+            AxisKind::Periodic => (n - j) % n,
+            AxisKind::Mirror => j,
+        }
+    }
+
     /// Hermitian projection of one self-conjugate plane (see [`Transform::hermitian_symmetrize`]).
     fn symmetrize_plane(&self, mut plane: ArrayViewMut2<Complex64>) {
         let [n0, n1, _] = self.plan.shape;
-        let neg = |j: usize, n: usize, a: usize| match self.plan.kinds[a] {
-            AxisKind::Periodic => (n - j) % n,
-            AxisKind::Mirror => j,
-        };
         for i0 in 0..n0 {
             for i1 in 0..n1 {
-                let q = (neg(i0, n0, 0), neg(i1, n1, 1));
+                let q = (self.negated(i0, 0), self.negated(i1, 1));
                 if q < (i0, i1) {
                     continue;
                 }
                 let mean = 0.5 * (plane[(i0, i1)] + plane[q].conj());
                 plane[(i0, i1)] = mean;
                 plane[q] = mean.conj();
+            }
+        }
+    }
+
+    /// Hermitian projection of every plane at once (mirror last axis), a contiguous lane of all
+    /// `j2` per pair `(k0, k1)`, `(−k0, −k1)`.
+    fn symmetrize_lanes(&self, a: &mut Array3<Complex64>) {
+        let [n0, n1, s2] = self.plan.spectral;
+        let data = a.as_slice_mut().expect("standard layout");
+        for i0 in 0..n0 {
+            for i1 in 0..n1 {
+                let p = i0 * n1 + i1;
+                let q = self.negated(i0, 0) * n1 + self.negated(i1, 1);
+                if q < p {
+                    continue;
+                }
+                if q == p {
+                    data[p * s2..(p + 1) * s2]
+                        .iter_mut()
+                        .for_each(|x| x.im = 0.0);
+                    continue;
+                }
+                let (low, high) = data.split_at_mut(q * s2);
+                let lane_p = &mut low[p * s2..(p + 1) * s2];
+                for (x, y) in lane_p.iter_mut().zip(&mut high[..s2]) {
+                    let mean = 0.5 * (*x + y.conj());
+                    *x = mean;
+                    *y = mean.conj();
+                }
             }
         }
     }

@@ -14,6 +14,7 @@ use crate::fd;
 use crate::output;
 use crate::run;
 use crate::setup::{self, Problem};
+use crate::simulation::{Simulation, StopRules};
 use ndarray::Array3;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -136,14 +137,14 @@ pub fn precision(scene: &Scene, out: &Path, force: bool) -> Result<Vec<Point>> {
 fn prepared(scene: &Scene) -> Result<Problem> {
     let mut problem = setup::build(scene)?;
     let s = variant(scene, Method::Spectral, Scheme::Sbdf1, scene.dt);
-    let (e, _) = run::start(
+    let (sim, _) = Simulation::of_scene(
         &Scene {
             prepare_steps: scene.prepare_steps,
             ..s
         },
         &problem,
     )?;
-    problem.phi = e.phi().clone();
+    problem.phi = sim.engine().phi().clone();
     Ok(problem)
 }
 
@@ -161,20 +162,15 @@ fn variant(scene: &Scene, method: Method, scheme: Scheme, dt: f64) -> Scene {
     s
 }
 
-/// Run `s` from `problem.phi` to `t_end`: the final φ, the steps and the wall seconds.
+/// Run `s` from `problem.phi` to `t_end`: the final φ, the steps and the wall seconds
+/// (planning included).
 fn advance(s: &Scene, problem: &Problem, t_end: f64) -> Result<(Array3<f64>, usize, f64)> {
     let clock = Instant::now();
-    let (mut e, _) = run::start(s, problem)?;
-    let (mut t, mut steps) = (0.0, 0);
-    while t < t_end - 1e-6 * s.dt {
-        let h = s.dt.min(t_end - t);
-        let r = e.step(t, h).map_err(|d| Error::Blowup {
-            step: steps + 1,
-            t,
-            reason: d.0,
-        })?;
-        t += r.dt;
-        steps += 1;
-    }
-    Ok((e.phi().clone(), steps, clock.elapsed().as_secs_f64()))
+    let (mut sim, _) = Simulation::of_scene(s, problem)?;
+    sim.run(&StopRules::until(t_end), &mut [])?;
+    Ok((
+        sim.engine().phi().clone(),
+        sim.clock.step,
+        clock.elapsed().as_secs_f64(),
+    ))
 }

@@ -12,8 +12,10 @@ use crate::config::{AdaptiveSpec, AreaMethod, Method, Scene, Scheme, Stabilizer,
 use crate::error::Result;
 use crate::fd;
 use crate::output;
+use crate::record::Record;
 use crate::run;
 use crate::setup;
+use crate::simulation::{Flow, Now, Probe, Simulation, StopRules};
 use crate::spectral;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -150,27 +152,31 @@ fn one_run(
     problem: &setup::Problem,
     steps: usize,
 ) -> Result<Sample> {
-    let (mut e, _) = run::start(&setup_free(s), problem)?;
+    let (mut sim, _) = Simulation::of_scene(&setup_free(s), problem)?;
     let mut outcome = Outcome::Stable;
-    for n in 0..steps {
-        let before = e.measures();
-        let sigma = e.sigma();
-        if e.step(n as f64 * s.dt, s.dt).is_err() {
-            outcome = Outcome::BlewUp;
-            break;
-        }
-        let after = e.measures();
-        let (f0, f1) = (
-            before.energy + sigma * before.area,
-            after.energy + sigma * after.area,
-        );
-        if f1 > f0 + RISE_TOL * f0.abs() && outcome == Outcome::Stable {
+    // F_eff before each step, at the σ of that state.
+    let f_eff = |r: &Record, sigma: f64| r.energy + sigma * r.area;
+    let mut before = sim.record();
+    let mut watch = Probe(|now: &Now| {
+        let after = &now.record;
+        let (f0, f1) = (f_eff(&before, before.sigma), f_eff(after, before.sigma));
+        if f1 > f0 + RISE_TOL * f0.abs() {
             outcome = Outcome::EnergyRise;
         }
-    }
-    let max_phi = match outcome {
-        Outcome::BlewUp => f64::INFINITY,
-        _ => e.phi().iter().fold(0.0f64, |m, p| m.max(p.abs())),
+        before = *after;
+        Ok(Flow::Continue)
+    });
+    let blew_up = sim
+        .run(&StopRules::steps(steps), &mut [&mut watch])
+        .is_err();
+    let max_phi = if blew_up {
+        outcome = Outcome::BlewUp;
+        f64::INFINITY
+    } else {
+        sim.engine()
+            .phi()
+            .iter()
+            .fold(0.0f64, |m, p| m.max(p.abs()))
     };
     Ok(Sample {
         stepper: name,

@@ -16,10 +16,10 @@ use crate::fd;
 use crate::output;
 use crate::run;
 use crate::setup::{self, Problem};
+use crate::simulation::{Flow, Now, Probe, Simulation, StopRules};
 use ndarray::Array3;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 /// Relative energy distance at which the relaxational route counts as arrived ...
 pub const ENERGY_TOL: f64 = 1e-6;
@@ -99,14 +99,6 @@ fn variant(scene: &Scene, f: impl FnOnce(&mut Scene)) -> Scene {
     s
 }
 
-fn blowup(name: &str, step: usize, t: f64, reason: String) -> Error {
-    Error::Blowup {
-        step,
-        t,
-        reason: format!("{name}: {reason}"),
-    }
-}
-
 /// Conserved flow with adaptive steps to residual < tol; returns the route and the end φ.
 fn conserved_route(
     scene: &Scene,
@@ -121,36 +113,21 @@ fn conserved_route(
             s.adaptive = AdaptiveSpec::Settings(AdaptiveSettings::default());
         }
     });
-    let clock = Instant::now();
-    let (mut e, _) = run::start(&s, problem)?;
-    let (mut t, mut dt, mut steps, mut evaluations) = (0.0, s.dt, 0, 0);
+    let (mut sim, _) = Simulation::of_scene(&s, problem)?;
     let mut trace = Vec::new();
-    loop {
-        dt = e.next_dt(dt);
-        let r = e
-            .step(t, dt)
-            .map_err(|d| blowup("conserved", steps + 1, t, d.0))?;
-        t += r.dt;
-        steps += 1;
-        evaluations += 1 + r.rejected;
-        trace.push((clock.elapsed().as_secs_f64(), e.measures().energy));
-        if r.residual < tol || steps >= max_steps {
-            break;
-        }
-    }
-    let m = e.measures();
-    let route = Route {
-        name: "conserved (spectral, adaptive)",
-        steps,
-        evaluations,
-        t,
-        wall: clock.elapsed().as_secs_f64(),
-        energy: m.energy,
-        reduced_energy: m.reduced(scene.dim, scene.eps).energy,
-        max_dphi: 0.0,
-        trace,
+    let mut probe = Probe(|now: &Now| {
+        trace.push((now.record.wall_seconds, now.record.energy));
+        Ok(Flow::Continue)
+    });
+    let rules = StopRules {
+        stop_residual: Some(tol),
+        max_steps: Some(max_steps),
+        t_end: None,
     };
-    Ok((route, e.phi().clone()))
+    sim.run(&rules, &mut [&mut probe])
+        .map_err(|e| tagged("conserved", e))?;
+    let route = route("conserved (spectral, adaptive)", &sim, scene, 0.0, trace);
+    Ok((route, sim.engine().phi().clone()))
 }
 
 /// L-BFGS until |F − F*|/F* < ENERGY_TOL and max|φ − φ*| ≤ PHI_TOL.
@@ -169,38 +146,45 @@ fn relax_route(
             s.area.alpha = None;
         }
     });
-    let clock = Instant::now();
-    let (mut e, _) = run::start(&s, problem)?;
-    let (mut t, mut steps, mut evaluations) = (0.0, 0, 0);
+    let (mut sim, _) = Simulation::of_scene(&s, problem)?;
     let mut trace = Vec::new();
-    let arrived = |e: &dyn crate::engine::Engine| {
-        (e.measures().energy - f_star).abs() / f_star < ENERGY_TOL
-            && crate::model::max_abs_diff(e.phi(), phi_star) <= PHI_TOL
-    };
-    while !arrived(e.as_ref()) && steps < max_steps && !e.stalled() {
-        let r = e
-            .step(t, s.dt)
-            .map_err(|d| blowup("relaxational", steps + 1, t, d.0))?;
-        t += r.dt;
-        steps += 1;
-        evaluations += 1 + r.rejected;
-        trace.push((
-            clock.elapsed().as_secs_f64(),
-            (e.measures().energy - f_star).abs() / f_star,
-        ));
-    }
-    let m = e.measures();
-    Ok(Route {
-        name: "relaxational (L-BFGS)",
-        steps,
-        evaluations,
-        t,
-        wall: clock.elapsed().as_secs_f64(),
-        energy: m.energy,
-        reduced_energy: m.reduced(scene.dim, scene.eps).energy,
-        max_dphi: crate::model::max_abs_diff(e.phi(), phi_star),
+    let mut probe = Probe(|now: &Now| {
+        let error = (now.record.energy - f_star).abs() / f_star;
+        trace.push((now.record.wall_seconds, error));
+        let arrived =
+            error < ENERGY_TOL && crate::model::max_abs_diff(now.engine.phi(), phi_star) <= PHI_TOL;
+        Ok(if arrived {
+            Flow::Stop("arrived")
+        } else {
+            Flow::Continue
+        })
+    });
+    sim.run(&StopRules::steps(max_steps), &mut [&mut probe])
+        .map_err(|e| tagged("relaxational", e))?;
+    let max_dphi = crate::model::max_abs_diff(sim.engine().phi(), phi_star);
+    Ok(route("relaxational (L-BFGS)", &sim, scene, max_dphi, trace))
+}
+
+/// A route's row from its finished simulation.
+fn route(
+    name: &'static str,
+    sim: &Simulation,
+    scene: &Scene,
+    max_dphi: f64,
+    trace: Vec<(f64, f64)>,
+) -> Route {
+    let r = sim.record();
+    Route {
+        name,
+        steps: r.step,
+        evaluations: r.step + r.rejected,
+        t: r.t,
+        wall: r.wall_seconds,
+        energy: r.energy,
+        reduced_energy: sim.engine().measures().reduced(scene.dim, scene.eps).energy,
+        max_dphi,
         trace,
-    })
+    }
 }
 
 /// FD at 95% of its bound: time FD_TIMED_STEPS steps, extrapolate to `t_star`.
@@ -213,13 +197,10 @@ fn fd_route(scene: &Scene, problem: &Problem, t_star: f64) -> Result<Route> {
     s.adaptive = AdaptiveSpec::Flag(false);
     s.dt = 0.95 * bound;
     s.area.method = Some(scene.area_method());
-    let (mut e, _) = run::start(&s, problem)?;
-    let clock = Instant::now();
-    for n in 0..FD_TIMED_STEPS {
-        e.step(n as f64 * s.dt, s.dt)
-            .map_err(|d| blowup("fd", n + 1, n as f64 * s.dt, d.0))?;
-    }
-    let per_step = clock.elapsed().as_secs_f64() / FD_TIMED_STEPS as f64;
+    let (mut sim, _) = Simulation::of_scene(&s, problem)?;
+    sim.run(&StopRules::steps(FD_TIMED_STEPS), &mut [])
+        .map_err(|e| tagged("fd", e))?;
+    let per_step = sim.clock.wall_seconds / FD_TIMED_STEPS as f64;
     let steps = (t_star / s.dt).ceil() as usize;
     Ok(Route {
         name: "fd (extrapolated)",
@@ -232,6 +213,18 @@ fn fd_route(scene: &Scene, problem: &Problem, t_star: f64) -> Result<Route> {
         max_dphi: f64::NAN,
         trace: Vec::new(),
     })
+}
+
+/// The error with the route's name in front of a blow-up's reason.
+fn tagged(name: &str, e: Error) -> Error {
+    match e {
+        Error::Blowup { step, t, reason } => Error::Blowup {
+            step,
+            t,
+            reason: format!("{name}: {reason}"),
+        },
+        other => other,
+    }
 }
 
 fn table(routes: &[Route], scene: &Scene) -> String {

@@ -4,8 +4,8 @@
 use serde_json::{json, Value};
 use vesicle::config::{self, Scene};
 use vesicle::engine::Engine;
-use vesicle::run;
 use vesicle::setup::{self, Problem};
+use vesicle::simulation::{Simulation, StopRules, Stopped};
 
 /// A validated scene from JSON.
 pub fn scene(v: Value) -> Scene {
@@ -14,11 +14,23 @@ pub fn scene(v: Value) -> Scene {
     s
 }
 
+/// The problem and a prepared simulation (area constraint installed) for `scene`.
+pub fn simulation(scene: &Scene) -> (Problem, Simulation) {
+    let problem = setup::build(scene).expect("problem");
+    let (sim, _) = Simulation::of_scene(scene, &problem).expect("simulation");
+    (problem, sim)
+}
+
 /// The problem and a prepared engine (area constraint installed) for `scene`.
 pub fn engine(scene: &Scene) -> (Problem, Box<dyn Engine + Send>) {
-    let problem = setup::build(scene).expect("problem");
-    let (e, _) = run::start(scene, &problem).expect("engine");
-    (problem, e)
+    let (problem, sim) = simulation(scene);
+    (problem, sim.into_engine())
+}
+
+/// Run `sim` to `t_end` (fixed or adaptive steps as its engine does, landing on `t_end`).
+pub fn advance(sim: &mut Simulation, t_end: f64) {
+    sim.run(&StopRules::until(t_end), &mut [])
+        .expect("no blow-up");
 }
 
 /// Relative difference |a − b| / |b|.
@@ -50,22 +62,19 @@ pub fn relaxed_sphere_energy(h: f64, laplacian: &str) -> f64 {
         "max_steps": 5000, "stop_residual": 1e-8,
         "initial": {"shape": "sphere", "radius": 6.0}, "symmetry": ["x", "y", "z"]
     }));
-    let (_, mut e) = engine(&s);
-    relax(e.as_mut(), s.dt, 1e-8, 5000).expect("the sphere relaxes");
-    e.measures().reduced(3, 1.0).energy
+    let (_, mut sim) = simulation(&s);
+    relax(&mut sim, 1e-8, 5000).expect("the sphere relaxes");
+    sim.engine().measures().reduced(3, 1.0).energy
 }
 
-/// Step `e` (adaptive Δt from `dt`) until its residual falls below `tol`; the steps taken, or
-/// `None` if `max_steps` did not suffice.
-pub fn relax(e: &mut (dyn Engine + Send), dt: f64, tol: f64, max_steps: usize) -> Option<usize> {
-    let (mut t, mut dt) = (0.0, dt);
-    for n in 1..=max_steps {
-        dt = e.next_dt(dt);
-        let r = e.step(t, dt).unwrap();
-        t += r.dt;
-        if r.residual < tol {
-            return Some(n);
-        }
-    }
-    None
+/// Run `sim` until its residual RMS(μ − μ̄) falls below `tol`; the steps taken, or `None`
+/// if `max_steps` did not suffice.
+pub fn relax(sim: &mut Simulation, tol: f64, max_steps: usize) -> Option<usize> {
+    let rules = StopRules {
+        stop_residual: Some(tol),
+        max_steps: Some(max_steps),
+        t_end: None,
+    };
+    let stopped = sim.run(&rules, &mut []).expect("no blow-up");
+    (stopped == Stopped::Stationary).then_some(sim.clock.step)
 }

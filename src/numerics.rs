@@ -1,0 +1,40 @@
+//! Small numerical pieces shared by the engines: the parallel chunk size and the stable root of
+//! the area quadratic.
+
+/// Elements per parallel task in the passes over a spectrum or a field (smaller tasks cost more
+/// in rayon's scheduling than they gain).
+pub const PAR_CHUNK: usize = 8192;
+
+/// The root of a x² + 2b x + c = 0 nearest `near` (numerically stable), `None` if not real.
+pub fn nearest_root(a: f64, b: f64, c: f64, near: f64) -> Option<f64> {
+    if a <= 0.0 {
+        return (b != 0.0).then(|| -c / (2.0 * b));
+    }
+    let disc = b * b - a * c;
+    if disc < 0.0 {
+        return None;
+    }
+    let q = -(b + b.signum() * disc.sqrt());
+    let r1 = q / a;
+    let r2 = if q != 0.0 { c / q } else { r1 };
+    Some(if (r1 - near).abs() <= (r2 - near).abs() {
+        r1
+    } else {
+        r2
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nearest_root;
+
+    /// (x − 1)(x − 3) = x² − 4x + 3: a = 1, b = −2, c = 3; both roots exact in binary.
+    #[test]
+    fn nearest_root_picks_the_closer_root() {
+        assert_eq!(nearest_root(1.0, -2.0, 3.0, 0.0), Some(1.0));
+        assert_eq!(nearest_root(1.0, -2.0, 3.0, 2.9), Some(3.0));
+        assert_eq!(nearest_root(1.0, 0.0, 1.0, 0.0), None);
+        // Linear: 2·2x − 8 = 0.
+        assert_eq!(nearest_root(0.0, 2.0, -8.0, 0.0), Some(2.0));
+    }
+}
