@@ -84,49 +84,28 @@ pub struct Prepared {
 }
 
 impl Prepared {
-    /// Build the engine, run the unconstrained preparation steps (σ = 0; the conserved
-    /// spectral SBDF1 stepper when the dynamics is relaxational), then install the area
-    /// constraint with A0 = the scene's target or the prepared area.
+    /// Run the unconstrained preparation steps (σ = 0, fixed steps of the scene's `dt`: FD
+    /// explicit Euler, or spectral SBDF1 for every spectral scheme and dynamics), build the engine the
+    /// scene asks for on the prepared field, then install the area constraint with A0 = the
+    /// scene's target or the prepared area.
     ///
     /// # Errors
     /// `Error::Config` if the initial field is not finite. A preparation step that diverges is
     /// not an error here: it is in `area_target`, beside the last good state.
     pub fn new(scene: &Scene, problem: &Problem) -> Result<Self> {
-        let relaxational = scene.dynamics == Dynamics::Relaxational;
-        let mut prep_scene = scene.clone();
-        if relaxational {
-            prep_scene.dynamics = Dynamics::Conserved;
-            prep_scene.scheme = Scheme::Sbdf1;
-            prep_scene.adaptive = AdaptiveSpec::Flag(false);
-        }
-        let mut engine = build_engine(&prep_scene, problem)?;
-        engine.set_area(AreaConstraint::none());
-        let mut prep = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
-        if scene.prepare_steps > 0 {
-            if let Err(e) = prep.run(&StopRules::steps(scene.prepare_steps), &mut []) {
-                let reason = match e {
-                    Error::Blowup { step, reason, .. } => {
-                        format!("during preparation step {step}: {reason}")
-                    }
-                    other => other.to_string(),
-                };
-                let failure = Error::Blowup {
-                    step: 0,
-                    t: 0.0,
-                    reason,
-                };
-                return Ok(Prepared {
-                    simulation: Simulation::new(prep.into_engine(), scene.dt, scene.dim, scene.eps),
-                    area_target: Err(failure),
-                });
+        let mut engine = if scene.prepare_steps == 0 {
+            build_engine(scene, problem)?
+        } else {
+            match prepare(scene, problem)? {
+                Ok(prepared) => build_engine(scene, &prepared)?,
+                Err((engine, failure)) => {
+                    return Ok(Prepared {
+                        simulation: Simulation::new(engine, scene.dt, scene.dim, scene.eps),
+                        area_target: Err(failure),
+                    })
+                }
             }
-        }
-        let mut engine = prep.into_engine();
-        if relaxational {
-            let mut prepared = problem.clone();
-            prepared.phi = engine.phi().clone();
-            engine = build_engine(scene, &prepared)?;
-        }
+        };
         let a0 = scene.area.target.unwrap_or(engine.measures().area);
         engine.set_area(AreaConstraint {
             method: scene.area_method(),
@@ -138,6 +117,40 @@ impl Prepared {
             area_target: Ok(a0),
         })
     }
+}
+
+/// The problem with its field after `scene.prepare_steps` unconstrained fixed steps of
+/// `scene.dt` of the conserved flow (FD explicit Euler, or spectral SBDF1 whatever the scene's
+/// scheme and dynamics), or the engine holding the last good state and the failure.
+type Preparation = std::result::Result<Problem, (Box<dyn Engine + Send>, Error)>;
+
+fn prepare(scene: &Scene, problem: &Problem) -> Result<Preparation> {
+    // The same preparation for every scheme and dynamics of a method, so that scenes differing
+    // only in those start from the same field and A0.
+    let mut prep_scene = scene.clone();
+    prep_scene.adaptive = AdaptiveSpec::Flag(false);
+    prep_scene.dynamics = Dynamics::Conserved;
+    prep_scene.scheme = Scheme::Sbdf1;
+    let mut engine = build_engine(&prep_scene, problem)?;
+    engine.set_area(AreaConstraint::none());
+    let mut prep = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
+    if let Err(e) = prep.run(&StopRules::steps(scene.prepare_steps), &mut []) {
+        let reason = match e {
+            Error::Blowup { step, reason, .. } => {
+                format!("during preparation step {step}: {reason}")
+            }
+            other => other.to_string(),
+        };
+        let failure = Error::Blowup {
+            step: 0,
+            t: 0.0,
+            reason,
+        };
+        return Ok(Err((prep.into_engine(), failure)));
+    }
+    let mut prepared = problem.clone();
+    prepared.phi = prep.engine().phi().clone();
+    Ok(Ok(prepared))
 }
 
 impl Simulation {
