@@ -194,6 +194,7 @@ pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
             .collect(),
     );
     s.threads = Some(rayon::current_num_threads());
+    s.output.record_every = Some(scene.record_every());
     let st = scene.stabilizer();
     s.stabilizer = crate::config::StabilizerSpec {
         s2: Some(st.s2),
@@ -331,6 +332,7 @@ fn time_loop(
     history.push(last);
     let bar = progress_bar(scene, opts.progress);
     let (mut t, mut step, mut dt, mut rejected) = (0.0, 0usize, scene.dt, 0usize);
+    let record_every = scene.record_every();
     let stopped = loop {
         dt = engine.next_dt(dt);
         if let Some(t_end) = scene.t_end {
@@ -365,7 +367,7 @@ fn time_loop(
         } else {
             stop_rule(scene, t, dt, step, report.residual)
         };
-        if step % scene.output.record_every == 0 || stop.is_some() {
+        if step % record_every == 0 || stop.is_some() {
             last = record(step, t, dt, engine);
             last.residual = report.residual;
             last.rejected = rejected;
@@ -488,7 +490,7 @@ fn write_final(
         write_charts(out, end.history)?;
     }
     let summary = json!({
-        "spec": resolved,
+        "spec": resolved.resolved_value(),
         "final": last,
         "levelset": crate::levelset::measure(&full, resolved.dim, resolved.h),
         "max_dt_over_bound": engine.max_dt_over_bound(),

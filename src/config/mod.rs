@@ -2,9 +2,12 @@
 //!
 //! Unknown keys are rejected, every field is checked by [`Scene::validate`], and every error
 //! names the dotted key of the field and the reason. `--set key=value` overrides are applied to
-//! the JSON before it is read ([`apply_override`]), so they are validated like the file itself.
+//! the JSON before it is read ([`apply_override`]), so they are validated like the file itself;
+//! `--set key=null` removes the key. A key the scene's method or dynamics ignores is refused
+//! (see the `ignored` module's table).
 
 mod c0;
+mod ignored;
 mod scene;
 mod shapes;
 mod validation;
@@ -12,7 +15,7 @@ mod validation;
 pub use c0::{C0Field, C0Spec};
 pub use scene::{
     axis_index, AdaptiveSettings, AdaptiveSpec, AreaMethod, AreaSpec, AutoTag, Dynamics, Laplacian,
-    Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry,
+    Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, RECORD_ROWS,
 };
 pub use shapes::{
     Capsule, Cup, Difference, Ellipsoid, Initial, Shape, Sphere, Spheroid, SpheroidKind, Union,
@@ -79,12 +82,13 @@ fn nonfinite_field(text: &str, line: usize, column: usize) -> Option<(String, St
     }
 }
 
-/// Deserialize a scene from JSON, reporting the dotted path of a bad field.
+/// Deserialize a scene from JSON, reporting the dotted path of a bad field, and refuse a key
+/// that the scene's method or dynamics ignores (a key set to `null` counts as absent).
 ///
 /// # Errors
 /// `Error::Config` with the path of the offending key.
 pub fn from_value(value: Value) -> Result<Scene> {
-    serde_path_to_error::deserialize::<_, Scene>(value.clone()).map_err(|e| {
+    let scene = serde_path_to_error::deserialize::<_, Scene>(value.clone()).map_err(|e| {
         let path = e.path().to_string();
         if let Some(err) = refine(&path, &value) {
             return err;
@@ -103,7 +107,9 @@ pub fn from_value(value: Value) -> Result<Scene> {
             Some((inner, rest)) => Error::config(format!("{field}.{inner}"), rest),
             None => Error::config(field, reason),
         }
-    })
+    })?;
+    ignored::refuse_ignored(&value, &scene)?;
+    Ok(scene)
 }
 
 /// Fields read through an intermediate value (`initial`, `c0`, `adaptive`) lose the inner key
@@ -146,6 +152,8 @@ fn resolve_relative(scene: &Path, file: &Path) -> PathBuf {
 
 /// Apply one `key=value` override to the scene JSON. `key` is dotted for nested fields
 /// (`area.alpha=0.01`); `value` is read as JSON, or taken as a string if it is not JSON.
+/// `key=null` removes the key (nothing happens if it is absent), so the field takes its
+/// default, or is reported missing if it is required.
 ///
 /// # Errors
 /// `Error::Config` if the text has no `=` or the path runs through a non-object.
@@ -154,6 +162,7 @@ pub fn apply_override(scene: &mut Value, assignment: &str) -> Result<()> {
         .split_once('=')
         .ok_or_else(|| Error::config(assignment, "--set expects key=value"))?;
     let value = serde_json::from_str(raw).unwrap_or_else(|_| Value::String(raw.to_string()));
+    let remove = value.is_null();
     let parts: Vec<&str> = key.split('.').collect();
     let mut node = scene;
     for (i, part) in parts.iter().enumerate() {
@@ -164,12 +173,67 @@ pub fn apply_override(scene: &mut Value, assignment: &str) -> Result<()> {
             )
         })?;
         if i + 1 == parts.len() {
-            obj.insert(part.to_string(), value);
+            if remove {
+                obj.remove(*part);
+            } else {
+                obj.insert(part.to_string(), value);
+            }
             return Ok(());
         }
-        node = obj
-            .entry(part.to_string())
-            .or_insert_with(|| Value::Object(Default::default()));
+        node = if remove {
+            match obj.get_mut(*part) {
+                Some(next) => next,
+                None => return Ok(()),
+            }
+        } else {
+            obj.entry(part.to_string())
+                .or_insert_with(|| Value::Object(Default::default()))
+        };
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{apply_override, from_value};
+    use crate::error::Error;
+    use serde_json::{json, Value};
+
+    fn scene() -> Value {
+        json!({
+            "dim": 2, "n": [32, 32], "dt": 0.001, "max_steps": 3, "scheme": "sbdf2",
+            "initial": {"shape": "sphere", "radius": 6.0},
+            "area": {"method": "lagrangian", "alpha": 0.01}
+        })
+    }
+
+    #[test]
+    fn set_null_removes_the_key() {
+        let mut v = scene();
+        apply_override(&mut v, "scheme=null").unwrap();
+        apply_override(&mut v, "area.alpha=null").unwrap();
+        assert!(v.get("scheme").is_none());
+        assert_eq!(v["area"], json!({"method": "lagrangian"}));
+        // absent keys, also under an absent object: nothing to remove, nothing created
+        apply_override(&mut v, "adaptive=null").unwrap();
+        apply_override(&mut v, "c0.inside=null").unwrap();
+        assert!(v.get("adaptive").is_none() && v.get("c0").is_none());
+        // a path through a non-object is still refused
+        assert!(apply_override(&mut v, "dt.x=null").is_err());
+        let s = from_value(v).unwrap();
+        assert_eq!(s.scheme, super::Scheme::Sbdf1);
+        assert_eq!(s.alpha(), 1e-3);
+    }
+
+    #[test]
+    fn set_null_on_a_required_key_reports_it_missing() {
+        let mut v = scene();
+        apply_override(&mut v, "dt=null").unwrap();
+        match from_value(v) {
+            Err(Error::Config { reason, .. }) => {
+                assert!(reason.contains("missing field `dt`"), "{reason}")
+            }
+            other => panic!("{other:?}"),
+        }
+    }
 }

@@ -82,6 +82,9 @@ pub struct Scene {
     pub output: OutputSpec,
 }
 
+/// Rows of `timeseries.csv` the automatic `output.record_every` aims at.
+pub const RECORD_ROWS: usize = 2000;
+
 pub(super) fn one() -> f64 {
     1.0
 }
@@ -286,7 +289,11 @@ impl Stabilizer {
 #[serde(deny_unknown_fields, default)]
 pub struct OutputSpec {
     /// A `timeseries.csv` row every this many steps (the first and last are always written).
-    pub record_every: usize,
+    /// Absent: automatic, about 2 000 rows per run ([`Scene::record_every`]): with N the
+    /// smaller of `max_steps` and, for fixed steps, ⌈t_end/dt⌉, every max(1, ⌈N/2000⌉) steps;
+    /// every step when nothing bounds the number of steps (no `max_steps`, and no `t_end` or
+    /// adaptive steps: a relaxation stopped by `stop_residual` alone).
+    pub record_every: Option<usize>,
     /// Snapshots (`.npy`, `.vti`, `.png`) every this many steps; 0 writes only the final state.
     pub snapshot_every: usize,
     /// Write VTK ImageData `.vti` snapshots.
@@ -298,7 +305,7 @@ pub struct OutputSpec {
 impl Default for OutputSpec {
     fn default() -> Self {
         OutputSpec {
-            record_every: 1,
+            record_every: None,
             snapshot_every: 0,
             vti: true,
             png: true,
@@ -328,6 +335,36 @@ impl Scene {
     pub fn alpha(&self) -> f64 {
         self.area.alpha.unwrap_or(1e-3)
     }
+
+    /// Steps between two `timeseries.csv` rows: `output.record_every` if given, else
+    /// ⌈N / [`RECORD_ROWS`]⌉ (at least 1) with N the bound on the number of steps: the smaller
+    /// of `max_steps` and, for fixed steps, ⌈t_end/dt⌉ (within the stop rule's 1e-6 of a step).
+    /// Nothing bounds N (adaptive steps without `max_steps`, or `stop_residual` alone): 1.
+    pub fn record_every(&self) -> usize {
+        if let Some(k) = self.output.record_every {
+            return k;
+        }
+        let by_time = match (self.t_end, self.adaptive.settings()) {
+            (Some(t_end), None) => Some((t_end / self.dt - 1e-6).ceil().max(1.0) as usize),
+            _ => None,
+        };
+        match (self.max_steps, by_time) {
+            (None, None) => 1,
+            (m, t) => {
+                let n = m.unwrap_or(usize::MAX).min(t.unwrap_or(usize::MAX));
+                n.div_ceil(RECORD_ROWS).max(1)
+            }
+        }
+    }
+
+    /// The scene as JSON without the keys its method or dynamics ignores (which a scene file
+    /// may not set), so that it reads back through [`super::from_value`]; what `summary.json`
+    /// stores under `"spec"`.
+    pub fn resolved_value(&self) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).expect("a scene serialises");
+        super::ignored::drop_ignored(&mut v, self);
+        v
+    }
 }
 
 /// Index of the scene axis named `name` ("x", "y", "z").
@@ -339,4 +376,62 @@ pub fn axis_index(name: &str, dim: usize) -> Option<usize> {
         _ => return None,
     };
     (i < dim).then_some(i)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::from_value;
+    use serde_json::{json, Value};
+
+    /// `record_every()` of a 2D scene with `extra` merged in.
+    fn record_every(extra: Value) -> usize {
+        let mut v = json!({
+            "dim": 2, "n": [32, 32], "dt": 0.001,
+            "initial": {"shape": "sphere", "radius": 6.0}
+        });
+        v.as_object_mut()
+            .unwrap()
+            .extend(extra.as_object().unwrap().clone());
+        from_value(v).unwrap().record_every()
+    }
+
+    #[test]
+    fn record_every_aims_at_2000_rows() {
+        for (extra, expect) in [
+            // explicit wins
+            (
+                json!({"max_steps": 1_000_000, "output": {"record_every": 7}}),
+                7,
+            ),
+            // max_steps alone
+            (json!({"max_steps": 2000}), 1),
+            (json!({"max_steps": 2001}), 2),
+            (json!({"max_steps": 4000}), 2),
+            (json!({"max_steps": 4001}), 3),
+            (
+                json!({"max_steps": 40_000, "adaptive": {"dt_max": 50.0}}),
+                20,
+            ),
+            // fixed steps to t_end: ceil(t_end/dt), without round-off adding a step
+            (json!({"t_end": 4.0}), 2),
+            (json!({"t_end": 4.000_001}), 3),
+            (json!({"t_end": 120.0, "dt": 4e-4, "method": "fd"}), 150),
+            (json!({"t_end": 0.0012, "dt": 4e-4, "method": "fd"}), 1),
+            // the smaller bound
+            (
+                json!({"t_end": 120.0, "dt": 4e-4, "method": "fd", "max_steps": 10_000}),
+                5,
+            ),
+            (json!({"t_end": 10.0, "max_steps": 1_000_000}), 5),
+            // nothing bounds the steps: every step
+            (json!({"stop_residual": 1e-9}), 1),
+            (json!({"t_end": 1e6, "adaptive": true}), 1),
+            (
+                json!({"t_end": 1e6, "adaptive": true, "max_steps": 6000}),
+                3,
+            ),
+        ] {
+            assert_eq!(record_every(extra.clone()), expect, "{extra}");
+        }
+    }
 }

@@ -63,7 +63,7 @@ impl Scene {
         if let Initial::Shape(s) = &self.initial {
             validate_shape(s, "initial", self.dim)?;
         }
-        if self.output.record_every == 0 {
+        if self.output.record_every == Some(0) {
             return Err(Error::config("output.record_every", "must be at least 1"));
         }
         Ok(())
