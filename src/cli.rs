@@ -238,7 +238,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
             );
             println!(
                 "{}",
-                serde_json::to_string_pretty(&resolved).expect("serialisable")
+                serde_json::to_string_pretty(&resolved.resolved_value()).expect("serialisable")
             );
             eprintln!("{}", run::describe(&scene, &problem, "check"));
             Ok(())

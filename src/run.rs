@@ -53,6 +53,7 @@ pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
             .collect(),
     );
     s.threads = Some(rayon::current_num_threads());
+    s.output.record_every = Some(scene.record_every());
     let st = scene.stabilizer();
     s.stabilizer = crate::config::StabilizerSpec {
         s2: Some(st.s2),
@@ -111,7 +112,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
         .map_or_else(|_| simulation.engine().measures().area, |a| *a);
     let resolved = resolved_scene(scene, a0, &problem.mirror);
     let mut recorder =
-        Recorder::to_file(scene.output.record_every, &opts.out.join("timeseries.csv"))?;
+        Recorder::to_file(scene.record_every(), &opts.out.join("timeseries.csv"))?;
     let ended = match area_target {
         Err(e) => {
             simulation.run(&StopRules::steps(0), &mut [&mut recorder])?;
@@ -192,7 +193,7 @@ fn write_final(
     last_json["steps"] = json!(last.step);
     last_json["stopped"] = json!(stopped);
     let summary = json!({
-        "spec": resolved,
+        "spec": resolved.resolved_value(),
         "final": last_json,
         "levelset": crate::levelset::measure(&full, resolved.dim, resolved.h),
         "max_dt_over_bound": engine.max_dt_over_bound(),

@@ -409,7 +409,12 @@ fn bad_overrides_are_rejected_with_exit_2_and_no_output() {
         (&sphere, &["--set", "initial.radius=30"], "does not fit"),
         (&sphere, &["--set", "symmetry=[\"x\",\"x\"]"], "`symmetry`"),
         (&sphere, &["--set", "max_steps=0"], "`max_steps`"),
-        (&sphere, &["--set", "method=fd"], "`dt`"),
+        (
+            &sphere,
+            &["--set", "method=fd", "--set", "scheme=null"],
+            "`dt`",
+        ),
+        (&sphere, &["--set", "method=fd"], "`scheme`: ignored by"),
         (
             &ellipse,
             &["--set", "adaptive.growth=3"],
@@ -421,6 +426,24 @@ fn bad_overrides_are_rejected_with_exit_2_and_no_output() {
             "`adaptive.dt_max`",
         ),
         (&ellipse, &["--set", "method=fd"], "`adaptive`"),
+        (
+            &ellipse,
+            &["--set", "method=fd", "--set", "adaptive=null"],
+            "`scheme`: ignored by \"method\": \"fd\"",
+        ),
+        (
+            &ellipse,
+            &["--set", "dynamics=relaxational", "--set", "scheme=null"],
+            "`adaptive`: ignored by \"dynamics\": \"relaxational\"",
+        ),
+        (&sphere, &["--set", "lbfgs_memory=3"], "`lbfgs_memory`"),
+        (&sphere, &["--set", "dt=null"], "missing field `dt`"),
+        (
+            &sphere,
+            &["--set", "initial=null"],
+            "missing field `initial`",
+        ),
+        (&sphere, &["--set", "initial.radius=null"], "radius"),
     ];
     let mut failures = Vec::new();
     for (scene, extra, expect) in cases {
@@ -458,8 +481,9 @@ fn missing_scene_file_is_exit_2() {
 // Valid scenes and their outputs
 // ---------------------------------------------------------------------------------------------
 
-/// Run `runs/<name>` tiny and check every output file.
-fn run_example_tiny(name: &str, overrides: &[&str]) {
+/// Run `runs/<name>` tiny and check every output file, and that the resolved scene under
+/// `"spec"` reads back as a valid scene. Returns `summary.json`.
+fn run_example_tiny(name: &str, overrides: &[&str]) -> Value {
     let scene_path = runs_dir().join(name);
     let scene = read_json(&scene_path);
     let n: Vec<usize> = scene["n"]
@@ -537,6 +561,10 @@ fn run_example_tiny(name: &str, overrides: &[&str]) {
     );
     assert_eq!(summary["spec"]["n"], scene["n"], "{name}");
     assert_eq!(summary["spec"]["dim"], scene["dim"], "{name}");
+    let spec = vesicle::config::from_value(summary["spec"].clone())
+        .unwrap_or_else(|e| panic!("{name}: the spec does not read back: {e}"));
+    spec.validate()
+        .unwrap_or_else(|e| panic!("{name}: the spec does not validate: {e}"));
 
     // phi_final.npy: float64, C order, the FULL box even on a mirror-reduced computation
     let (descr, fortran, shape, values) = read_npy(&out.join("phi_final.npy"));
@@ -556,6 +584,7 @@ fn run_example_tiny(name: &str, overrides: &[&str]) {
     );
     let png = fs::read(out.join("shape_final.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{name}");
+    summary
 }
 
 #[test]
@@ -580,6 +609,58 @@ fn example_prolate3d_fd_runs_tiny() {
         "prolate3d_fd.json",
         &["t_end=0.0012", "prepare_steps=2", "output.record_every=1"],
     );
+}
+
+/// `--set key=null` removes a key: the spectral prolate becomes its FD reference, and the
+/// resolved spec leaves out what FD ignores and shows the automatic `record_every`.
+#[test]
+fn set_null_turns_the_spectral_prolate_into_its_fd_reference() {
+    let summary = run_example_tiny(
+        "prolate3d.json",
+        &[
+            "method=fd",
+            "scheme=null",
+            "adaptive=null",
+            "dt=4e-4",
+            "output.record_every=null",
+            "max_steps=3",
+            "prepare_steps=2",
+        ],
+    );
+    let spec = &summary["spec"];
+    assert_eq!(spec["method"], "fd");
+    assert_eq!(summary["steps"], 3);
+    for key in [
+        "scheme",
+        "adaptive",
+        "laplacian",
+        "stabilizer",
+        "lbfgs_memory",
+    ] {
+        assert!(spec.get(key).is_none(), "the fd spec keeps {key}: {spec}");
+    }
+    assert_eq!(spec["output"]["record_every"], 1, "3 steps: every step");
+}
+
+/// A relaxational run's spec leaves out `scheme` and `adaptive` and reads back.
+#[test]
+fn relaxational_run_spec_reads_back() {
+    let summary = run_example_tiny(
+        "ellipse2d.json",
+        &[
+            "dynamics=relaxational",
+            "scheme=null",
+            "adaptive=null",
+            "max_steps=3",
+            "prepare_steps=2",
+        ],
+    );
+    let spec = &summary["spec"];
+    assert_eq!(spec["dynamics"], "relaxational");
+    for key in ["scheme", "adaptive"] {
+        assert!(spec.get(key).is_none(), "the relaxational spec keeps {key}");
+    }
+    assert_eq!(spec["lbfgs_memory"], 5);
 }
 
 #[test]
