@@ -111,8 +111,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
         .as_ref()
         .map_or_else(|_| simulation.engine().measures().area, |a| *a);
     let resolved = resolved_scene(scene, a0, &problem.mirror);
-    let mut recorder =
-        Recorder::to_file(scene.record_every(), &opts.out.join("timeseries.csv"))?;
+    let mut recorder = Recorder::to_file(scene.record_every(), &opts.out.join("timeseries.csv"))?;
     let ended = match area_target {
         Err(e) => {
             simulation.run(&StopRules::steps(0), &mut [&mut recorder])?;
