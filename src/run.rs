@@ -227,6 +227,21 @@ fn write_charts(out: &Path, history: &[Record]) -> Result<()> {
     Ok(())
 }
 
+/// The stop rules in words.
+fn stop_text(scene: &Scene) -> String {
+    let mut parts = Vec::new();
+    if let Some(r) = scene.stop_residual {
+        parts.push(format!("residual < {r:e}"));
+    }
+    if let Some(t) = scene.t_end {
+        parts.push(format!("t = {t}"));
+    }
+    if let Some(m) = scene.max_steps {
+        parts.push(format!("{m} steps"));
+    }
+    parts.join(" or ")
+}
+
 /// A few lines describing the run, printed at start-up.
 pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
     let g = &problem.grid;
@@ -240,13 +255,17 @@ pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
         scene.h,
         scene.eps
     );
+    let stepper = match (scene.method, scene.dynamics) {
+        (crate::config::Method::Fd, _) => "explicit Euler".to_string(),
+        (_, crate::config::Dynamics::Relaxational) => "L-BFGS".to_string(),
+        _ => format!("{:?}", scene.scheme).to_lowercase(),
+    };
     s += &format!(
-        "  dt {}  scheme {:?}  dynamics {:?}  area {:?} (A0 = {:.6e})",
+        "  dt {}  {stepper}  area {:?} (A0 = {:.6e})  stop: {}",
         scene.dt,
-        scene.scheme,
-        scene.dynamics,
         scene.area_method(),
-        scene.area.target.unwrap_or(f64::NAN)
+        scene.area.target.unwrap_or(f64::NAN),
+        stop_text(scene)
     );
     if let Some(b) = bound {
         s += &format!(
