@@ -538,14 +538,19 @@ fn run_example_tiny(name: &str, overrides: &[&str]) -> Value {
         .keys()
         .map(String::as_str)
         .collect();
-    let mut sorted_header = header.clone();
-    sorted_header.sort_unstable();
+    // "final": the CSV columns plus "steps" and "stopped" (DESIGN.md §6; "wall_seconds" is a
+    // column).
+    let mut expected_final = header.clone();
+    expected_final.extend(["steps", "stopped"]);
+    expected_final.sort_unstable();
     let mut sorted_final = final_keys.clone();
     sorted_final.sort_unstable();
     assert_eq!(
-        sorted_final, sorted_header,
-        "{name}: final keys vs CSV columns"
+        sorted_final, expected_final,
+        "{name}: final keys vs CSV columns + steps, stopped"
     );
+    assert_eq!(summary["final"]["stopped"], summary["stopped"], "{name}");
+    assert_eq!(summary["final"]["steps"], summary["steps"], "{name}");
     let steps = summary["steps"].as_u64().unwrap();
     assert!(steps >= 1, "{name}");
     assert_eq!(summary["final"]["step"].as_u64(), Some(steps), "{name}");

@@ -100,10 +100,12 @@ fn stability_study_brackets_the_fd_bound() {
     assert!(out.join("stability.png").exists());
 }
 
-/// `study stationary` on a small 2D ellipse: the L-BFGS route reaches the conserved flow's
-/// end energy (1e-6) and field (1e-3) with fewer evaluations.
+/// `study stationary` on a small 2D ellipse: every route (L-BFGS, SBDF1, SBDF2) passes
+/// residual 1e-6 at a state within 1e-6 (relative) of F* in energy (the README's guidance: the
+/// energy error goes as the residual squared), each tighter tolerance gives a smaller error on
+/// the conserved routes, and L-BFGS needs fewer evaluations than SBDF1 to 1e-6.
 #[test]
-fn stationary_study_relaxational_route_arrives() {
+fn stationary_study_tolerances_mean_the_same_on_every_route() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("stat");
     let o = vesicle(&[
@@ -116,22 +118,36 @@ fn stationary_study_relaxational_route_arrives() {
         "n=[64,64]",
         "--set",
         "initial.r0=10",
-        "--set",
-        "stop_residual=1e-9",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows = csv_rows(&out.join("stationary.csv"));
-    let num = |r: usize, c: usize| -> f64 { rows[r][c].parse().unwrap() };
-    let (f_conserved, f_relax) = (num(0, 5), num(1, 5));
-    assert!((f_relax - f_conserved).abs() / f_conserved < 1e-6);
-    assert!(num(1, 7) <= 1e-3, "max|dphi| {}", num(1, 7));
-    assert!(
-        num(1, 2) < num(0, 2),
-        "evaluations {} vs {}",
-        num(1, 2),
-        num(0, 2)
-    );
-    assert!(out.join("convergence.png").exists());
+    // route,stop_residual,steps,evaluations,t,wall_seconds,residual,energy,relative_energy_error
+    let at = |route: &str, tol: f64| -> (f64, f64) {
+        let r = rows
+            .iter()
+            .find(|r| r[0].contains(route) && r[1].parse::<f64>().unwrap() == tol)
+            .unwrap_or_else(|| panic!("{route} reaches {tol}"));
+        (r[3].parse().unwrap(), r[8].parse::<f64>().unwrap().abs())
+    };
+    for route in ["L-BFGS", "SBDF1", "SBDF2"] {
+        let (_, error) = at(route, 1e-6);
+        assert!(
+            error < 1e-6,
+            "{route}: energy error {error:e} at residual 1e-6"
+        );
+    }
+    for route in ["SBDF1", "SBDF2"] {
+        let errors: Vec<f64> = [1e-4, 1e-5, 1e-6, 1e-7]
+            .iter()
+            .map(|&t| at(route, t).1)
+            .collect();
+        assert!(
+            errors.windows(2).all(|w| w[1] < w[0]),
+            "{route}: errors {errors:?}"
+        );
+    }
+    assert!(at("L-BFGS", 1e-6).0 < at("SBDF1", 1e-6).0);
+    assert!(out.join("convergence.png").exists() && out.join("residual.png").exists());
 }
 
 /// `study precision`: SBDF2's error falls as Δt² down the ladder (order within 2 ± 0.2 over
