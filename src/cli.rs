@@ -69,6 +69,23 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Continue a run from its checkpoint (`DIR/checkpoint.bin`, written every
+    /// `output.checkpoint_every` steps, every `output.checkpoint_minutes` and at the end),
+    /// bit for bit as if it had not stopped. Extend it with `--set max_steps=M` (counting from
+    /// the start), `--set t_end=T` or `--set stop_residual=R`.
+    #[command(
+        after_help = "Examples:\n  vesicle resume out/prolate3d --set stop_residual=1e-8\n  vesicle resume out/prolate3d_fd --set t_end=240"
+    )]
+    Resume {
+        /// The run folder.
+        dir: PathBuf,
+        /// Change a stop rule, `threads` or an `output.*` key: `key=value` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Validate a scene and print it with every default resolved, and its stability bound.
     #[command(after_help = "Example:\n  vesicle check runs/prolate3d.json --set method=fd")]
     Check {
@@ -143,7 +160,7 @@ enum Study {
 pub fn main() -> i32 {
     let cli = Cli::parse();
     match dispatch(cli) {
-        Ok(()) => 0,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e}");
             exit_code(&e)
@@ -197,7 +214,26 @@ where
         .install(f)
 }
 
-fn dispatch(cli: Cli) -> Result<(), Error> {
+/// Print the one-line result of a run; its exit code (128 + the signal that interrupted it).
+fn report(outcome: &run::Outcome, out: &Path) -> i32 {
+    let l = &outcome.last;
+    eprintln!(
+        "done ({}): step {} t {:.6e} e {:.6} v {:.6} sigma {:.4e} residual {:.3e} in {:.2} s -> {}",
+        outcome.stopped.as_str(),
+        l.step,
+        l.t,
+        l.reduced_energy,
+        l.reduced_volume,
+        l.sigma,
+        l.residual,
+        outcome.wall_seconds,
+        out.display()
+    );
+    outcome.signal.map_or(0, |s| 128 + s)
+}
+
+/// Run the command; its exit code (0, or 130/143 for a run ended by SIGINT/SIGTERM).
+fn dispatch(cli: Cli) -> Result<i32, Error> {
     match cli.command {
         Command::Run {
             scene: args,
@@ -212,20 +248,15 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
                 progress: !quiet && std::io::stderr().is_terminal(),
             };
             let outcome = with_threads(&scene, || run::run(&scene, &opts))?;
-            let l = &outcome.last;
-            eprintln!(
-                "done ({}): step {} t {:.6e} e {:.6} v {:.6} sigma {:.4e} residual {:.3e} in {:.2} s -> {}",
-                outcome.stopped.as_str(),
-                l.step,
-                l.t,
-                l.reduced_energy,
-                l.reduced_volume,
-                l.sigma,
-                l.residual,
-                outcome.wall_seconds,
-                out.display()
-            );
-            Ok(())
+            Ok(report(&outcome, &out))
+        }
+        Command::Resume { dir, set, quiet } => {
+            let checkpoint = crate::checkpoint::Checkpoint::read(&dir)?;
+            let scene = run::resumed_scene(checkpoint.scene.clone(), &set)?;
+            let progress = !quiet && std::io::stderr().is_terminal();
+            let outcome =
+                with_threads(&scene, || run::resume(&dir, &checkpoint, &scene, progress))?;
+            Ok(report(&outcome, &dir))
         }
         Command::Check { scene: args } => {
             let scene = load(&args)?;
@@ -241,7 +272,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
                 serde_json::to_string_pretty(&resolved.resolved_value()).expect("serialisable")
             );
             eprintln!("{}", run::describe(&scene, &problem, "check"));
-            Ok(())
+            Ok(0)
         }
         Command::Study(Study::Stationary {
             scene: args,
@@ -252,7 +283,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
             with_threads(&scene, || {
                 crate::study::stationary::stationary(&scene, &out, output.force)
             })?;
-            Ok(())
+            Ok(0)
         }
         Command::Study(Study::Precision {
             scene: args,
@@ -263,7 +294,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
             with_threads(&scene, || {
                 crate::study::precision::precision(&scene, &out, output.force)
             })?;
-            Ok(())
+            Ok(0)
         }
         Command::Study(Study::Stability {
             scene: args,
@@ -290,7 +321,7 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
                     dt_max,
                 )
             })?;
-            Ok(())
+            Ok(0)
         }
         Command::Compare {
             scene: args,
@@ -300,7 +331,8 @@ fn dispatch(cli: Cli) -> Result<(), Error> {
             let out = output.folder(&args.scene, "-compare");
             with_threads(&scene, || {
                 crate::compare::compare(&scene, &out, output.force)
-            })
+            })?;
+            Ok(0)
         }
     }
 }

@@ -14,6 +14,7 @@
 use crate::config::AreaMethod;
 use crate::model::Measures;
 use ndarray::Array3;
+use rustfft::num_complex::Complex64;
 
 /// The area constraint an engine applies.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -88,4 +89,95 @@ pub trait Engine {
     }
     /// Short name for logs and tables.
     fn name(&self) -> &'static str;
+    /// Everything needed to continue exactly from the current state (checkpoints): the state
+    /// arrays as they are held (spectra, not their transforms) and the scalars that are not
+    /// recomputed from them.
+    fn save(&self) -> Saved;
+    /// Continue from `saved`, the state at time `t` of an engine built for the same scene, with
+    /// the same area constraint installed. Afterwards the engine steps bit for bit as the saved
+    /// one would have.
+    ///
+    /// # Errors
+    /// A message naming what is missing or has the wrong shape.
+    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String>;
+}
+
+/// An array of an engine's saved state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SavedArray {
+    /// A real field (φ on the grid).
+    Real(Array3<f64>),
+    /// A spectrum.
+    Complex(Array3<Complex64>),
+}
+
+/// An engine's state for a checkpoint: named scalars and arrays.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Saved {
+    /// Named scalars (bit-exact; NaN allowed).
+    pub scalars: Vec<(String, f64)>,
+    /// Named arrays.
+    pub arrays: Vec<(String, SavedArray)>,
+}
+
+impl Saved {
+    /// Add a scalar.
+    pub fn scalar(mut self, name: &str, value: f64) -> Self {
+        self.scalars.push((name.to_string(), value));
+        self
+    }
+
+    /// Add an array.
+    pub fn array(mut self, name: &str, value: SavedArray) -> Self {
+        self.arrays.push((name.to_string(), value));
+        self
+    }
+
+    /// The scalar `name`.
+    ///
+    /// # Errors
+    /// If it is missing.
+    pub fn get(&self, name: &str) -> Result<f64, String> {
+        self.scalars
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
+            .ok_or_else(|| format!("the saved state lacks `{name}`"))
+    }
+
+    /// The real array `name`, which must have `shape`.
+    ///
+    /// # Errors
+    /// If it is missing, complex or of another shape.
+    pub fn real(&self, name: &str, shape: &[usize]) -> Result<&Array3<f64>, String> {
+        match self.find(name)? {
+            SavedArray::Real(a) if a.shape() == shape => Ok(a),
+            SavedArray::Real(a) => Err(wrong_shape(name, a.shape(), shape)),
+            SavedArray::Complex(_) => Err(format!("saved `{name}` is complex, not real")),
+        }
+    }
+
+    /// The complex array `name`, which must have `shape`.
+    ///
+    /// # Errors
+    /// If it is missing, real or of another shape.
+    pub fn complex(&self, name: &str, shape: &[usize]) -> Result<&Array3<Complex64>, String> {
+        match self.find(name)? {
+            SavedArray::Complex(a) if a.shape() == shape => Ok(a),
+            SavedArray::Complex(a) => Err(wrong_shape(name, a.shape(), shape)),
+            SavedArray::Real(_) => Err(format!("saved `{name}` is real, not complex")),
+        }
+    }
+
+    fn find(&self, name: &str) -> Result<&SavedArray, String> {
+        self.arrays
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, a)| a)
+            .ok_or_else(|| format!("the saved state lacks `{name}`"))
+    }
+}
+
+fn wrong_shape(name: &str, got: &[usize], want: &[usize]) -> String {
+    format!("saved `{name}` has shape {got:?}, the scene needs {want:?}")
 }

@@ -13,7 +13,7 @@
 //! RMS(μ_h − mean μ_h) is read from it, and the next step uses it.
 
 use crate::config::AreaMethod;
-use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
+use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, C0, PHI_BLOWUP};
 use crate::numerics::{nearest_root, PAR_CHUNK};
@@ -317,5 +317,23 @@ impl Engine for FdEngine {
 
     fn name(&self) -> &'static str {
         "fd"
+    }
+
+    fn save(&self) -> Saved {
+        Saved::default()
+            .scalar("sigma", self.sigma)
+            .scalar("max_bound_ratio", self.max_bound_ratio)
+            .array("phi", SavedArray::Real(self.phi.clone()))
+    }
+
+    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String> {
+        let phi = saved.real("phi", self.phi.shape())?;
+        self.phi.assign(phi);
+        self.sigma = saved.get("sigma")?;
+        self.max_bound_ratio = saved.get("max_bound_ratio")?;
+        self.t = t;
+        self.refresh(t).map_err(|d| d.0)?;
+        self.refresh_mu();
+        Ok(())
     }
 }

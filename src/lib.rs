@@ -31,6 +31,7 @@
 //! println!("{}: F = {}, residual = {}", stopped.as_str(), last.energy, last.residual);
 //! ```
 
+pub mod checkpoint;
 pub mod cli;
 pub mod compare;
 pub mod config;
@@ -48,6 +49,7 @@ pub mod relax;
 pub mod run;
 pub mod setup;
 pub mod shapes;
+pub mod signals;
 pub mod simulation;
 pub mod spectral;
 pub mod stencil;

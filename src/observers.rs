@@ -1,6 +1,7 @@
 //! Observers of a [`Simulation`](crate::simulation::Simulation): the time-series recorder, the
-//! progress bar and the snapshot writer.
+//! progress bar, the snapshot writer and the checkpoint writer.
 
+use crate::checkpoint::Checkpoint;
 use crate::config::Scene;
 use crate::error::Result;
 use crate::grid::Grid;
@@ -39,6 +40,15 @@ impl Recorder {
             file: Some(TimeSeries::create(path)?),
             ..Self::in_memory(every)
         })
+    }
+
+    /// Continue a time series already holding `history` (a resumed run).
+    pub fn resuming(every: usize, file: TimeSeries, history: Vec<Record>) -> Self {
+        Recorder {
+            every: every.max(1),
+            file: Some(file),
+            history,
+        }
     }
 
     /// The last row kept.
@@ -200,5 +210,66 @@ impl Observer for Snapshots<'_> {
             output::image::write_slices_png(&base.with_extension("png"), &full, dim, &title)?;
         }
         Ok(Flow::Continue)
+    }
+}
+
+/// Writes `checkpoint.bin` into a run folder every `every_steps` steps (0: never by count),
+/// every `every_seconds` of wall time, and at the end (also after a failed step: the engine
+/// then holds the last good state).
+pub struct Checkpointer {
+    dir: PathBuf,
+    scene: serde_json::Value,
+    every_steps: usize,
+    every_seconds: f64,
+    last_wall: f64,
+}
+
+impl Checkpointer {
+    /// Checkpoints of a run of the resolved `scene` (its JSON value) into `dir`.
+    pub fn new(
+        dir: &Path,
+        scene: serde_json::Value,
+        every_steps: usize,
+        every_minutes: f64,
+    ) -> Self {
+        Checkpointer {
+            dir: dir.to_path_buf(),
+            scene,
+            every_steps,
+            every_seconds: 60.0 * every_minutes,
+            last_wall: 0.0,
+        }
+    }
+
+    fn write(&mut self, now: &Now) -> Result<()> {
+        Checkpoint {
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            scene: self.scene.clone(),
+            clock: now.clock,
+            engine: now.engine.save(),
+        }
+        .write(&self.dir)?;
+        self.last_wall = now.clock.wall_seconds;
+        Ok(())
+    }
+}
+
+impl Observer for Checkpointer {
+    fn start(&mut self, now: &Now) -> Result<()> {
+        self.last_wall = now.clock.wall_seconds;
+        Ok(())
+    }
+
+    fn step(&mut self, now: &Now) -> Result<Flow> {
+        let by_count = self.every_steps > 0 && now.clock.step.is_multiple_of(self.every_steps);
+        let by_time = now.clock.wall_seconds - self.last_wall >= self.every_seconds;
+        if by_count || by_time {
+            self.write(now)?;
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn finish(&mut self, now: &Now, _ending: Ending) -> Result<()> {
+        self.write(now)
     }
 }

@@ -90,11 +90,57 @@ impl TimeSeries {
         Ok(ts)
     }
 
-    /// Append one row.
+    /// Continue the file at `path` after its row of `step`: rows of later steps (written after
+    /// the checkpoint a run resumes from) are dropped, the rest kept and returned, and rows are
+    /// appended from there.
+    ///
+    /// # Errors
+    /// `Error::Io` if the file cannot be read or written; `Error::Config` on field
+    /// `timeseries.csv` if it is not this program's time series.
+    pub fn resume(path: &Path, step: usize) -> Result<(Self, Vec<Record>)> {
+        let text = std::fs::read_to_string(path).map_err(|source| io(path, source))?;
+        let mut lines = text.lines();
+        if lines.next() != Some(HEADER) {
+            return Err(Error::config(
+                "timeseries.csv",
+                format!("{} does not start with the header {HEADER}", path.display()),
+            ));
+        }
+        let mut kept = Vec::new();
+        for (i, line) in lines.enumerate() {
+            let r = parse_row(line).ok_or_else(|| {
+                Error::config(
+                    "timeseries.csv",
+                    format!("{}: row {} is not a time-series row", path.display(), i + 2),
+                )
+            })?;
+            if r.step > step {
+                break;
+            }
+            kept.push(r);
+        }
+        // Rewrite beside the file and rename over it: a crash leaves the old file or the new.
+        let tmp = path.with_extension("csv.tmp");
+        let mut ts = TimeSeries::create(&tmp)?;
+        for r in &kept {
+            ts.write_row(r)?;
+        }
+        ts.flush()?;
+        std::fs::rename(&tmp, path).map_err(|source| io(path, source))?;
+        ts.path = path.to_path_buf();
+        Ok((ts, kept))
+    }
+
+    /// Append one row and flush it, so that a crash keeps every row written.
     ///
     /// # Errors
     /// `Error::Io` on a write failure.
     pub fn push(&mut self, r: &Record) -> Result<()> {
+        self.write_row(r)?;
+        self.flush()
+    }
+
+    fn write_row(&mut self, r: &Record) -> Result<()> {
         writeln!(
             self.out,
             "{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -122,6 +168,29 @@ impl TimeSeries {
     pub fn flush(&mut self) -> Result<()> {
         self.out.flush().map_err(|e| io(&self.path, e))
     }
+}
+
+/// A row of the file back into a record (the inverse of [`TimeSeries::push`]).
+fn parse_row(line: &str) -> Option<Record> {
+    let mut f = line.split(',');
+    let mut x = || f.next()?.parse::<f64>().ok();
+    let count = |v: f64| (v >= 0.0 && v.fract() == 0.0).then_some(v as usize);
+    let r = Record {
+        step: count(x()?)?,
+        t: x()?,
+        dt: x()?,
+        energy: x()?,
+        area: x()?,
+        volume: x()?,
+        reduced_volume: x()?,
+        reduced_energy: x()?,
+        sigma: x()?,
+        residual: x()?,
+        rate: x()?,
+        rejected: count(x()?)?,
+        wall_seconds: x()?,
+    };
+    Some(r)
 }
 
 fn io(path: &Path, source: std::io::Error) -> Error {

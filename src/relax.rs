@@ -18,7 +18,7 @@
 //! `t` advances by the nominal `dt` per iteration and is not physical time.
 
 use crate::config::{AreaMethod, Scene};
-use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
+use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::numerics::{nearest_root, PAR_CHUNK};
@@ -482,5 +482,52 @@ impl Engine for RelaxEngine {
 
     fn name(&self) -> &'static str {
         "relaxational (L-BFGS)"
+    }
+
+    fn save(&self) -> Saved {
+        let mut saved = Saved::default()
+            .scalar("stalled", if self.stalled { 1.0 } else { 0.0 })
+            .scalar("pairs", self.pairs.len() as f64)
+            .array("phi_hat", SavedArray::Complex(self.cur.hat.clone()));
+        for (i, p) in self.pairs.iter().enumerate() {
+            saved = saved
+                .scalar(&format!("rho_{i}"), p.rho)
+                .scalar(&format!("yy_{i}"), p.yy)
+                .array(&format!("s_{i}"), SavedArray::Complex(p.s.clone()))
+                .array(&format!("y_{i}"), SavedArray::Complex(p.y.clone()));
+        }
+        saved
+    }
+
+    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String> {
+        let shape = self.cur.hat.shape().to_vec();
+        self.cur.hat.assign(saved.complex("phi_hat", &shape)?);
+        self.stalled = saved.get("stalled")? != 0.0;
+        let n = saved.get("pairs")?;
+        if !(0.0..=self.memory as f64).contains(&n) || n.fract() != 0.0 {
+            return Err(format!(
+                "the saved L-BFGS memory holds {n} pairs; lbfgs_memory is {}",
+                self.memory
+            ));
+        }
+        self.reset_memory();
+        for i in 0..n as usize {
+            let mut pair = self.spare_pairs.pop().unwrap_or_else(|| Pair {
+                s: Array3::zeros(self.dir.raw_dim()),
+                y: Array3::zeros(self.dir.raw_dim()),
+                rho: 0.0,
+                yy: 0.0,
+            });
+            pair.s.assign(saved.complex(&format!("s_{i}"), &shape)?);
+            pair.y.assign(saved.complex(&format!("y_{i}"), &shape)?);
+            pair.rho = saved.get(&format!("rho_{i}"))?;
+            pair.yy = saved.get(&format!("yy_{i}"))?;
+            self.pairs.push_back(pair);
+        }
+        self.ev
+            .evaluate(&mut self.cur, t, None, None)
+            .map_err(|d| d.0)?;
+        self.refresh_gradient();
+        Ok(())
     }
 }

@@ -1,16 +1,23 @@
-//! `vesicle run`: wires a scene to the simulation driver and its writers. Builds the problem,
-//! prepares the simulation, runs it with the recorder, progress bar and snapshot observers,
-//! and writes the final field, images and `summary.json`.
+//! `vesicle run` and `vesicle resume`: wire a scene (or a checkpoint) to the simulation driver
+//! and its writers. A run builds the problem and prepares the simulation; a resumed run rebuilds
+//! the engine from `checkpoint.bin`. Both then run with the recorder, progress bar, snapshot,
+//! checkpoint and interrupt observers, holding the folder's lock, and write the final field,
+//! images and `summary.json`.
 
-use crate::config::{AreaMethod, Scene, Symmetry};
-use crate::engine::Engine;
+use crate::checkpoint::Checkpoint;
+use crate::config::{self, AreaMethod, Scene, Symmetry};
+use crate::engine::{AreaConstraint, Engine};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-use crate::observers::{Progress, Recorder, Snapshots};
+use crate::observers::{Checkpointer, Progress, Recorder, Snapshots};
 use crate::output;
-use crate::record::Record;
+use crate::output::lock::{self, RunLock};
+use crate::record::{Record, TimeSeries};
 use crate::setup::{self, Problem};
-use crate::simulation::{check_stability, stability_bound, Prepared, StopRules, Stopped};
+use crate::signals::Interrupts;
+use crate::simulation::{
+    build_engine, check_stability, stability_bound, Prepared, Simulation, StopRules, Stopped,
+};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -34,6 +41,8 @@ pub struct Outcome {
     pub stopped: Stopped,
     /// Wall time of the time loop.
     pub wall_seconds: f64,
+    /// The signal that interrupted the run (SIGINT or SIGTERM), if one did.
+    pub signal: Option<i32>,
 }
 
 /// The scene with every default made explicit, as saved under `"spec"` in `summary.json`.
@@ -97,8 +106,11 @@ pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
     let mut problem = setup::build(scene)?;
     check_stability(scene, &problem.grid)?;
-    if opts.out.exists() && !opts.force {
-        make_out_dir(&opts.out, false)?;
+    if opts.out.exists() {
+        lock::refuse_if_held(&opts.out)?;
+        if !opts.force {
+            make_out_dir(&opts.out, false)?;
+        }
     }
     let Prepared {
         mut simulation,
@@ -107,53 +119,185 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
     // The engine holds its own copy of φ: free the initial field for the run.
     problem.phi = ndarray::Array3::zeros((0, 0, 0));
     make_out_dir(&opts.out, opts.force)?;
+    let _lock = RunLock::acquire(&opts.out)?;
     let a0 = area_target
         .as_ref()
         .map_or_else(|_| simulation.engine().measures().area, |a| *a);
     let resolved = resolved_scene(scene, a0, &problem.mirror);
     let mut recorder = Recorder::to_file(scene.record_every(), &opts.out.join("timeseries.csv"))?;
-    let ended = match area_target {
+    match area_target {
         Err(e) => {
             simulation.run(&StopRules::steps(0), &mut [&mut recorder])?;
-            Err(e)
+            let end = Ending {
+                result: Err(e),
+                signal: None,
+            };
+            finish(
+                &opts.out,
+                &problem.grid,
+                &simulation,
+                &resolved,
+                &recorder,
+                end,
+            )
         }
         Ok(_) => {
             eprintln!(
                 "{}",
                 describe(&resolved, &problem, simulation.engine().name())
             );
-            let rules = StopRules::of(scene);
-            let mut progress = Progress::new(rules, opts.progress);
-            let mut snapshots = Snapshots::new(
-                &opts.out.join("snapshots"),
-                &problem.grid,
-                scene,
-                scene.output.snapshot_every,
-            );
-            simulation.run(&rules, &mut [&mut recorder, &mut progress, &mut snapshots])
+            drive(&resolved, &problem.grid, simulation, recorder, opts)
         }
+    }
+}
+
+/// Continue the run in `dir` from its `checkpoint` (read from `dir`), with `scene` its
+/// scene after the overrides of [`resumed_scene`]. The time series is cut back to the
+/// checkpoint's step and continued; the final field and `summary.json` are rewritten at the end.
+///
+/// # Errors
+/// `Error::Config` if the checkpoint does not fit the scene or another run holds the folder;
+/// otherwise as [`run`].
+pub fn resume(
+    dir: &Path,
+    checkpoint: &Checkpoint,
+    scene: &Scene,
+    progress: bool,
+) -> Result<Outcome> {
+    let _lock = RunLock::acquire(dir)?;
+    let problem = setup::frame(scene)?;
+    let mut engine = build_engine(scene, &problem)?;
+    let target = scene
+        .area
+        .target
+        .ok_or_else(|| Error::config("checkpoint", "its scene lacks the resolved area.target"))?;
+    engine.set_area(AreaConstraint {
+        method: scene.area_method(),
+        alpha: scene.alpha(),
+        target,
+    });
+    engine
+        .restore(&checkpoint.engine, checkpoint.clock.t)
+        .map_err(|m| Error::config("checkpoint", m))?;
+    let mut simulation = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
+    simulation.clock = checkpoint.clock;
+    let (series, history) = TimeSeries::resume(&dir.join("timeseries.csv"), checkpoint.clock.step)?;
+    let recorder = Recorder::resuming(scene.record_every(), series, history);
+    eprintln!(
+        "{}\n  resuming at step {} t = {:.6e}",
+        describe(scene, &problem, simulation.engine().name()),
+        checkpoint.clock.step,
+        checkpoint.clock.t
+    );
+    let opts = RunOptions {
+        out: dir.to_path_buf(),
+        force: false,
+        progress,
     };
+    drive(scene, &problem.grid, simulation, recorder, &opts)
+}
+
+/// Top-level keys a resumed run may change.
+const RESUMABLE: [&str; 5] = ["max_steps", "t_end", "stop_residual", "threads", "output"];
+
+/// The checkpoint's scene with `overrides` applied, each to a key of [`RESUMABLE`]
+/// (`max_steps` counts every step since the start of the run).
+///
+/// # Errors
+/// `Error::Config` naming a key that cannot change on resume, or an invalid value.
+pub fn resumed_scene(mut value: serde_json::Value, overrides: &[String]) -> Result<Scene> {
+    for o in overrides {
+        let key = o.split('=').next().unwrap_or_default();
+        let top = key.split('.').next().unwrap_or_default();
+        if !RESUMABLE.contains(&top) {
+            return Err(Error::config(
+                key,
+                format!(
+                    "cannot change when resuming (the checkpoint continues the run that wrote it); \
+                     only {} can",
+                    RESUMABLE.join(", ")
+                ),
+            ));
+        }
+        config::apply_override(&mut value, o)?;
+    }
+    let scene = config::from_value(value)?;
+    scene.validate()?;
+    Ok(scene)
+}
+
+/// Run `simulation` with the writers of a run folder until a stop rule of `resolved` fires, an
+/// interrupt arrives or a step fails, then write the final outputs.
+fn drive(
+    resolved: &Scene,
+    grid: &Grid,
+    mut simulation: Simulation,
+    mut recorder: Recorder,
+    opts: &RunOptions,
+) -> Result<Outcome> {
+    let rules = StopRules::of(resolved);
+    let mut progress = Progress::new(rules, opts.progress);
+    let mut snapshots = Snapshots::new(
+        &opts.out.join("snapshots"),
+        grid,
+        resolved,
+        resolved.output.snapshot_every,
+    );
+    let mut checkpoints = Checkpointer::new(
+        &opts.out,
+        resolved.resolved_value(),
+        resolved.output.checkpoint_every,
+        resolved.output.checkpoint_minutes,
+    );
+    let mut interrupts = Interrupts::install();
+    let result = simulation.run(
+        &rules,
+        &mut [
+            &mut recorder,
+            &mut progress,
+            &mut snapshots,
+            &mut interrupts,
+            &mut checkpoints,
+        ],
+    );
+    let end = Ending {
+        result,
+        signal: interrupts.received(),
+    };
+    finish(&opts.out, grid, &simulation, resolved, &recorder, end)
+}
+
+/// How the step loop ended.
+struct Ending {
+    result: Result<Stopped>,
+    signal: Option<i32>,
+}
+
+/// Write the final outputs and turn the ending into the run's result.
+fn finish(
+    out: &Path,
+    grid: &Grid,
+    simulation: &Simulation,
+    resolved: &Scene,
+    recorder: &Recorder,
+    end: Ending,
+) -> Result<Outcome> {
     let last = *recorder.last().expect("the recorder keeps the last state");
-    let text = match &ended {
+    let text = match &end.result {
         Ok(stopped) => stopped.as_str().to_string(),
         Err(e) => format!("blew up: {e}"),
     };
-    let end = End {
+    let summary = End {
         last: &last,
         stopped: &text,
         history: &recorder.history,
     };
-    write_final(
-        &opts.out,
-        &problem.grid,
-        simulation.engine(),
-        &resolved,
-        &end,
-    )?;
-    ended.map(|stopped| Outcome {
+    write_final(out, grid, simulation.engine(), resolved, &summary)?;
+    end.result.map(|stopped| Outcome {
         last,
         stopped,
         wall_seconds: last.wall_seconds,
+        signal: end.signal,
     })
 }
 

@@ -51,6 +51,31 @@ pub fn build(scene: &Scene) -> Result<Problem> {
     })
 }
 
+/// The problem of a resolved scene without its initial field (φ = 0; a resumed run restores φ
+/// from its checkpoint): the grid of the scene's explicit mirror axes and the c0 field.
+///
+/// # Errors
+/// `Error::Config` on field `symmetry` if the scene does not name its mirror axes.
+pub fn frame(scene: &Scene) -> Result<Problem> {
+    let Symmetry::Axes(axes) = &scene.symmetry else {
+        return Err(Error::config(
+            "symmetry",
+            "a resumed scene names its mirror axes (it was resolved when the run started)",
+        ));
+    };
+    let mirror: Vec<bool> = (0..scene.dim)
+        .map(|a| axes.iter().any(|n| axis_index(n, scene.dim) == Some(a)))
+        .collect();
+    let grid = Grid::new(&scene.n, scene.h, &mirror);
+    let c0 = C0::new(&scene.c0, &grid, scene.eps);
+    Ok(Problem {
+        phi: grid.zeros(),
+        grid,
+        c0,
+        mirror,
+    })
+}
+
 fn initial_field(scene: &Scene, grid: &Grid) -> Result<Array3<f64>> {
     match &scene.initial {
         Initial::Shape(shape) => {

@@ -302,6 +302,11 @@ pub struct OutputSpec {
     pub vti: bool,
     /// Write PNG images of the mid-plane slices and charts of the time series.
     pub png: bool,
+    /// A checkpoint (`checkpoint.bin`, for `vesicle resume`) every this many steps; 0: only by
+    /// wall time and at the end.
+    pub checkpoint_every: usize,
+    /// A checkpoint every this many minutes of wall time (and always at the end).
+    pub checkpoint_minutes: f64,
 }
 
 impl Default for OutputSpec {
@@ -311,6 +316,8 @@ impl Default for OutputSpec {
             snapshot_every: 0,
             vti: true,
             png: true,
+            checkpoint_every: 0,
+            checkpoint_minutes: 10.0,
         }
     }
 }

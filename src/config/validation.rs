@@ -63,6 +63,12 @@ impl Scene {
         if let Initial::Shape(s) = &self.initial {
             validate_shape(s, "initial", self.dim)?;
         }
+        if self.output.checkpoint_minutes <= 0.0 {
+            return Err(Error::config(
+                "output.checkpoint_minutes",
+                "must be positive (checkpoints are always written at the end)",
+            ));
+        }
         if self.output.record_every == Some(0) {
             return Err(Error::config("output.record_every", "must be at least 1"));
         }

@@ -7,6 +7,7 @@
 
 pub mod chart;
 pub mod image;
+pub mod lock;
 pub mod npy;
 pub mod vti;
 

@@ -61,6 +61,8 @@ impl Clock {
 
 /// What observers see: the record of the current state and the engine holding it.
 pub struct Now<'a> {
+    /// The clock (with the step to offer next, which the record lacks).
+    pub clock: Clock,
     /// Row of the current state (step, t, measures, σ, residual, rate, counters, wall).
     pub record: Record,
     /// The engine (its φ, σ, measures).
@@ -200,6 +202,7 @@ impl Simulation {
 
     fn now(&self, report: Option<StepReport>) -> Now<'_> {
         Now {
+            clock: self.clock,
             record: self.record(),
             engine: self.engine(),
             report,
@@ -253,7 +256,10 @@ impl Simulation {
             .map_err(|Diverged(reason)| Error::Blowup {
                 step: c.step + 1,
                 t: c.t + dt,
-                reason,
+                reason: format!(
+                    "step of Δt = {dt:.4e} from t = {:.6e} failed: {reason}",
+                    c.t
+                ),
             })?;
         c.t += report.dt;
         c.step += 1;

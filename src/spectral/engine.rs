@@ -20,7 +20,7 @@
 
 use super::evaluator::{axis_symbol, Evaluator, ExplicitTerm, State};
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
-use crate::engine::{AreaConstraint, Diverged, Engine, StepReport};
+use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::numerics::{nearest_root, PAR_CHUNK};
@@ -437,5 +437,41 @@ impl Engine for SpectralEngine {
 
     fn name(&self) -> &'static str {
         "spectral"
+    }
+
+    fn save(&self) -> Saved {
+        let mut saved = Saved::default()
+            .scalar("sigma", self.sigma)
+            .scalar("volume0", self.volume0)
+            .scalar("dt_prev", self.dt_prev)
+            .scalar("dt_next", self.dt_next.unwrap_or(f64::NAN))
+            .array("phi_hat", SavedArray::Complex(self.cur.hat.clone()));
+        if let Some((hat, nonlinear)) = &self.prev {
+            saved = saved
+                .array("prev_phi_hat", SavedArray::Complex(hat.clone()))
+                .array("prev_nonlinear", SavedArray::Complex(nonlinear.clone()));
+        }
+        saved
+    }
+
+    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String> {
+        let shape = self.cur.hat.shape().to_vec();
+        self.cur.hat.assign(saved.complex("phi_hat", &shape)?);
+        self.sigma = saved.get("sigma")?;
+        self.volume0 = saved.get("volume0")?;
+        self.dt_prev = saved.get("dt_prev")?;
+        let dt_next = saved.get("dt_next")?;
+        self.dt_next = (!dt_next.is_nan()).then_some(dt_next);
+        self.prev = match (self.scheme, saved.complex("prev_phi_hat", &shape)) {
+            (Scheme::Sbdf2, Ok(hat)) => Some((
+                hat.clone(),
+                saved.complex("prev_nonlinear", &shape)?.clone(),
+            )),
+            _ => None,
+        };
+        self.ev
+            .evaluate(&mut self.cur, t, None, Some(self.sigma))
+            .map_err(|d| d.0)?;
+        Ok(())
     }
 }

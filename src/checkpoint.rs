@@ -1,0 +1,400 @@
+//! Checkpoints: everything needed to continue a run exactly (the resolved scene, the clock and
+//! the engine's saved state), in one file written atomically.
+//!
+//! Layout of `checkpoint.bin`:
+//!
+//! ```text
+//! MAGIC                    b"VESICLE-CHECKPOINT\n"
+//! header length            u64, little endian
+//! header                   JSON: {"version", "scene", "scalars": [names], "arrays": [{name, kind, shape}]}
+//! payload                  the scalars, then each array (complex as re, im pairs): f64, little endian
+//! checksum                 CRC-32 of header and payload, u32, little endian
+//! ```
+//!
+//! A checkpoint is written to a temporary file in the same folder, flushed to disk and renamed
+//! over the old one, so a crash at any moment leaves the previous checkpoint or the new one,
+//! whole. Reading checks the magic, every length against the file, the checksum and the program
+//! version before anything is used: a truncated, corrupted or foreign file is refused with a
+//! message, never half-loaded.
+
+use crate::engine::{Saved, SavedArray};
+use crate::error::{Error, Result};
+use crate::simulation::Clock;
+use ndarray::Array3;
+use rustfft::num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// First bytes of every checkpoint.
+pub const MAGIC: &[u8] = b"VESICLE-CHECKPOINT\n";
+/// The checkpoint's file name in a run folder.
+pub const FILE_NAME: &str = "checkpoint.bin";
+
+/// A run's state at the end of an accepted step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checkpoint {
+    /// The program version that wrote it.
+    pub version: String,
+    /// The resolved scene (`summary.json`'s `"spec"`).
+    pub scene: Value,
+    /// The simulation clock.
+    pub clock: Clock,
+    /// The engine's state.
+    pub engine: Saved,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    version: String,
+    scene: Value,
+    scalars: Vec<String>,
+    arrays: Vec<ArrayHeader>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct ArrayHeader {
+    name: String,
+    kind: String,
+    shape: [usize; 3],
+}
+
+/// The clock's fields in the scalar list.
+const CLOCK: [&str; 7] = [
+    "clock.step",
+    "clock.t",
+    "clock.dt",
+    "clock.last_dt",
+    "clock.last_rate",
+    "clock.rejected",
+    "clock.wall_seconds",
+];
+
+fn clock_values(c: &Clock) -> [f64; 7] {
+    [
+        c.step as f64,
+        c.t,
+        c.dt,
+        c.last_dt,
+        c.last_rate,
+        c.rejected as f64,
+        c.wall_seconds,
+    ]
+}
+
+impl Checkpoint {
+    /// The checkpoint's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut names: Vec<String> = CLOCK.iter().map(|s| s.to_string()).collect();
+        let mut values: Vec<f64> = clock_values(&self.clock).to_vec();
+        for (n, v) in &self.engine.scalars {
+            names.push(format!("engine.{n}"));
+            values.push(*v);
+        }
+        let arrays = self
+            .engine
+            .arrays
+            .iter()
+            .map(|(name, a)| {
+                let (kind, shape) = match a {
+                    SavedArray::Real(a) => ("real", a.dim()),
+                    SavedArray::Complex(a) => ("complex", a.dim()),
+                };
+                ArrayHeader {
+                    name: name.clone(),
+                    kind: kind.to_string(),
+                    shape: [shape.0, shape.1, shape.2],
+                }
+            })
+            .collect();
+        let header = serde_json::to_vec(&Header {
+            version: self.version.clone(),
+            scene: self.scene.clone(),
+            scalars: names,
+            arrays,
+        })
+        .expect("serialisable header");
+        let mut body = header.clone();
+        for v in values {
+            body.extend_from_slice(&v.to_le_bytes());
+        }
+        for (_, a) in &self.engine.arrays {
+            match a {
+                SavedArray::Real(a) => a
+                    .iter()
+                    .for_each(|v| body.extend_from_slice(&v.to_le_bytes())),
+                SavedArray::Complex(a) => a.iter().for_each(|v| {
+                    body.extend_from_slice(&v.re.to_le_bytes());
+                    body.extend_from_slice(&v.im.to_le_bytes());
+                }),
+            }
+        }
+        let mut out = Vec::with_capacity(MAGIC.len() + 12 + body.len());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&(header.len() as u64).to_le_bytes());
+        out.extend_from_slice(&body);
+        out.extend_from_slice(&crc32fast::hash(&body).to_le_bytes());
+        out
+    }
+
+    /// Parse a checkpoint from `bytes` (from `source`, named in messages).
+    ///
+    /// # Errors
+    /// `Error::Config` on field `checkpoint` when the bytes are not a whole checkpoint of this
+    /// program version.
+    pub fn from_bytes(bytes: &[u8], source: &Path) -> Result<Self> {
+        let bad = |reason: String| {
+            Error::config(
+                "checkpoint",
+                format!("{}: {reason}; it cannot be resumed", source.display()),
+            )
+        };
+        let rest = bytes
+            .strip_prefix(MAGIC)
+            .ok_or_else(|| bad("not a vesicle checkpoint (wrong magic bytes)".into()))?;
+        if rest.len() < 12 {
+            return Err(bad("truncated (no header)".into()));
+        }
+        let (len, rest) = rest.split_at(8);
+        let header_len = u64::from_le_bytes(len.try_into().expect("8 bytes"));
+        let (body, crc) = rest.split_at(rest.len() - 4);
+        if header_len > body.len() as u64 {
+            return Err(bad(format!(
+                "truncated: the header says {header_len} bytes, {} remain",
+                body.len()
+            )));
+        }
+        let stored = u32::from_le_bytes(crc.try_into().expect("4 bytes"));
+        if crc32fast::hash(body) != stored {
+            return Err(bad(
+                "corrupted: the checksum does not match (truncated or overwritten)".into(),
+            ));
+        }
+        let (header, payload) = body.split_at(header_len as usize);
+        let header: Header =
+            serde_json::from_slice(header).map_err(|e| bad(format!("unreadable header ({e})")))?;
+        let version = env!("CARGO_PKG_VERSION");
+        if header.version != version {
+            return Err(bad(format!(
+                "written by vesicle {}, this is vesicle {version}",
+                header.version
+            )));
+        }
+        let mut values = F64s(payload);
+        let mut scalars = Vec::with_capacity(header.scalars.len());
+        for name in &header.scalars {
+            let v = values
+                .next()
+                .ok_or_else(|| bad("truncated payload".into()))?;
+            scalars.push((name.clone(), v));
+        }
+        let clock_value = |name: &str| {
+            scalars
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, v)| *v)
+                .ok_or_else(|| bad(format!("the header lacks `{name}`")))
+        };
+        let count = |v: f64, name: &str| {
+            if v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(53) {
+                Ok(v as usize)
+            } else {
+                Err(bad(format!("`{name}` = {v} is not a count")))
+            }
+        };
+        let clock = Clock {
+            step: count(clock_value(CLOCK[0])?, CLOCK[0])?,
+            t: clock_value(CLOCK[1])?,
+            dt: clock_value(CLOCK[2])?,
+            last_dt: clock_value(CLOCK[3])?,
+            last_rate: clock_value(CLOCK[4])?,
+            rejected: count(clock_value(CLOCK[5])?, CLOCK[5])?,
+            wall_seconds: clock_value(CLOCK[6])?,
+        };
+        let mut engine = Saved::default();
+        for (n, v) in &scalars {
+            if let Some(name) = n.strip_prefix("engine.") {
+                engine.scalars.push((name.to_string(), *v));
+            }
+        }
+        for a in &header.arrays {
+            let [n0, n1, n2] = a.shape;
+            let per = match a.kind.as_str() {
+                "real" => 1,
+                "complex" => 2,
+                other => return Err(bad(format!("array `{}` of unknown kind {other}", a.name))),
+            };
+            let len = n0
+                .checked_mul(n1)
+                .and_then(|x| x.checked_mul(n2))
+                .filter(|&x| x.checked_mul(per).is_some_and(|m| m <= values.remaining()))
+                .ok_or_else(|| bad(format!("array `{}` is larger than the file", a.name)))?;
+            let array = if per == 1 {
+                let data: Vec<f64> = (0..len).filter_map(|_| values.next()).collect();
+                SavedArray::Real(Array3::from_shape_vec((n0, n1, n2), data).expect("checked size"))
+            } else {
+                let data: Vec<Complex64> = (0..len)
+                    .filter_map(|_| Some(Complex64::new(values.next()?, values.next()?)))
+                    .collect();
+                SavedArray::Complex(
+                    Array3::from_shape_vec((n0, n1, n2), data).expect("checked size"),
+                )
+            };
+            engine.arrays.push((a.name.clone(), array));
+        }
+        if values.remaining() != 0 {
+            return Err(bad(format!(
+                "{} bytes after the last array",
+                8 * values.remaining()
+            )));
+        }
+        Ok(Checkpoint {
+            version: header.version,
+            scene: header.scene,
+            clock,
+            engine,
+        })
+    }
+
+    /// Write atomically to `dir/checkpoint.bin`: a temporary file, flushed to disk, renamed.
+    ///
+    /// # Errors
+    /// `Error::Io` on failure (the previous checkpoint is then untouched).
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        let path = dir.join(FILE_NAME);
+        let tmp = dir.join(format!("{FILE_NAME}.tmp"));
+        let io = |p: &PathBuf| {
+            let p = p.clone();
+            move |source| Error::Io { path: p, source }
+        };
+        let mut file = File::create(&tmp).map_err(io(&tmp))?;
+        for chunk in self.to_bytes().chunks(1 << 20) {
+            file.write_all(chunk).map_err(io(&tmp))?;
+            pause_for_tests();
+        }
+        file.sync_all().map_err(io(&tmp))?;
+        drop(file);
+        std::fs::rename(&tmp, &path).map_err(io(&path))?;
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+        Ok(())
+    }
+
+    /// Read `dir/checkpoint.bin`.
+    ///
+    /// # Errors
+    /// `Error::Config` on field `checkpoint` if it is missing or not a whole checkpoint of this
+    /// version.
+    pub fn read(dir: &Path) -> Result<Self> {
+        let path = dir.join(FILE_NAME);
+        let bytes = std::fs::read(&path).map_err(|e| {
+            Error::config("checkpoint", format!("cannot read {}: {e}", path.display()))
+        })?;
+        Self::from_bytes(&bytes, &path)
+    }
+}
+
+/// With `VESICLE_TEST_SLOW_CHECKPOINT=<ms>` in the environment, sleep that long after each MiB
+/// written, so a test can kill the process in the middle of a checkpoint write.
+fn pause_for_tests() {
+    if let Some(ms) = std::env::var("VESICLE_TEST_SLOW_CHECKPOINT")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+}
+
+/// Little-endian f64 values of a byte slice, in order.
+struct F64s<'a>(&'a [u8]);
+
+impl F64s<'_> {
+    fn remaining(&self) -> usize {
+        self.0.len() / 8
+    }
+}
+
+impl Iterator for F64s<'_> {
+    type Item = f64;
+    fn next(&mut self) -> Option<f64> {
+        if self.0.len() < 8 {
+            return None;
+        }
+        let (v, rest) = self.0.split_at(8);
+        self.0 = rest;
+        Some(f64::from_le_bytes(v.try_into().expect("8 bytes")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Checkpoint {
+        let saved = Saved::default()
+            .scalar("sigma", -0.07)
+            .scalar("dt_next", f64::NAN)
+            .array(
+                "phi",
+                SavedArray::Real(Array3::from_shape_fn((1, 3, 4), |(_, i, j)| {
+                    i as f64 - j as f64
+                })),
+            )
+            .array(
+                "hat",
+                SavedArray::Complex(Array3::from_shape_fn((2, 2, 2), |(a, b, c)| {
+                    Complex64::new(a as f64, b as f64 * 0.5 - c as f64)
+                })),
+            );
+        let mut clock = Clock::new(0.5);
+        clock.step = 12;
+        clock.t = 3.25;
+        Checkpoint {
+            version: env!("CARGO_PKG_VERSION").into(),
+            scene: serde_json::json!({"dim": 2}),
+            clock,
+            engine: saved,
+        }
+    }
+
+    /// Bytes → checkpoint → bytes is the identity (NaN scalars included, bit for bit).
+    #[test]
+    fn round_trip_is_bit_exact() {
+        let c = sample();
+        let bytes = c.to_bytes();
+        let back = Checkpoint::from_bytes(&bytes, Path::new("x")).unwrap();
+        assert_eq!(back.to_bytes(), bytes);
+        assert_eq!(back.clock.step, 12);
+        assert!(back.engine.get("dt_next").unwrap().is_nan());
+        assert_eq!(back.engine.arrays, c.engine.arrays);
+    }
+
+    /// Every truncation and every single flipped byte is refused with an error, never a panic.
+    #[test]
+    fn truncated_or_corrupted_is_refused() {
+        let bytes = sample().to_bytes();
+        for cut in 0..bytes.len() {
+            assert!(Checkpoint::from_bytes(&bytes[..cut], Path::new("x")).is_err());
+        }
+        for i in 0..bytes.len() {
+            let mut b = bytes.clone();
+            b[i] ^= 0x5a;
+            assert!(
+                Checkpoint::from_bytes(&b, Path::new("x")).is_err(),
+                "byte {i}"
+            );
+        }
+    }
+
+    /// A checkpoint of another version is refused, naming both versions.
+    #[test]
+    fn other_version_is_refused() {
+        let mut c = sample();
+        c.version = "0.0.0-other".into();
+        let e = Checkpoint::from_bytes(&c.to_bytes(), Path::new("x")).unwrap_err();
+        assert!(e.to_string().contains("0.0.0-other"), "{e}");
+    }
+}

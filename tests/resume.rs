@@ -1,0 +1,261 @@
+//! Runs that survive: a run of 2N steps and a run of N steps resumed for N more give bitwise
+//! identical φ and identical CSV rows (every column but the wall time), for every engine;
+//! SIGINT and SIGTERM end a run cleanly (exit 130/143, outputs and checkpoint written), also
+//! with SIGINT ignored as in a background job; a `kill -9` in the middle of a checkpoint write
+//! leaves the previous checkpoint loadable and the run resumable.
+
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+use tempfile::TempDir;
+
+fn vesicle(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vesicle"))
+        .args(args)
+        .output()
+        .expect("the vesicle binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write_scene(dir: &Path, name: &str, scene: &Value) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, serde_json::to_string_pretty(scene).unwrap()).unwrap();
+    path
+}
+
+/// The CSV rows without the last column (wall seconds).
+fn rows_without_wall(dir: &Path) -> Vec<String> {
+    std::fs::read_to_string(dir.join("timeseries.csv"))
+        .unwrap()
+        .lines()
+        .map(|l| l.rsplit_once(',').unwrap().0.to_string())
+        .collect()
+}
+
+fn summary(dir: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// A 2D ellipse on a 32² box with the engine settings of `extra`.
+fn ellipse(extra: Value) -> Value {
+    let mut v = json!({
+        "dim": 2, "n": [32, 32], "dt": 0.5,
+        "initial": {"shape": "ellipsoid", "axes": [10.0, 6.0]},
+        "c0": 0.1, "prepare_steps": 5,
+        "output": {"record_every": 1, "png": false, "vti": false}
+    });
+    v.as_object_mut()
+        .unwrap()
+        .extend(extra.as_object().unwrap().clone());
+    v
+}
+
+#[test]
+fn resumed_runs_are_bitwise_identical_to_uninterrupted_ones() {
+    let n = 30;
+    for (name, extra) in [
+        ("fd", json!({"method": "fd", "dt": 4e-4})),
+        ("sbdf1", json!({"scheme": "sbdf1"})),
+        (
+            "sbdf1-adaptive",
+            json!({"scheme": "sbdf1", "adaptive": {"dt_max": 50.0}}),
+        ),
+        ("sbdf2", json!({"scheme": "sbdf2"})),
+        (
+            "sbdf2-adaptive",
+            json!({"scheme": "sbdf2", "adaptive": {"dt_max": 50.0}}),
+        ),
+        (
+            "relaxational",
+            json!({"dynamics": "relaxational", "dt": 1.0}),
+        ),
+        (
+            "mirror-sbdf2",
+            json!({"scheme": "sbdf2", "symmetry": ["x", "y"]}),
+        ),
+    ] {
+        let tmp = TempDir::new().unwrap();
+        let scene = write_scene(tmp.path(), "s.json", &ellipse(extra));
+        let scene = scene.to_str().unwrap();
+        let (whole, split) = (tmp.path().join("whole"), tmp.path().join("split"));
+        let steps = |k: usize| format!("max_steps={k}");
+        let o = vesicle(&[
+            "run",
+            scene,
+            "--out",
+            whole.to_str().unwrap(),
+            "--set",
+            &steps(2 * n),
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let o = vesicle(&[
+            "run",
+            scene,
+            "--out",
+            split.to_str().unwrap(),
+            "--set",
+            &steps(n),
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let o = vesicle(&["resume", split.to_str().unwrap(), "--set", &steps(2 * n)]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let phi = |d: &Path| std::fs::read(d.join("phi_final.npy")).unwrap();
+        assert!(
+            phi(&whole) == phi(&split),
+            "{name}: φ differs after resuming"
+        );
+        assert_eq!(
+            rows_without_wall(&whole),
+            rows_without_wall(&split),
+            "{name}: CSV rows"
+        );
+        assert_eq!(summary(&split)["final"]["steps"], json!(2 * n), "{name}");
+    }
+}
+
+#[test]
+fn resume_refuses_changes_other_than_stop_rules_and_bad_checkpoints() {
+    let tmp = TempDir::new().unwrap();
+    let scene = write_scene(tmp.path(), "s.json", &ellipse(json!({"max_steps": 3})));
+    let out = tmp.path().join("r");
+    let out_s = out.to_str().unwrap();
+    assert!(vesicle(&["run", scene.to_str().unwrap(), "--out", out_s])
+        .status
+        .success());
+    let o = vesicle(&["resume", out_s, "--set", "dt=0.1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("`dt`"), "{}", stderr(&o));
+    // A corrupted checkpoint is refused, naming it, and nothing is changed.
+    let ck = out.join("checkpoint.bin");
+    let mut bytes = std::fs::read(&ck).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    std::fs::write(&ck, &bytes).unwrap();
+    let before = std::fs::read(out.join("timeseries.csv")).unwrap();
+    let o = vesicle(&["resume", out_s, "--set", "max_steps=6"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("checkpoint"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(out.join("timeseries.csv")).unwrap(), before);
+    // A missing one too.
+    std::fs::remove_file(&ck).unwrap();
+    let o = vesicle(&["resume", out_s]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+/// A long-running 3D FD run in `dir` (writes rows every step), started through `sh` so that the
+/// shell can set signal dispositions first.
+fn spawn_long_run(
+    tmp: &Path,
+    out: &Path,
+    prelude: &str,
+    env: &[(&str, &str)],
+) -> std::process::Child {
+    let scene = write_scene(
+        tmp,
+        "long.json",
+        &json!({
+            "dim": 3, "n": [48, 48, 48], "method": "fd", "dt": 4e-4, "max_steps": 10_000_000,
+            "initial": {"shape": "sphere", "radius": 12.0},
+            "output": {"record_every": 1, "png": false, "vti": false, "checkpoint_every": 1}
+        }),
+    );
+    let mut cmd = Command::new("sh");
+    cmd.arg("-c")
+        .arg(format!(
+            "{prelude} exec \"$0\" run \"$1\" --out \"$2\" --quiet",
+        ))
+        .arg(env!("CARGO_BIN_EXE_vesicle"))
+        .arg(scene)
+        .arg(out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.spawn().unwrap()
+}
+
+fn wait_for(what: &str, limit: Duration, mut ready: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !ready() {
+        assert!(start.elapsed() < limit, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn rows(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("timeseries.csv"))
+        .map(|t| t.lines().count())
+        .unwrap_or(0)
+}
+
+#[test]
+fn sigterm_and_background_sigint_end_the_run_cleanly() {
+    for (signal, code, prelude) in [
+        ("-TERM", 143, ""),
+        // As in a background job of a non-interactive shell: SIGINT ignored on entry.
+        ("-INT", 130, "trap '' INT;"),
+    ] {
+        let tmp = TempDir::new().unwrap();
+        let out = tmp.path().join("run");
+        let mut child = spawn_long_run(tmp.path(), &out, prelude, &[]);
+        wait_for("a few steps", Duration::from_secs(60), || rows(&out) >= 4);
+        let kill = Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(code), "{signal}");
+        let s = summary(&out);
+        assert_eq!(s["stopped"], json!("interrupted"), "{signal}");
+        assert_eq!(s["final"]["stopped"], json!("interrupted"), "{signal}");
+        assert!(out.join("phi_final.npy").exists() && out.join("checkpoint.bin").exists());
+        assert!(
+            !out.join(".lock").exists(),
+            "{signal}: the lock is released"
+        );
+        // It continues from where it stopped.
+        let steps = s["steps"].as_u64().unwrap();
+        let more = format!("max_steps={}", steps + 2);
+        let o = vesicle(&["resume", out.to_str().unwrap(), "--set", &more]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(summary(&out)["steps"].as_u64(), Some(steps + 2));
+    }
+}
+
+#[test]
+fn kill_9_during_a_checkpoint_write_keeps_the_previous_checkpoint() {
+    let tmp = TempDir::new().unwrap();
+    let out = tmp.path().join("run");
+    // 48³ f64 is 0.9 MiB: with 150 ms per MiB written a checkpoint write takes ~150 ms.
+    let mut child = spawn_long_run(
+        tmp.path(),
+        &out,
+        "",
+        &[("VESICLE_TEST_SLOW_CHECKPOINT", "150")],
+    );
+    let ck = out.join("checkpoint.bin");
+    let tmp_ck = out.join("checkpoint.bin.tmp");
+    wait_for("a first checkpoint", Duration::from_secs(60), || {
+        ck.exists()
+    });
+    wait_for(
+        "a checkpoint write under way",
+        Duration::from_secs(60),
+        || tmp_ck.exists(),
+    );
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    assert!(tmp_ck.exists(), "killed in the middle of a write");
+    assert!(out.join(".lock").exists(), "a killed run leaves its lock");
+    let o = vesicle(&["resume", out.to_str().unwrap(), "--set", "max_steps=1"]);
+    // The checkpoint is whole: it loads (the stale lock is taken over), and with max_steps
+    // below its step the run ends at once.
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(summary(&out)["stopped"], json!("max_steps"));
+}
