@@ -16,6 +16,8 @@
 //! * driving and output: [`run`] (the time loop, stop rules, outputs), [`record`],
 //!   [`output`] (npy, vti, png), [`levelset`] (sharp φ = 0 measures);
 //! * comparisons: [`compare`], [`study`] (stationary routes, stability map, work–precision);
+//! * [`axisym`]: the sharp-interface reference for the c0 = 0 shape diagram (Ritz method on
+//!   axisymmetric shapes, continuation along the prolate, oblate and stomatocyte branches);
 //! * [`cli`]: the `vesicle` command line.
 //!
 //! ```no_run
@@ -26,6 +28,7 @@
 //! println!("F = {}, residual = {}", engine.measures().energy, report.residual);
 //! ```
 
+pub mod axisym;
 pub mod cli;
 pub mod compare;
 pub mod config;
