@@ -3,9 +3,9 @@
 //! run, the transition volumes and branch ends of Seifert, Berndl & Lipowsky (1991), closed
 //! contours that reproduce A and V, the multipliers, and the `vesicle axisym` command.
 //!
-//! Reference energies: `solve`/`branch_curve` with 513 nodes (K = 128 modes, twice the default
-//! 257/64); at the default the prolate and oblate agree with them to 1e-12 and the stomatocyte
-//! (whose narrow neck converges slowest) to better than 1e-5 at every listed v.
+//! Reference energies: `solve`/`branch_curve` with 513 nodes and K = 128 modes (the default is
+//! 241 nodes, K = 80); at the default the prolate and oblate agree with them to 1e-12 and the
+//! stomatocyte (whose narrow neck converges slowest) to 4e-5 at v = 0.5, better above.
 
 use std::f64::consts::PI;
 use std::process::Command;
@@ -42,19 +42,27 @@ fn sphere_has_unit_energy() {
     }
 }
 
+/// `K` modes on `3K + 1` nodes (the default ratio).
+fn with_modes(k: usize) -> Options {
+    Options {
+        modes: k,
+        ..Options::with_nodes(3 * k + 1)
+    }
+}
+
 /// Exponential convergence in the number of modes, prolate at v = 0.8. Measured errors against
-/// 513 nodes, K = 4, 8, 12, 16 (nodes 4K + 1): 4.1e-5, 1.2e-7, 3.1e-10, 8.0e-13, i.e. a factor
-/// ≈ 350–390 per 4 more modes (2 more even coefficients), err ≈ exp(−1.48 K): the shape is
-/// analytic and the sine series of ψ − πt converges geometrically. Asserted: at least 100 per
-/// 4 modes, and at least 1e4 for the doubling K = 8 → 16 (an algebraic order p would give
-/// only 2^p, so no order below 13 fits).
+/// 513 nodes / K = 128, for K = 4, 8, 12, 16 (nodes 3K + 1): 4.6e-5, 1.2e-7, 3.1e-10, 8.0e-13,
+/// a steady factor ≈ 20 per 2 more modes (one more even coefficient), ≈ 390 per 4:
+/// err ≈ exp(−1.49 K), geometric as for an analytic shape whose ψ − πt has a smooth odd
+/// continuation. Asserted: at least 100 per 4 modes, and at least 1e4 for the doubling
+/// K = 8 → 16 (an algebraic order p would give only 2^p, so no order below 13 fits).
 #[test]
 fn prolate_converges_exponentially_in_modes() {
     const REFERENCE: f64 = 1.387440432443829; // 513 nodes, K = 128
-    let errs: Vec<f64> = [17, 33, 49, 65]
+    let errs: Vec<f64> = [4, 8, 12, 16]
         .iter()
-        .map(|&n| {
-            let s = axisym::solve(Branch::Prolate, 0.8, &Options::with_nodes(n)).unwrap();
+        .map(|&k| {
+            let s = axisym::solve(Branch::Prolate, 0.8, &with_modes(k)).unwrap();
             (s.e - REFERENCE).abs()
         })
         .collect();
@@ -65,7 +73,27 @@ fn prolate_converges_exponentially_in_modes() {
     assert!(errs[3] < 1e-11, "errors {errs:?}");
 }
 
-/// Energies at the default discretisation (321 nodes, K = 80) against 513-node references
+/// The stomatocyte converges exponentially too, but slower: its neck (two sheets 0.3 R0
+/// apart, joined by a tight fold) needs short wavelengths. At v = 0.6 against 513 nodes /
+/// K = 128, K = 32, 48, 64, 80 give 4.9e-4, 4.0e-5, 1.8e-6, 1.0e-7: a factor 12–22 per 16
+/// modes, err ≈ exp(−0.18 K). Asserted: at least 8 per 16 modes from K = 48 to 64, and the
+/// default (K = 80) within 1e-6.
+#[test]
+fn stomatocyte_converges_exponentially_but_slower() {
+    const REFERENCE: f64 = 1.977381349295; // 513 nodes, K = 128
+    let errs: Vec<f64> = [48, 64, 80]
+        .iter()
+        .map(|&k| {
+            let s = axisym::solve(Branch::Stomatocyte, 0.6, &with_modes(k)).unwrap();
+            (s.e - REFERENCE).abs()
+        })
+        .collect();
+    assert!(errs[0] / errs[1] > 8.0, "errors {errs:?}");
+    assert!(errs[1] / errs[2] > 8.0, "errors {errs:?}");
+    assert!(errs[2] < 1e-6, "errors {errs:?}");
+}
+
+/// Energies at the default discretisation (241 nodes, K = 80) against 513-node references
 /// (K = 128), to 1e-4 (the target) at the listed v: the prolate and oblate agree to ~1e-12
 /// (converged), the stomatocyte to 3.6e-5 at v = 0.5 (its neck is narrowest there and it
 /// converges slowest: 1.8e-4 at K = 64, 7.6e-4 at K = 48) and better at larger v.

@@ -25,8 +25,8 @@ pub struct DiagramArgs {
     /// Spacing of the grid in v.
     #[arg(long, default_value_t = 0.01)]
     pub dv: f64,
-    /// Quadrature nodes (Chebyshev–Lobatto; modes K = (nodes − 1)/4).
-    #[arg(long, default_value_t = 321)]
+    /// Quadrature nodes (Chebyshev–Lobatto; modes K = (nodes − 1)/3).
+    #[arg(long, default_value_t = 241)]
     pub nodes: usize,
     /// Replace an existing output folder.
     #[arg(long)]
@@ -107,7 +107,8 @@ pub fn run(args: &DiagramArgs) -> Result<()> {
         .map(|&b| follow(b, &vs, &opts))
         .collect();
     let end_of = |b: Branch| {
-        let f = &followed[b as usize];
+        let i = Branch::ALL.iter().position(|x| *x == b).expect("listed");
+        let f = &followed[i];
         f.end.or_else(|| branch_end(b, &opts))
     };
     let curves: Vec<Vec<Solution>> = followed.iter().map(|f| f.shapes.clone()).collect();

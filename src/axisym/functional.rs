@@ -34,10 +34,16 @@ pub(crate) struct Basis {
     pub q: Vec<f64>,
     /// `Q̃ = Q − t wᵀ` (row-major): `ρ̃ = Q̃ cos ψ`.
     qt: Vec<f64>,
+    /// `Q̃ᵀ` (row-major), so that `Q̃ x` is a sum of rows (vectorises).
+    qt_trans: Vec<f64>,
     /// `sin(kπ t_j)`, row `j`, column = mode index.
     sin_tab: Vec<f64>,
     /// `kπ cos(kπ t_j)`, row `j`, column = mode index.
     dsin_tab: Vec<f64>,
+    /// `sin(kπ t_j)`, row = mode index, column `j`.
+    sin_cols: Vec<f64>,
+    /// `kπ cos(kπ t_j)`, row = mode index, column `j`.
+    dsin_cols: Vec<f64>,
 }
 
 /// Values and gradients of the functional at one coefficient vector.
@@ -83,6 +89,12 @@ impl Basis {
                 qt[i * n + j] -= t[i] * w[j];
             }
         }
+        let mut qt_trans = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                qt_trans[j * n + i] = qt[i * n + j];
+            }
+        }
         let nm = modes.len();
         let mut sin_tab = vec![0.0; n * nm];
         let mut dsin_tab = vec![0.0; n * nm];
@@ -99,6 +111,9 @@ impl Basis {
             w,
             q,
             qt,
+            qt_trans,
+            sin_cols: transpose(&sin_tab, n, nm),
+            dsin_cols: transpose(&dsin_tab, n, nm),
             sin_tab,
             dsin_tab,
         }
@@ -113,15 +128,14 @@ impl Basis {
     pub fn samples(&self, a: &[f64]) -> Samples {
         let n = self.len();
         let nm = self.modes.len();
-        let mut psi = vec![0.0; n];
-        let mut dpsi = vec![0.0; n];
-        for j in 0..n {
-            let (s, d) = (&self.sin_tab[j * nm..], &self.dsin_tab[j * nm..]);
-            psi[j] = PI * self.t[j] + (0..nm).map(|c| a[c] * s[c]).sum::<f64>();
-            dpsi[j] = PI + (0..nm).map(|c| a[c] * d[c]).sum::<f64>();
+        let mut psi: Vec<f64> = self.t.iter().map(|t| PI * t).collect();
+        let mut dpsi = vec![PI; n];
+        for (c, ac) in a.iter().enumerate().take(nm) {
+            axpy(&mut psi, *ac, &self.sin_cols[c * n..(c + 1) * n]);
+            axpy(&mut dpsi, *ac, &self.dsin_cols[c * n..(c + 1) * n]);
         }
         let cos: Vec<f64> = psi.iter().map(|p| p.cos()).collect();
-        let rho = mat_vec(&self.qt, &cos);
+        let rho = mat_t_vec(&self.qt_trans, &cos);
         Samples { psi, dpsi, rho }
     }
 
@@ -160,9 +174,10 @@ impl Basis {
         let v_rho: Vec<f64> = (0..n)
             .map(|j| v * (2.0 * w[j] * rho[j] * s[j] / iv - 1.5 * w[j] / ia))
             .collect();
-        let grad_e = self.chain(&e_psi, Some(&e_dpsi), &e_rho, &s);
-        let grad_g = self.chain(&g_psi, None, &[], &s);
-        let grad_v = self.chain(&v_psi, None, &v_rho, &s);
+        let (back_e, back_v) = mat_t_vec2(&self.qt, &e_rho, &v_rho);
+        let grad_e = self.chain(&e_psi, Some(&e_dpsi), Some(&back_e), &s);
+        let grad_g = self.chain(&g_psi, None, None, &s);
+        let grad_v = self.chain(&v_psi, None, Some(&back_v), &s);
         Some(Eval {
             e,
             g,
@@ -175,13 +190,18 @@ impl Basis {
     }
 
     /// Chain rule to the coefficients: `∂F/∂a_k = Σ_j (F_ψj − sin ψ_j (Q̃ᵀ F_ρ)_j) sin(kπt_j)
-    /// + Σ_j F_ψ'j kπ cos(kπt_j)`, since `∂ρ̃_i/∂ψ_j = −Q̃_ij sin ψ_j`.
-    fn chain(&self, f_psi: &[f64], f_dpsi: Option<&[f64]>, f_rho: &[f64], sin: &[f64]) -> Vec<f64> {
+    /// + Σ_j F_ψ'j kπ cos(kπt_j)`, since `∂ρ̃_i/∂ψ_j = −Q̃_ij sin ψ_j`; `back = Q̃ᵀ F_ρ`.
+    fn chain(
+        &self,
+        f_psi: &[f64],
+        f_dpsi: Option<&[f64]>,
+        back: Option<&[f64]>,
+        sin: &[f64],
+    ) -> Vec<f64> {
         let n = self.len();
         let nm = self.modes.len();
         let mut g_psi = f_psi.to_vec();
-        if !f_rho.is_empty() {
-            let back = mat_t_vec(&self.qt, f_rho);
+        if let Some(back) = back {
             for j in 0..n {
                 g_psi[j] -= sin[j] * back[j];
             }
@@ -203,6 +223,39 @@ impl Basis {
     }
 }
 
+/// `y += α x`.
+fn axpy(y: &mut [f64], alpha: f64, x: &[f64]) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += alpha * x;
+    }
+}
+
+/// The transpose of a row-major `rows × cols` matrix.
+fn transpose(a: &[f64], rows: usize, cols: usize) -> Vec<f64> {
+    let mut t = vec![0.0; rows * cols];
+    for i in 0..rows {
+        for j in 0..cols {
+            t[j * rows + i] = a[i * cols + j];
+        }
+    }
+    t
+}
+
+/// `(Aᵀ x1, Aᵀ x2)` for a square row-major `A`, in one pass over `A`.
+fn mat_t_vec2(a: &[f64], x1: &[f64], x2: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = x1.len();
+    let mut y1 = vec![0.0; n];
+    let mut y2 = vec![0.0; n];
+    for i in 0..n {
+        let (u, w) = (x1[i], x2[i]);
+        for ((y1, y2), a) in y1.iter_mut().zip(y2.iter_mut()).zip(&a[i * n..(i + 1) * n]) {
+            *y1 += a * u;
+            *y2 += a * w;
+        }
+    }
+    (y1, y2)
+}
+
 /// `A x` for a square row-major `A`.
 pub(crate) fn mat_vec(a: &[f64], x: &[f64]) -> Vec<f64> {
     let n = x.len();
@@ -221,12 +274,9 @@ pub(crate) fn mat_vec(a: &[f64], x: &[f64]) -> Vec<f64> {
 fn mat_t_vec(a: &[f64], x: &[f64]) -> Vec<f64> {
     let n = x.len();
     let mut y = vec![0.0; n];
-    for i in 0..n {
-        let xi = x[i];
-        if xi != 0.0 {
-            for (y, a) in y.iter_mut().zip(&a[i * n..(i + 1) * n]) {
-                *y += a * xi;
-            }
+    for (i, xi) in x.iter().enumerate() {
+        if *xi != 0.0 {
+            axpy(&mut y, *xi, &a[i * n..(i + 1) * n]);
         }
     }
     y

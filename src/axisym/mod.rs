@@ -15,9 +15,9 @@
 //! the sine series converges exponentially for analytic shapes. Up–down symmetric shapes
 //! (prolate, oblate: `ψ(1 − t) = π − ψ(t)`) use the even `k` only, which also makes the
 //! closure automatic; the stomatocyte uses every `k` and holds the closure by a multiplier.
-//! The reduced quantities are scale free, so `L` drops out ([`functional`]); integrals are
+//! The reduced quantities are scale free, so `L` drops out (`functional.rs`); integrals are
 //! Clenshaw–Curtis on Chebyshev–Lobatto nodes ([`quadrature`]). The constrained minimum of `e`
-//! at fixed `v` is found by Newton on the Lagrangian ([`solver`]), and each branch is followed
+//! at fixed `v` is found by Newton on the Lagrangian (`solver.rs`), and each branch is followed
 //! by continuation in `v` with a secant predictor and step halving ([`branches`]): prolate and
 //! oblate from the sphere, the stomatocyte from a sphere-in-sphere start at small `v`. The
 //! command `vesicle axisym` ([`diagram`]) writes the diagram.
@@ -84,22 +84,24 @@ pub struct Options {
 }
 
 impl Default for Options {
-    /// 321 nodes and `K = 80`: energies within 1e-12 of a 513-node run on the prolate and
+    /// 241 nodes and `K = 80`: energies within 1e-12 of a 513-node run on the prolate and
     /// oblate branches, and within 4e-5 on the stomatocyte (whose narrow neck converges
     /// slowest; worst at the smallest v, 0.5). Newton to 1e-11, continuation steps of at most
     /// 0.02 in `v`, branch ends located to about 1e-4.
     fn default() -> Self {
-        Options::with_nodes(321)
+        Options::with_nodes(241)
     }
 }
 
 impl Options {
-    /// Defaults with `nodes` quadrature nodes and `K = (nodes − 1)/4` modes (four nodes per
-    /// mode keep the quadrature of the nonlinear integrand well below the truncation error).
+    /// Defaults with `nodes` quadrature nodes and `K = (nodes − 1)/3` modes (three nodes per
+    /// mode keep the quadrature of the nonlinear integrand below the truncation error: on the
+    /// stomatocyte at v = 0.5 with K = 80, 241 and 321 nodes agree to 5e-9, 161 nodes are off
+    /// by 3e-6).
     pub fn with_nodes(nodes: usize) -> Self {
         Options {
             nodes,
-            modes: ((nodes - 1) / 4).max(2),
+            modes: ((nodes - 1) / 3).max(2),
             tol: 1e-11,
             max_iter: 15,
             dv_max: 0.02,
