@@ -249,6 +249,8 @@ fn check(v: f64, opts: &Options) -> Result<()> {
 }
 
 /// The stationary shape of `branch` at reduced volume `v`, followed from the branch's start.
+/// Unlike [`follow`], it does not stop at self-intersection (the oblate below v ≈ 0.503): see
+/// [`Solution::self_intersecting`].
 ///
 /// # Errors
 /// `Error::Config` (field `v`) if `v ∉ (0, 1]` or the branch does not reach `v` (beyond the
