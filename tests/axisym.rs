@@ -22,8 +22,8 @@ fn e_at(curve: &[Solution], v: f64) -> f64 {
 
 /// The sphere is the solution at v = 1 on both symmetric branches: e = 1 to round-off
 /// (Clenshaw–Curtis integrates the sphere's integrand exactly; only summation error remains,
-/// ≤ 1e-12), a unit circle as contour (R0 = 1), and the sphere's multipliers P = −12 (the
-/// slope de/dv = −2 of the quasi-spherical limit e ≈ 1 + 2(1 − v)), σ = P/2.
+/// ≤ 1e-12), and its contour is the unit circle through the origin (R0 = 1, length π).
+/// (Its multipliers are not determined: ∇e = ∇v = 0 there.)
 #[test]
 fn sphere_has_unit_energy() {
     for b in [Branch::Prolate, Branch::Oblate] {
