@@ -1,4 +1,4 @@
-//! Command-line interface: `vesicle run | check | compare | study`.
+//! Command-line interface: `vesicle run | check | compare | study | axisym`.
 //!
 //! Exit codes: 0 success, 2 invalid input (the message names the field), 3 a run that blew up
 //! or broke a constraint (its last good state and summary are written), 1 anything else.
@@ -98,6 +98,12 @@ enum Command {
         after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/stability2d.json --out out/stability"
     )]
     Study(Study),
+    /// Shape diagram at c0 = 0 from the axisymmetric (sharp-interface) reference solver:
+    /// prolate, oblate and stomatocyte branches, e against v, and the transition volumes.
+    #[command(
+        after_help = "Example:\n  vesicle axisym --out out/axisym --v-min 0.5 --v-max 0.99 --dv 0.01"
+    )]
+    Axisym(crate::axisym::diagram::DiagramArgs),
     /// Run the finite-difference reference and the spectral engine on the same initial field;
     /// print and write a table of both at common times.
     #[command(after_help = "Example:\n  vesicle compare runs/compare2d.json --out out/compare")]
@@ -321,6 +327,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
                     dt_max,
                 )
             })?;
+            Ok(0)
+        }
+        Command::Axisym(args) => {
+            crate::axisym::diagram::run(&args)?;
             Ok(0)
         }
         Command::Compare {

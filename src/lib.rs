@@ -16,10 +16,14 @@
 //!   shared pieces in [`numerics`]; every engine reports the same Δt-free stationarity
 //!   residual RMS(μ − μ̄);
 //! * driving: [`simulation`] (the one step loop: clock, stop rules, observers), [`observers`]
-//!   (time-series recorder, progress bar, snapshots), [`record`];
-//! * commands and output: [`run`] (a scene wired to the driver and its writers), [`output`]
-//!   (npy, vti, png), [`levelset`] (sharp φ = 0 measures), [`compare`], [`study`]
-//!   (stationary routes, stability map, work–precision), [`cli`].
+//!   (time-series recorder, progress bar, snapshots, checkpoints), [`record`], [`checkpoint`]
+//!   (the file `vesicle resume` continues from), [`signals`] (SIGINT/SIGTERM end a run cleanly);
+//! * commands and output: [`run`] (a scene or a checkpoint wired to the driver and its
+//!   writers), [`output`] (npy, vti, png, the folder lock), [`levelset`] (sharp φ = 0
+//!   measures), [`compare`], [`study`] (stationary routes, stability map, work–precision),
+//!   [`cli`];
+//! * [`axisym`]: the sharp-interface reference for the c0 = 0 shape diagram (Ritz method on
+//!   axisymmetric shapes, continuation along the prolate, oblate and stomatocyte branches).
 //!
 //! ```no_run
 //! use vesicle::simulation::{Simulation, StopRules};
@@ -31,6 +35,7 @@
 //! println!("{}: F = {}, residual = {}", stopped.as_str(), last.energy, last.residual);
 //! ```
 
+pub mod axisym;
 pub mod checkpoint;
 pub mod cli;
 pub mod compare;

@@ -1,0 +1,283 @@
+//! The discrete Ritz functional: reduced energy, closure defect and reduced volume of a shape
+//! `ψ(t) = πt + Σ_k a_k sin(kπt)`, and their exact gradients in the coefficients `a_k`.
+//!
+//! The arc length is `s = L t`, `t ∈ [0, 1]`. Every reduced quantity is scale free, so `L`
+//! drops out: with `ρ(t) = r/L = ∫_0^t cos ψ`,
+//!
+//! ```text
+//! e   = ∮(2H)² dA / (16π) = (1/8) ∫_0^1 (ψ_t + sin ψ / ρ)² ρ dt        (2H = ψ_s + sin ψ / r)
+//! G   = ρ(1) = ∫_0^1 cos ψ dt                                           (closure: G = 0)
+//! v   = V / ((4π/3) R0³) = (3/4) I_V / (I_A/2)^{3/2},
+//!       I_A = ∫ ρ dt  (A = 2π L² I_A),   I_V = ∫ ρ² sin ψ dt  (V = π L³ I_V)
+//! ```
+//!
+//! The integrals use Clenshaw–Curtis quadrature on Chebyshev–Lobatto nodes and `ρ` the
+//! spectral integration matrix `Q` ([`super::quadrature`]). In place of `ρ` the functional uses
+//! `ρ̃(t) = ρ(t) − t G`, which equals `ρ` on closed shapes and vanishes at both poles for any
+//! `a`, so `sin ψ / ρ̃` stays finite during Newton iterations off the closure constraint. The
+//! energy integrand vanishes at the poles (`ρ̃ = 0` there, `sin ψ / ρ̃` finite), so only interior
+//! nodes contribute.
+
+use super::quadrature;
+use std::f64::consts::PI;
+
+/// Nodes, weights and mode tables of one discretisation (`m + 1` nodes, the listed modes).
+#[derive(Clone, Debug)]
+pub(crate) struct Basis {
+    /// Mode numbers `k` of the coefficients, in order.
+    pub modes: Vec<usize>,
+    /// Nodes `t_j` on `[0, 1]`.
+    pub t: Vec<f64>,
+    /// Clenshaw–Curtis weights.
+    pub w: Vec<f64>,
+    /// Integration matrix `Q` (row-major): `ρ = Q cos ψ`, `z/L = Q sin ψ`.
+    pub q: Vec<f64>,
+    /// `Q̃ = Q − t wᵀ` (row-major): `ρ̃ = Q̃ cos ψ`.
+    qt: Vec<f64>,
+    /// `Q̃ᵀ` (row-major), so that `Q̃ x` is a sum of rows (vectorises).
+    qt_trans: Vec<f64>,
+    /// `sin(kπ t_j)`, row `j`, column = mode index.
+    sin_tab: Vec<f64>,
+    /// `kπ cos(kπ t_j)`, row `j`, column = mode index.
+    dsin_tab: Vec<f64>,
+    /// `sin(kπ t_j)`, row = mode index, column `j`.
+    sin_cols: Vec<f64>,
+    /// `kπ cos(kπ t_j)`, row = mode index, column `j`.
+    dsin_cols: Vec<f64>,
+}
+
+/// Values and gradients of the functional at one coefficient vector.
+#[derive(Clone, Debug)]
+pub(crate) struct Eval {
+    /// Reduced energy `e`.
+    pub e: f64,
+    /// Closure defect `G = ρ(1)`.
+    pub g: f64,
+    /// Reduced volume `v`.
+    pub v: f64,
+    /// `I_A = ∫ρ̃ dt` (the contour length scale is `L = R0 √(2/I_A)`).
+    pub ia: f64,
+    /// `∂e/∂a`.
+    pub grad_e: Vec<f64>,
+    /// `∂G/∂a`.
+    pub grad_g: Vec<f64>,
+    /// `∂v/∂a`.
+    pub grad_v: Vec<f64>,
+}
+
+/// The shape's samples at the nodes.
+#[derive(Clone, Debug)]
+pub(crate) struct Samples {
+    /// `ψ(t_j)`.
+    pub psi: Vec<f64>,
+    /// `ψ_t(t_j)`.
+    pub dpsi: Vec<f64>,
+    /// `ρ̃(t_j)`.
+    pub rho: Vec<f64>,
+}
+
+impl Basis {
+    /// A basis with `m + 1` nodes and the given mode numbers.
+    pub fn new(m: usize, modes: Vec<usize>) -> Self {
+        let t = quadrature::nodes(m);
+        let q = quadrature::integration_matrix(m);
+        let n = m + 1;
+        let w = q[m * n..].to_vec();
+        let mut qt = q.clone();
+        for i in 0..n {
+            for j in 0..n {
+                qt[i * n + j] -= t[i] * w[j];
+            }
+        }
+        let mut qt_trans = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                qt_trans[j * n + i] = qt[i * n + j];
+            }
+        }
+        let nm = modes.len();
+        let mut sin_tab = vec![0.0; n * nm];
+        let mut dsin_tab = vec![0.0; n * nm];
+        for (j, tj) in t.iter().enumerate() {
+            for (c, &k) in modes.iter().enumerate() {
+                let kp = k as f64 * PI;
+                sin_tab[j * nm + c] = (kp * tj).sin();
+                dsin_tab[j * nm + c] = kp * (kp * tj).cos();
+            }
+        }
+        Basis {
+            modes,
+            t,
+            w,
+            q,
+            qt,
+            qt_trans,
+            sin_cols: transpose(&sin_tab, n, nm),
+            dsin_cols: transpose(&dsin_tab, n, nm),
+            sin_tab,
+            dsin_tab,
+        }
+    }
+
+    /// Number of nodes `m + 1`.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// `ψ`, `ψ_t` and `ρ̃` at the nodes for coefficients `a`.
+    pub fn samples(&self, a: &[f64]) -> Samples {
+        let n = self.len();
+        let nm = self.modes.len();
+        let mut psi: Vec<f64> = self.t.iter().map(|t| PI * t).collect();
+        let mut dpsi = vec![PI; n];
+        for (c, ac) in a.iter().enumerate().take(nm) {
+            axpy(&mut psi, *ac, &self.sin_cols[c * n..(c + 1) * n]);
+            axpy(&mut dpsi, *ac, &self.dsin_cols[c * n..(c + 1) * n]);
+        }
+        let cos: Vec<f64> = psi.iter().map(|p| p.cos()).collect();
+        let rho = mat_t_vec(&self.qt_trans, &cos);
+        Samples { psi, dpsi, rho }
+    }
+
+    /// `e`, `G`, `v` and their gradients at `a`; `None` if `ρ̃ ≤ 0` at an interior node (the
+    /// curve crosses the axis: not a shape).
+    pub fn eval(&self, a: &[f64]) -> Option<Eval> {
+        let n = self.len();
+        let Samples { psi, dpsi, rho } = self.samples(a);
+        if rho[1..n - 1].iter().any(|r| *r <= 0.0 || !r.is_finite()) {
+            return None;
+        }
+        let w = &self.w;
+        let (s, c): (Vec<f64>, Vec<f64>) = psi.iter().map(|p| p.sin_cos()).unzip();
+        // Energy and its partial derivatives in ψ_j (explicit), ψ_t,j and ρ̃_j.
+        let mut e = 0.0;
+        let mut e_psi = vec![0.0; n];
+        let mut e_dpsi = vec![0.0; n];
+        let mut e_rho = vec![0.0; n];
+        for j in 1..n - 1 {
+            let h = dpsi[j] + s[j] / rho[j];
+            e += 0.125 * w[j] * h * h * rho[j];
+            e_psi[j] = 0.25 * w[j] * h * c[j];
+            e_dpsi[j] = 0.25 * w[j] * h * rho[j];
+            e_rho[j] = 0.125 * w[j] * (h * h - 2.0 * h * s[j] / rho[j]);
+        }
+        // Closure defect.
+        let g: f64 = (0..n).map(|j| w[j] * c[j]).sum();
+        let g_psi: Vec<f64> = (0..n).map(|j| -w[j] * s[j]).collect();
+        // Reduced volume.
+        let ia: f64 = (0..n).map(|j| w[j] * rho[j]).sum();
+        let iv: f64 = (0..n).map(|j| w[j] * rho[j] * rho[j] * s[j]).sum();
+        let v = 0.75 * iv / (0.5 * ia).powf(1.5);
+        let v_psi: Vec<f64> = (0..n)
+            .map(|j| v * w[j] * rho[j] * rho[j] * c[j] / iv)
+            .collect();
+        let v_rho: Vec<f64> = (0..n)
+            .map(|j| v * (2.0 * w[j] * rho[j] * s[j] / iv - 1.5 * w[j] / ia))
+            .collect();
+        let (back_e, back_v) = mat_t_vec2(&self.qt, &e_rho, &v_rho);
+        let grad_e = self.chain(&e_psi, Some(&e_dpsi), Some(&back_e), &s);
+        let grad_g = self.chain(&g_psi, None, None, &s);
+        let grad_v = self.chain(&v_psi, None, Some(&back_v), &s);
+        Some(Eval {
+            e,
+            g,
+            v,
+            ia,
+            grad_e,
+            grad_g,
+            grad_v,
+        })
+    }
+
+    /// Chain rule to the coefficients: `∂F/∂a_k = Σ_j (F_ψj − sin ψ_j (Q̃ᵀ F_ρ)_j) sin(kπt_j)
+    /// + Σ_j F_ψ'j kπ cos(kπt_j)`, since `∂ρ̃_i/∂ψ_j = −Q̃_ij sin ψ_j`; `back = Q̃ᵀ F_ρ`.
+    fn chain(
+        &self,
+        f_psi: &[f64],
+        f_dpsi: Option<&[f64]>,
+        back: Option<&[f64]>,
+        sin: &[f64],
+    ) -> Vec<f64> {
+        let n = self.len();
+        let nm = self.modes.len();
+        let mut g_psi = f_psi.to_vec();
+        if let Some(back) = back {
+            for j in 0..n {
+                g_psi[j] -= sin[j] * back[j];
+            }
+        }
+        let mut grad = vec![0.0; nm];
+        for j in 0..n {
+            let srow = &self.sin_tab[j * nm..(j + 1) * nm];
+            for (g, s) in grad.iter_mut().zip(srow) {
+                *g += g_psi[j] * s;
+            }
+            if let Some(fd) = f_dpsi {
+                let drow = &self.dsin_tab[j * nm..(j + 1) * nm];
+                for (g, d) in grad.iter_mut().zip(drow) {
+                    *g += fd[j] * d;
+                }
+            }
+        }
+        grad
+    }
+}
+
+/// `y += α x`.
+fn axpy(y: &mut [f64], alpha: f64, x: &[f64]) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += alpha * x;
+    }
+}
+
+/// The transpose of a row-major `rows × cols` matrix.
+fn transpose(a: &[f64], rows: usize, cols: usize) -> Vec<f64> {
+    let mut t = vec![0.0; rows * cols];
+    for i in 0..rows {
+        for j in 0..cols {
+            t[j * rows + i] = a[i * cols + j];
+        }
+    }
+    t
+}
+
+/// `(Aᵀ x1, Aᵀ x2)` for a square row-major `A`, in one pass over `A`.
+fn mat_t_vec2(a: &[f64], x1: &[f64], x2: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = x1.len();
+    let mut y1 = vec![0.0; n];
+    let mut y2 = vec![0.0; n];
+    for i in 0..n {
+        let (u, w) = (x1[i], x2[i]);
+        for ((y1, y2), a) in y1.iter_mut().zip(y2.iter_mut()).zip(&a[i * n..(i + 1) * n]) {
+            *y1 += a * u;
+            *y2 += a * w;
+        }
+    }
+    (y1, y2)
+}
+
+/// `A x` for a square row-major `A`.
+pub(crate) fn mat_vec(a: &[f64], x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            a[i * n..(i + 1) * n]
+                .iter()
+                .zip(x)
+                .map(|(a, x)| a * x)
+                .sum()
+        })
+        .collect()
+}
+
+/// `Aᵀ x` for a square row-major `A`.
+fn mat_t_vec(a: &[f64], x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut y = vec![0.0; n];
+    for (i, xi) in x.iter().enumerate() {
+        if *xi != 0.0 {
+            axpy(&mut y, *xi, &a[i * n..(i + 1) * n]);
+        }
+    }
+    y
+}
