@@ -1,7 +1,10 @@
 //! Command-line interface: `vesicle run | check | compare | study | axisym`.
 //!
-//! Exit codes: 0 success, 2 invalid input (the message names the field), 3 a run that blew up
-//! or broke a constraint (its last good state and summary are written), 1 anything else.
+//! Exit codes: 0 success, 2 invalid input (the message names the field: a scene key, `n` for a
+//! grid whose estimated peak memory exceeds the memory available, `--out` for an output folder
+//! that exists or cannot be written; all checked before any computation, nothing written), 3 a
+//! run that blew up or broke a constraint (its last good state and summary are written), 1
+//! anything else.
 
 use crate::config::{self, Scene};
 use crate::error::Error;
@@ -207,7 +210,7 @@ where
         crate::config::Symmetry::Axes(a) => a.len() as u32,
         crate::config::Symmetry::Auto(_) => 0,
     };
-    let points = scene.n.iter().product::<usize>() >> mirrored;
+    let points = scene.n.iter().fold(1usize, |p, &m| p.saturating_mul(m)) >> mirrored;
     let threads = scene.threads.unwrap_or(if points < SERIAL_BELOW {
         1
     } else {

@@ -179,9 +179,7 @@ pub fn to_table(rows: &[Row], dim: usize, eps: f64) -> String {
 /// # Errors
 /// As [`run_pair`], plus `Error::Io` when writing.
 pub fn compare(scene: &Scene, out: &Path, force: bool) -> Result<()> {
-    if out.exists() && !force {
-        run::make_out_dir(out, false)?;
-    }
+    run::check_out_dir(out, force)?;
     let rows = run_pair(scene)?;
     run::make_out_dir(out, force)?;
     let table = to_table(&rows, scene.dim, scene.eps);

@@ -9,7 +9,8 @@
 //!
 //! Module map:
 //! * scene → problem: [`config`] (the strict scene file), [`setup`] (grid, initial field, c0),
-//!   [`grid`], [`shapes`], [`model`] (f, f', reduced quantities, c0 fields);
+//!   [`grid`], [`shapes`], [`model`] (f, f', reduced quantities, c0 fields), [`memory`]
+//!   (the peak-memory estimate a grid must fit);
 //! * engines behind [`engine::Engine`]: [`fd`] (explicit Euler on [`stencil`], the paper's
 //!   reference), [`spectral`] (semi-implicit SBDF1/2 with the exact area projection, on
 //!   [`spectral::transform`]), [`relax`] (preconditioned L-BFGS to stationary states), with
@@ -45,6 +46,7 @@ pub mod error;
 pub mod fd;
 pub mod grid;
 pub mod levelset;
+pub mod memory;
 pub mod model;
 pub mod numerics;
 pub mod observers;

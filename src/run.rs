@@ -97,21 +97,60 @@ pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
     })
 }
 
+/// Check, before any computation, that the output folder can be made: refuse an existing one
+/// without `force` (as [`make_out_dir`]), an existing path that is not a folder, and a folder
+/// whose nearest existing ancestor is not a folder or cannot be written (probed by creating
+/// and removing an empty folder in it). Writes nothing that stays.
+///
+/// # Errors
+/// `Error::Config` on field `--out` with the reason.
+pub fn check_out_dir(out: &Path, force: bool) -> Result<()> {
+    let bad =
+        |why: String| Error::config("--out", format!("cannot write {}: {why}", out.display()));
+    if out.exists() {
+        lock::refuse_if_held(out)?;
+        if !force {
+            return make_out_dir(out, false);
+        }
+        if !out.is_dir() {
+            return Err(bad("it exists and is not a folder".into()));
+        }
+    }
+    // The nearest existing ancestor: where the folder (or its replacement) will be created.
+    let mut ancestor = out;
+    loop {
+        ancestor = match ancestor.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if ancestor.exists() || ancestor == Path::new(".") || ancestor.parent().is_none() {
+            break;
+        }
+    }
+    let meta = std::fs::metadata(ancestor)
+        .map_err(|e| bad(format!("{} cannot be read: {e}", ancestor.display())))?;
+    if !meta.is_dir() {
+        return Err(bad(format!("{} is not a folder", ancestor.display())));
+    }
+    let probe = ancestor.join(format!(".vesicle-write-probe-{}", std::process::id()));
+    std::fs::create_dir(&probe)
+        .map_err(|e| bad(format!("{} is not writable: {e}", ancestor.display())))?;
+    // An empty folder of ours: removing it cannot fail short of a race; ignore that.
+    let _ = std::fs::remove_dir(&probe);
+    Ok(())
+}
+
 /// Run a validated scene and write its outputs to `opts.out`.
 ///
 /// # Errors
 /// `Error::Config` for input that only shows up once the field is built (shape outside the
-/// box, asymmetric mirror planes, unstable Δt, existing output folder), in which case nothing
-/// is written; `Error::Blowup` after writing the last good state and the summary.
+/// box, asymmetric mirror planes, unstable Δt, an output folder that exists or cannot be
+/// written, checked first), in which case nothing is written; `Error::Blowup` after writing
+/// the last good state and the summary.
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
+    check_out_dir(&opts.out, opts.force)?;
     let mut problem = setup::build(scene)?;
     check_stability(scene, &problem.grid)?;
-    if opts.out.exists() {
-        lock::refuse_if_held(&opts.out)?;
-        if !opts.force {
-            make_out_dir(&opts.out, false)?;
-        }
-    }
     let Prepared {
         mut simulation,
         area_target,

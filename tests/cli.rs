@@ -1,8 +1,9 @@
 //! Integration tests of the `vesicle` command line: the invalid-scene corpus in
 //! `tests/bad_scenes/` (every file must be refused with exit code 2, a message naming the
 //! field, and no output folder), `--set` overrides, tiny runs of the example scenes and their
-//! output files, the output-folder rules, a blow-up (exit 3 with the last good state written),
-//! and the help texts.
+//! output files, the output-folder rules (an existing folder, one that cannot be written), a
+//! grid too large for memory, a blow-up (exit 3 with the last good state written), and the
+//! help texts.
 
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -79,6 +80,11 @@ fn manifest() -> BTreeMap<String, String> {
 /// An npy v1.0 file: magic, version, header dict padded with spaces to a multiple of 64
 /// bytes (ending in a newline), then the raw data.
 fn npy_bytes(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
+    npy_bytes_ordered(descr, false, shape, data)
+}
+
+/// As [`npy_bytes`], with the `fortran_order` flag given.
+fn npy_bytes_ordered(descr: &str, fortran: bool, shape: &[usize], data: &[u8]) -> Vec<u8> {
     let shape_txt = match shape {
         [n] => format!("({n},)"),
         _ => format!(
@@ -90,8 +96,10 @@ fn npy_bytes(descr: &str, shape: &[usize], data: &[u8]) -> Vec<u8> {
                 .join(", ")
         ),
     };
-    let mut header =
-        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_txt}, }}");
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape_txt}, }}",
+        if fortran { "True" } else { "False" }
+    );
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(' ');
     }
@@ -142,6 +150,50 @@ fn write_npy_fixtures(dir: &Path) {
         .collect();
     write("fixture_32x32_f4.npy", npy_bytes("<f4", &[32, 32], &f4));
     write("fixture_not_npy.npy", b"this is not an npy file\n".to_vec());
+    // wrong dtypes holding the same field
+    let i8: Vec<u8> = good
+        .iter()
+        .flat_map(|&x| ((x * 100.0) as i64).to_le_bytes())
+        .collect();
+    write("fixture_32x32_i8.npy", npy_bytes("<i8", &[32, 32], &i8));
+    let be: Vec<u8> = good.iter().flat_map(|x| x.to_be_bytes()).collect();
+    write("fixture_32x32_be.npy", npy_bytes(">f8", &[32, 32], &be));
+    // the transposed field in Fortran order: the same array, another memory order
+    let fortran: Vec<f64> = (0..32 * 32).map(|k| good[(k % 32) * 32 + k / 32]).collect();
+    write(
+        "fixture_32x32_fortran.npy",
+        npy_bytes_ordered("<f8", true, &[32, 32], &f64_bytes(fortran)),
+    );
+    let mut inf = good.clone();
+    inf[3] = f64::INFINITY;
+    write(
+        "fixture_32x32_inf.npy",
+        npy_bytes("<f8", &[32, 32], &f64_bytes(inf)),
+    );
+    // the header promises 32 × 32 values; 100 are there
+    write(
+        "fixture_32x32_truncated.npy",
+        npy_bytes("<f8", &[32, 32], &f64_bytes(good[..100].to_vec())),
+    );
+    let mut extra = good.clone();
+    extra.extend([0.0; 8]);
+    write(
+        "fixture_32x32_extra.npy",
+        npy_bytes("<f8", &[32, 32], &f64_bytes(extra)),
+    );
+    // a valid preamble, then a header dict cut short and padded
+    let mut corrupt = npy_bytes("<f8", &[32, 32], &f64_bytes(good.clone()));
+    for b in &mut corrupt[30..60] {
+        *b = b'#';
+    }
+    write("fixture_corrupt_header.npy", corrupt);
+    write("fixture_empty.npy", Vec::new());
+    // a valid header of a grid too large to read: refused on its shape, before any data
+    write(
+        "fixture_huge_shape.npy",
+        npy_bytes("<f8", &[1 << 40, 1 << 40], &[]),
+    );
+    fs::create_dir_all(dir.join("fixture_dir.npy")).unwrap();
     write(
         "fixture_32x32_good.npy",
         npy_bytes("<f8", &[32, 32], &f64_bytes(good)),
@@ -331,8 +383,22 @@ fn initial_file_fixtures_fail_for_their_own_defect() {
     for (fixture, words) in [
         ("fixture_8x8.npy", &["[32, 32]", "[8, 8]"][..]),
         ("fixture_32x32x1.npy", &["[32, 32, 1]"][..]),
-        ("fixture_32x32_nan.npy", &["non-finite"][..]),
+        ("fixture_32x32_nan.npy", &["non-finite", "NaN"][..]),
+        ("fixture_32x32_inf.npy", &["non-finite", "inf"][..]),
         ("fixture_32x32_f4.npy", &["<f4"][..]),
+        ("fixture_32x32_i8.npy", &["<i8"][..]),
+        ("fixture_32x32_be.npy", &[">f8"][..]),
+        ("fixture_32x32_fortran.npy", &["Fortran order"][..]),
+        ("fixture_32x32_truncated.npy", &["invalid npy data"][..]),
+        ("fixture_32x32_extra.npy", &["invalid npy data"][..]),
+        ("fixture_corrupt_header.npy", &["invalid npy header"][..]),
+        ("fixture_empty.npy", &["ends before its header"][..]),
+        ("fixture_not_npy.npy", &["invalid npy header"][..]),
+        (
+            "fixture_huge_shape.npy",
+            &["[1099511627776, 1099511627776]"][..],
+        ),
+        ("fixture_dir.npy", &["fixture_dir.npy"][..]),
         ("does_not_exist.npy", &["does_not_exist.npy"][..]),
     ] {
         let o = vesicle([
@@ -342,6 +408,11 @@ fn initial_file_fixtures_fail_for_their_own_defect() {
             OsStr::new(&set(fixture)),
         ]);
         assert_eq!(code(&o), 2, "{fixture}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("initial.file"),
+            "{fixture}: {}",
+            stderr(&o)
+        );
         for w in words {
             assert!(stderr(&o).contains(w), "{fixture}: {w:?} in {}", stderr(&o));
         }
@@ -778,6 +849,144 @@ fn existing_output_folder_needs_force() {
     ] {
         assert!(out.join(f).exists(), "{f} after --force");
     }
+}
+
+/// An output folder that cannot be made is a usage error: exit 2 naming `--out`, before any
+/// computation (the scene would run for minutes), and nothing is left anywhere.
+#[test]
+fn unwritable_output_folder_is_exit_2_before_computing() {
+    let tmp = TempDir::new().unwrap();
+    let file = tmp.path().join("file.txt");
+    fs::write(&file, "not a folder").unwrap();
+    let readonly = tmp.path().join("readonly");
+    fs::create_dir(&readonly).unwrap();
+    let mut cases: Vec<(PathBuf, Vec<&str>, &str)> = vec![
+        (file.join("x"), vec![], "is not a folder"),
+        (file.join("a").join("b"), vec![], "is not a folder"),
+        (file.clone(), vec!["--force"], "is not a folder"),
+    ];
+    if Path::new("/proc/self").exists() {
+        cases.push((PathBuf::from("/proc/forbidden/x"), vec![], "not writable"));
+    }
+    // a read-only folder (root writes anyway: then the case says nothing)
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        fs::set_permissions(&readonly, fs::Permissions::from_mode(0o555)).unwrap();
+        if fs::create_dir(readonly.join("probe")).is_err() {
+            cases.push((readonly.join("x"), vec![], "not writable"));
+        } else {
+            fs::remove_dir(readonly.join("probe")).unwrap();
+        }
+    }
+    let before = snapshot_dir(tmp.path());
+    // prolate3d runs up to 40 000 steps after 20 preparation steps: far beyond the timeout
+    for (out, extra, why) in &cases {
+        for command in [&["run"][..], &["compare"][..], &["study", "stationary"][..]] {
+            let mut args: Vec<&OsStr> = command.iter().map(OsStr::new).collect();
+            args.extend([
+                OsStr::new("runs/prolate3d.json"),
+                OsStr::new("--out"),
+                out.as_os_str(),
+            ]);
+            args.extend(extra.iter().map(OsStr::new));
+            let start = std::time::Instant::now();
+            let o = vesicle(&args);
+            let what = format!("{command:?} --out {} {extra:?}", out.display());
+            assert_eq!(code(&o), 2, "{what}: {}", stderr(&o));
+            assert!(stderr(&o).contains("`--out`"), "{what}: {}", stderr(&o));
+            assert!(
+                stderr(&o).contains(why),
+                "{what}: {why:?} in {}",
+                stderr(&o)
+            );
+            assert!(
+                start.elapsed().as_secs_f64() < 10.0,
+                "{what}: computed first"
+            );
+        }
+    }
+    assert_eq!(snapshot_dir(tmp.path()), before, "something was written");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        fs::set_permissions(&readonly, fs::Permissions::from_mode(0o755)).unwrap();
+    }
+}
+
+/// A grid whose estimated peak memory exceeds the machine's is refused up front: exit 2 naming
+/// `n`, with the estimate in bytes and f64 per point and the memory available, no output
+/// folder, and no allocation attempted (it returns at once).
+#[test]
+fn grid_too_large_for_memory_is_refused_up_front() {
+    if fs::read_to_string("/proc/meminfo").is_err() {
+        eprintln!("no /proc/meminfo: the memory check is skipped, and so is this test");
+        return;
+    }
+    let tmp = TempDir::new().unwrap();
+    for n in [
+        "n=[4096,4096,4096]",
+        // the point count overflows 64-bit integers
+        "n=[4294967296,4294967296,4294967296]",
+    ] {
+        for extra in [
+            &[][..],
+            &["--set", "method=fd", "--set", "scheme=null"][..],
+            &["--set", "dynamics=relaxational", "--set", "scheme=null"][..],
+        ] {
+            let out = tmp.path().join("x");
+            let mut args = vec![
+                OsStr::new("run"),
+                OsStr::new("runs/sphere3d.json"),
+                OsStr::new("--out"),
+                out.as_os_str(),
+                OsStr::new("--set"),
+                OsStr::new(n),
+            ];
+            args.extend(extra.iter().map(OsStr::new));
+            let start = std::time::Instant::now();
+            let o = vesicle(&args);
+            let err = stderr(&o);
+            assert_eq!(code(&o), 2, "{n} {extra:?}: {err}");
+            for w in ["`n`", "bytes", "f64 per computed point", "available"] {
+                assert!(err.contains(w), "{n} {extra:?}: {w:?} in {err}");
+            }
+            assert!(!out.exists(), "{n}: output folder created");
+            assert!(
+                start.elapsed().as_secs_f64() < 5.0,
+                "{n}: not refused at once"
+            );
+        }
+    }
+    let o = vesicle(["check", "runs/sphere3d.json", "--set", "n=[4096,4096,4096]"]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains(" TB"), "{}", stderr(&o));
+}
+
+/// Hostile but valid: the largest `max_steps` is accepted (another rule stops the run), and
+/// a scene path that is a folder is refused as input.
+#[test]
+fn huge_max_steps_runs_and_a_folder_as_scene_is_exit_2() {
+    let tmp = TempDir::new().unwrap();
+    let out = tmp.path().join("x");
+    let o = vesicle([
+        OsStr::new("run"),
+        OsStr::new("runs/ellipse2d.json"),
+        OsStr::new("--out"),
+        out.as_os_str(),
+        OsStr::new("--quiet"),
+        OsStr::new("--set"),
+        OsStr::new("max_steps=18446744073709551615"),
+        OsStr::new("--set"),
+        OsStr::new("t_end=0.05"),
+        OsStr::new("--set"),
+        OsStr::new("stop_residual=null"),
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(out.join("summary.json").exists());
+    let o = vesicle([OsStr::new("check"), tmp.path().as_os_str()]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("(scene file)"), "{}", stderr(&o));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -29,16 +29,20 @@ use std::path::{Path, PathBuf};
 /// Read a scene file, apply `--set` overrides and validate it.
 ///
 /// # Errors
-/// `Error::Io` if the file cannot be read; `Error::Config` naming the field for malformed JSON,
-/// unknown keys, wrong types and invalid values.
+/// `Error::Config` naming the field for an unreadable file (`(scene file)`), malformed JSON
+/// (`(file)`), unknown keys, wrong types, invalid values, and a grid whose estimated peak
+/// memory exceeds the memory available (`n`, [`crate::memory::check`]).
 pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
+    let bytes = std::fs::read(path).map_err(|e| {
+        Error::config(
+            "(scene file)",
+            format!("{} cannot be read: {e}", path.display()),
+        )
     })?;
-    let mut value: Value = serde_json::from_str(&text).map_err(|e| {
+    let mut value: Value = serde_json::from_slice(&bytes).map_err(|e| {
         let reason = format!("{} is not valid JSON: {e}", path.display());
-        match nonfinite_field(&text, e.line(), e.column()) {
+        let text = std::str::from_utf8(&bytes).unwrap_or("");
+        match nonfinite_field(text, e.line(), e.column()) {
             Some((field, token)) if e.to_string().contains("number out of range") => {
                 Error::config(field, format!("must be a finite number, got {token}"))
             }
@@ -53,6 +57,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
         *file = resolve_relative(path, file);
     }
     scene.validate()?;
+    crate::memory::check(&scene)?;
     Ok(scene)
 }
 
@@ -88,6 +93,7 @@ fn nonfinite_field(text: &str, line: usize, column: usize) -> Option<(String, St
 /// # Errors
 /// `Error::Config` with the path of the offending key.
 pub fn from_value(value: Value) -> Result<Scene> {
+    objects_where_objects(&value)?;
     let scene = serde_path_to_error::deserialize::<_, Scene>(value.clone()).map_err(|e| {
         let path = e.path().to_string();
         if let Some(err) = refine(&path, &value) {
@@ -110,6 +116,65 @@ pub fn from_value(value: Value) -> Result<Scene> {
     })?;
     ignored::refuse_ignored(&value, &scene)?;
     Ok(scene)
+}
+
+/// Serde reads a struct from an array too, positionally (`"area": ["lagrangian", 0.01]`); a
+/// scene names its fields, so an array where an object belongs (the scene itself, `area`,
+/// `stabilizer`, `output`, `adaptive`, `c0`, `initial` and the shapes inside it) is refused.
+fn objects_where_objects(scene: &Value) -> Result<()> {
+    fn kind(v: &Value) -> &'static str {
+        match v {
+            Value::Null => "null",
+            Value::Bool(_) => "a boolean",
+            Value::Number(_) => "a number",
+            Value::String(_) => "a string",
+            Value::Array(_) => "an array",
+            Value::Object(_) => "an object",
+        }
+    }
+    fn shapes(v: &Value, at: &str) -> Result<()> {
+        match v {
+            Value::Array(_) => Err(Error::config(
+                at,
+                "must be an object {\"shape\": ..., ...} or {\"file\": ...}, got an array",
+            )),
+            Value::Object(o) => {
+                for k in ["base", "minus"] {
+                    if let Some(inner) = o.get(k) {
+                        shapes(inner, &format!("{at}.{k}"))?;
+                    }
+                }
+                if let Some(Value::Array(of)) = o.get("of") {
+                    for (i, inner) in of.iter().enumerate() {
+                        shapes(inner, &format!("{at}.of[{i}]"))?;
+                    }
+                }
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+    let Value::Object(top) = scene else {
+        return Err(Error::config(
+            "(top level)",
+            format!(
+                "a scene is a JSON object {{\"dim\": ..., ...}}, got {}",
+                kind(scene)
+            ),
+        ));
+    };
+    for key in ["area", "stabilizer", "output", "adaptive", "c0"] {
+        if let Some(v @ Value::Array(_)) = top.get(key) {
+            return Err(Error::config(
+                key,
+                format!("must be an object of named fields, got {}", kind(v)),
+            ));
+        }
+    }
+    if let Some(initial) = top.get("initial") {
+        shapes(initial, "initial")?;
+    }
+    Ok(())
 }
 
 /// Fields read through an intermediate value (`initial`, `c0`, `adaptive`) lose the inner key

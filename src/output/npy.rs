@@ -89,6 +89,12 @@ fn write_error(path: &Path, err: WriteNpyError) -> OutputError {
 /// Map an ndarray-npy header error, keeping I/O errors as such.
 fn header_error(path: &Path, err: ReadHeaderError) -> OutputError {
     match err {
+        ReadHeaderError::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            OutputError::format(
+                path,
+                "invalid npy header: the file ends before its header does (empty or cut short)",
+            )
+        }
         ReadHeaderError::Io(io) => OutputError::io(path, io),
         other => OutputError::format(path, format!("invalid npy header: {other}")),
     }

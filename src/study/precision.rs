@@ -44,9 +44,7 @@ pub fn precision(scene: &Scene, out: &Path, force: bool) -> Result<Vec<Point>> {
     let t_end = scene
         .t_end
         .ok_or_else(|| Error::config("t_end", "the precision study needs t_end"))?;
-    if out.exists() && !force {
-        run::make_out_dir(out, false)?;
-    }
+    run::check_out_dir(out, force)?;
     let problem = prepared(scene)?;
     let reference = advance(
         &variant(scene, Method::Spectral, Scheme::Sbdf2, scene.dt / 64.0),

@@ -106,9 +106,7 @@ pub fn stability(
     dt_lo: f64,
     dt_hi: f64,
 ) -> Result<Vec<Sample>> {
-    if out.exists() && !force {
-        run::make_out_dir(out, false)?;
-    }
+    run::check_out_dir(out, force)?;
     let problem = setup::build(scene)?;
     let per_decade = 4.0;
     let count = ((dt_hi / dt_lo).log10() * per_decade).ceil() as i32;

@@ -93,9 +93,7 @@ pub struct Stationary {
 /// `Error::Config` for an unsuitable scene or an existing `out` without `force`;
 /// `Error::Blowup` if a route diverges.
 pub fn stationary(scene: &Scene, out: &Path, force: bool) -> Result<Stationary> {
-    if out.exists() && !force {
-        run::make_out_dir(out, false)?;
-    }
+    run::check_out_dir(out, force)?;
     let problem = setup::build(scene)?;
     let max_steps = scene.max_steps.unwrap_or(200_000);
     let (reference, phi_star) = route(scene, &problem, Route::RELAX, max_steps, None)?;
