@@ -18,8 +18,9 @@
 //! * driving: [`simulation`] (the one step loop: clock, stop rules, observers), [`observers`]
 //!   (time-series recorder, progress bar, snapshots), [`record`];
 //! * commands and output: [`run`] (a scene wired to the driver and its writers), [`output`]
-//!   (npy, vti, png), [`levelset`] (sharp φ = 0 measures), [`compare`], [`study`]
-//!   (stationary routes, stability map, work–precision), [`cli`].
+//!   (npy, vti, png; the φ = 0 mesh, ply, shaded views, gif), [`levelset`] (sharp φ = 0
+//!   measures), [`compare`], [`study`] (stationary routes, stability map, work–precision),
+//!   [`render`] (frames and movie of a finished run), [`cli`].
 //!
 //! ```no_run
 //! use vesicle::simulation::{Simulation, StopRules};
@@ -45,6 +46,7 @@ pub mod observers;
 pub mod output;
 pub mod record;
 pub mod relax;
+pub mod render;
 pub mod run;
 pub mod setup;
 pub mod shapes;
