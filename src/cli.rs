@@ -1,4 +1,4 @@
-//! Command-line interface: `vesicle run | check | compare | study | axisym`.
+//! Command-line interface: `vesicle run | resume | check | compare | study | axisym | render`.
 //!
 //! Exit codes: 0 success, 2 invalid input (the message names the field: a scene key, `n` for a
 //! grid whose estimated peak memory exceeds the memory available, `--out` for an output folder
@@ -107,6 +107,30 @@ enum Command {
         after_help = "Example:\n  vesicle axisym --out out/axisym --v-min 0.5 --v-max 0.99 --dv 0.01"
     )]
     Axisym(crate::axisym::diagram::DiagramArgs),
+    /// Pictures of a finished run: DIR/frames/frame_<step>.png from its snapshots and final
+    /// state (3D: shaded φ = 0 surface, plus surface_<step>.ply), and DIR/movie.gif.
+    #[command(
+        after_help = "Example:\n  vesicle run runs/sphere3d.json --out out/s --set output.snapshot_every=20\n  vesicle render out/s --gif --cut y"
+    )]
+    Render {
+        /// Run folder (with summary.json and snapshots/phi_<step>.npy).
+        dir: PathBuf,
+        /// Also assemble DIR/movie.gif.
+        #[arg(long)]
+        gif: bool,
+        /// Cut away the near half of a 3D shape across the mid-plane normal to this axis.
+        #[arg(long, value_parser = ["x", "y", "z"])]
+        cut: Option<String>,
+        /// Use every K-th snapshot (the final state always).
+        #[arg(long, value_name = "K", default_value_t = 1)]
+        every: usize,
+        /// GIF frame delay in hundredths of a second.
+        #[arg(long, value_name = "CS", default_value_t = 20)]
+        delay: u16,
+        /// Replace an existing DIR/frames.
+        #[arg(long)]
+        force: bool,
+    },
     /// Run the finite-difference reference and the spectral engine on the same initial field;
     /// print and write a table of both at common times.
     #[command(after_help = "Example:\n  vesicle compare runs/compare2d.json --out out/compare")]
@@ -334,6 +358,31 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Axisym(args) => {
             crate::axisym::diagram::run(&args)?;
+            Ok(0)
+        }
+        Command::Render {
+            dir,
+            gif,
+            cut,
+            every,
+            delay,
+            force,
+        } => {
+            let opts = crate::render::RenderOptions {
+                gif,
+                cut: cut.as_deref().map(crate::render::axis_index).transpose()?,
+                every,
+                force,
+                delay_cs: delay,
+            };
+            let done = crate::render::render(&dir, &opts)?;
+            let gif = done.gif.map(|g| format!(" and {}", g.display()));
+            eprintln!(
+                "{} frames -> {}{}",
+                done.frames.len(),
+                dir.join("frames").display(),
+                gif.unwrap_or_default()
+            );
             Ok(0)
         }
         Command::Compare {

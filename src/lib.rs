@@ -20,9 +20,9 @@
 //!   (time-series recorder, progress bar, snapshots, checkpoints), [`record`], [`checkpoint`]
 //!   (the file `vesicle resume` continues from), [`signals`] (SIGINT/SIGTERM end a run cleanly);
 //! * commands and output: [`run`] (a scene or a checkpoint wired to the driver and its
-//!   writers), [`output`] (npy, vti, png, the folder lock), [`levelset`] (sharp φ = 0
-//!   measures), [`compare`], [`study`] (stationary routes, stability map, work–precision),
-//!   [`cli`];
+//!   writers), [`output`] (npy, vti, png, the folder lock; the φ = 0 mesh, ply, shaded views,
+//!   gif), [`levelset`] (sharp φ = 0 measures), [`compare`], [`study`] (stationary routes,
+//!   stability map, work–precision), [`render`] (frames and movie of a finished run), [`cli`];
 //! * [`axisym`]: the sharp-interface reference for the c0 = 0 shape diagram (Ritz method on
 //!   axisymmetric shapes, continuation along the prolate, oblate and stomatocyte branches).
 //!
@@ -53,6 +53,7 @@ pub mod observers;
 pub mod output;
 pub mod record;
 pub mod relax;
+pub mod render;
 pub mod run;
 pub mod setup;
 pub mod shapes;

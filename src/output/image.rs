@@ -6,7 +6,7 @@
 //! pixels); colours are bilinearly interpolated between grid points and the contour comes from
 //! marching squares with linear interpolation, drawn as anti-aliased segments.
 
-use super::{check_field, ensure_font, write_rgb_png, OutputError, FONT_FAMILY};
+use super::{check_field, ensure_font, OutputError, RgbImage, FONT_FAMILY};
 use ndarray::{Array2, Array3, ArrayView2, Axis};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -62,6 +62,17 @@ pub fn write_slices_png(
     dim: usize,
     title: &str,
 ) -> Result<(), OutputError> {
+    slices_image(path, field, dim, title)?.write_png(path)
+}
+
+/// The picture of [`write_slices_png`] as an RGB buffer; `path` names it in error messages.
+/// Its size depends only on the shape of `field`, so the frames of one run match.
+pub fn slices_image(
+    path: &Path,
+    field: &Array3<f64>,
+    dim: usize,
+    title: &str,
+) -> Result<RgbImage, OutputError> {
     check_field(path, field, dim)?;
     ensure_font(path)?;
     let panels = panels(field, dim);
@@ -76,7 +87,11 @@ pub fn write_slices_png(
         (panel.label.as_str(), centre)
     });
     draw_texts(path, &mut canvas, title, labels, &caption(field))?;
-    write_rgb_png(path, canvas.width as u32, canvas.height as u32, &canvas.rgb)
+    Ok(RgbImage {
+        width: canvas.width,
+        height: canvas.height,
+        rgb: canvas.rgb,
+    })
 }
 
 /// The panels of a 2D (one) or 3D (three mid-plane slices) scene.

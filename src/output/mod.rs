@@ -1,14 +1,20 @@
 //! Writers for simulation output: raw arrays (`.npy`), ParaView volumes (`.vti`), slice
-//! pictures of the phase field and time-series charts (`.png`).
+//! pictures of the phase field and time-series charts (`.png`), and the pictures of
+//! `vesicle render`: the φ = 0 surface as a mesh ([`surface`]), `.ply` files ([`ply`]),
+//! shaded views ([`shade`]) and animated GIFs ([`animation`]).
 //!
 //! Every writer receives a FULL-box field (already unfolded from any mirror reduction) in the
 //! internal layout of [`crate::grid`]: a standard-layout `Array3<f64>` of shape `[n0, n1, n2]`,
 //! with a 2D scene stored as `[1, nx, ny]`, together with the scene dimension.
 
+pub mod animation;
 pub mod chart;
 pub mod image;
 pub mod lock;
 pub mod npy;
+pub mod ply;
+pub mod shade;
+pub mod surface;
 pub mod vti;
 
 use ndarray::Array3;
@@ -128,4 +134,62 @@ pub(crate) fn write_rgb_png(
     writer.write_image_data(rgb).map_err(png_err)?;
     writer.finish().map_err(png_err)?;
     file.flush().map_err(|e| OutputError::io(path, e))
+}
+
+/// An 8-bit RGB picture, row-major, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `3 × width × height` bytes: R, G, B of each pixel.
+    pub rgb: Vec<u8>,
+}
+
+impl RgbImage {
+    /// A `width × height` picture of one colour.
+    pub fn filled(width: usize, height: usize, colour: [u8; 3]) -> Self {
+        RgbImage {
+            width,
+            height,
+            rgb: colour.repeat(width * height),
+        }
+    }
+
+    /// The colour of pixel `(x, y)`.
+    pub fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
+        let k = 3 * (y * self.width + x);
+        [self.rgb[k], self.rgb[k + 1], self.rgb[k + 2]]
+    }
+
+    /// Write the picture as a PNG file.
+    pub fn write_png(&self, path: &Path) -> Result<(), OutputError> {
+        write_rgb_png(path, self.width as u32, self.height as u32, &self.rgb)
+    }
+
+    /// Draw `text` in the embedded font, `size` pixels high, in `colour`, centred on `(x, y)`;
+    /// `name` names the picture in error messages.
+    pub(crate) fn draw_text(
+        &mut self,
+        name: &Path,
+        text: &str,
+        size: u32,
+        colour: [u8; 3],
+        (x, y): (usize, usize),
+    ) -> Result<(), OutputError> {
+        use plotters::prelude::*;
+        use plotters::style::text_anchor::{HPos, Pos, VPos};
+        ensure_font(name)?;
+        let (w, h) = (self.width as u32, self.height as u32);
+        let root = BitMapBackend::with_buffer(&mut self.rgb, (w, h)).into_drawing_area();
+        let rgb = RGBColor(colour[0], colour[1], colour[2]);
+        let style = TextStyle::from((FONT_FAMILY, size).into_font())
+            .color(&rgb)
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        let text_err = |e| OutputError::format(name, format!("cannot draw text: {e}"));
+        root.draw_text(text, &style, (x as i32, y as i32))
+            .map_err(text_err)?;
+        root.present().map_err(text_err)
+    }
 }
