@@ -82,6 +82,9 @@ pub trait Engine {
     fn stalled(&self) -> bool {
         false
     }
+    /// Turn on or off the check that a step does not raise F_eff where the scheme guarantees a
+    /// decrease (on by default; off for stability studies, which classify rises themselves).
+    fn guard_energy(&mut self, _on: bool) {}
     /// The largest Δt / (stability bound at the current σ) taken so far, for engines with a
     /// bound (FD); `None` otherwise.
     fn max_dt_over_bound(&self) -> Option<f64> {

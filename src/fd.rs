@@ -16,7 +16,7 @@ use crate::config::AreaMethod;
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
 use crate::model::{self, bulk, bulk_derivative, Measures, C0, PHI_BLOWUP};
-use crate::numerics::{nearest_root, PAR_CHUNK};
+use crate::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK};
 use crate::stencil;
 use ndarray::Array3;
 use rayon::prelude::*;
@@ -59,6 +59,10 @@ pub struct FdEngine {
     max_bound_ratio: f64,
     /// Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ of the exact projection (allocated when it is chosen).
     projection: Option<Array3<f64>>,
+    /// V of the first state (held to round-off by the telescoping stencil).
+    volume0: f64,
+    /// Refuse steps that raise F_eff (explicit Euler below its bound is dissipative).
+    energy_guard: bool,
 }
 
 impl FdEngine {
@@ -83,10 +87,13 @@ impl FdEngine {
             residual: f64::NAN,
             max_bound_ratio: 0.0,
             projection: None,
+            volume0: 0.0,
+            energy_guard: true,
             grid,
         };
         e.refresh(t)?;
         e.refresh_mu();
+        e.volume0 = e.measures.volume;
         Ok(e)
     }
 
@@ -179,8 +186,42 @@ impl FdEngine {
         stability_bound(&self.grid, self.eps, self.sigma)
     }
 
+    /// After a step of `dt` from a state with measures `before` (σ now that of the step): V
+    /// held, A held under the projection, and F_eff at the step's σ not risen (unless a ramped C0
+    /// or a stability study).
+    fn check(&self, before: Measures, dt: f64) -> Result<(), Diverged> {
+        let m = self.measures;
+        let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
+        if dv > CONSTRAINT_TOL {
+            return Err(Diverged(format!(
+                "volume drifted by {dv:.2e} (relative) at Δt = {dt:.4e}"
+            )));
+        }
+        if self.area.method == AreaMethod::Projection {
+            let da = (m.area - self.area.target).abs() / self.area.target;
+            if da > CONSTRAINT_TOL {
+                return Err(Diverged(format!(
+                    "area off its target by {da:.2e} (relative)"
+                )));
+            }
+        }
+        if self.energy_guard && !self.c0.is_ramped() && dt > 0.0 {
+            let s = self.sigma;
+            let (f0, f1) = (before.energy + s * before.area, m.energy + s * m.area);
+            if f1 > f0 + ENERGY_RISE_TOL * f0.abs() {
+                return Err(Diverged(format!(
+                    "F_eff rose from {f0:.12e} to {f1:.12e} (relative {:.2e}): explicit Euler \
+                     is not dissipative at Δt = {dt:.4e} (bound {:.4e} at this σ)",
+                    (f1 - f0) / f0.abs(),
+                    self.bound()
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// Back to the state before a failed step (φⁿ is in `mu`, σⁿ given).
-    fn restore(&mut self, sigma: f64) -> Result<(), Diverged> {
+    fn undo_step(&mut self, sigma: f64) -> Result<(), Diverged> {
         std::mem::swap(&mut self.mu, &mut self.phi);
         self.sigma = sigma;
         self.refresh(self.t)?;
@@ -290,15 +331,16 @@ impl Engine for FdEngine {
             Ok(Some(r)) => r,
             Ok(None) => rate,
             Err(e) => {
-                self.restore(sigma_before)?;
+                self.undo_step(sigma_before)?;
                 return Err(e);
             }
         };
-        let area_before = self.measures.area;
-        if let Err(e) = self.refresh(t + dt) {
-            self.restore(sigma_before)?;
+        let before = self.measures;
+        if let Err(e) = self.refresh(t + dt).and_then(|()| self.check(before, dt)) {
+            self.undo_step(sigma_before)?;
             return Err(e);
         }
+        let area_before = before.area;
         if self.area.method == AreaMethod::Lagrangian {
             self.sigma += self.area.alpha * (area_before - self.area.target);
         }
@@ -315,6 +357,10 @@ impl Engine for FdEngine {
         Some(self.max_bound_ratio)
     }
 
+    fn guard_energy(&mut self, on: bool) {
+        self.energy_guard = on;
+    }
+
     fn name(&self) -> &'static str {
         "fd"
     }
@@ -323,6 +369,7 @@ impl Engine for FdEngine {
         Saved::default()
             .scalar("sigma", self.sigma)
             .scalar("max_bound_ratio", self.max_bound_ratio)
+            .scalar("volume0", self.volume0)
             .array("phi", SavedArray::Real(self.phi.clone()))
     }
 
@@ -331,6 +378,7 @@ impl Engine for FdEngine {
         self.phi.assign(phi);
         self.sigma = saved.get("sigma")?;
         self.max_bound_ratio = saved.get("max_bound_ratio")?;
+        self.volume0 = saved.get("volume0")?;
         self.t = t;
         self.refresh(t).map_err(|d| d.0)?;
         self.refresh_mu();

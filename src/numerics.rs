@@ -5,6 +5,14 @@
 /// in rayon's scheduling than they gain).
 pub const PAR_CHUNK: usize = 8192;
 
+/// Largest relative rise of F_eff a step may make (round-off of the sums) where the scheme
+/// guarantees a decrease: FD explicit Euler below its bound, stabilised SBDF1, adaptive steps.
+pub const ENERGY_RISE_TOL: f64 = 1e-11;
+
+/// Largest relative drift of V (and of A under the exact projection) before a step counts as
+/// breaking a constraint (both are held to round-off, about 1e-14).
+pub const CONSTRAINT_TOL: f64 = 1e-9;
+
 /// The root of a x² + 2b x + c = 0 nearest `near` (numerically stable), `None` if not real.
 pub fn nearest_root(a: f64, b: f64, c: f64, near: f64) -> Option<f64> {
     if a <= 0.0 {

@@ -171,7 +171,12 @@ fn vti_3d_header_and_binary_block() {
     write_vti(&path, &field, 3, 0.5, "phi").unwrap();
     let bytes = std::fs::read(&path).unwrap();
     let (xml, block) = vti_parts(&bytes);
-    assert!(xml.starts_with("<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\""));
+    assert!(xml.starts_with("<?xml version=\"1.0\"?>\n<!-- written by vesicle "));
+    assert!(
+        xml.contains(env!("CARGO_PKG_VERSION")),
+        "the program version is recorded"
+    );
+    assert!(xml.contains("-->\n<VTKFile type=\"ImageData\""));
     for needle in [
         "byte_order=\"LittleEndian\"",
         "header_type=\"UInt64\"",

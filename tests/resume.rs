@@ -259,3 +259,69 @@ fn kill_9_during_a_checkpoint_write_keeps_the_previous_checkpoint() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(summary(&out)["stopped"], json!("max_steps"));
 }
+
+/// A fixed SBDF1 step far beyond its dissipative range (Δt = 200; the stabilised step stays
+/// dissipative to about Δt = 5 here) raises F_eff: the run stops with exit 3 naming the step,
+/// Δt and the check, keeps the time series, and its checkpoint holds the last good state, from
+/// which it resumes (with adaptive steps the same Δt is retried smaller instead).
+#[test]
+fn energy_rise_at_a_fixed_step_stops_with_exit_3_and_a_good_checkpoint() {
+    let tmp = TempDir::new().unwrap();
+    let scene = write_scene(
+        tmp.path(),
+        "s.json",
+        &ellipse(json!({"scheme": "sbdf1", "dt": 200.0, "max_steps": 200, "prepare_steps": 0})),
+    );
+    let out = tmp.path().join("r");
+    let o = vesicle(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("F_eff rose") && err.contains("Δt = 2.0000e2"),
+        "{err}"
+    );
+    let s = summary(&out);
+    let steps = s["steps"].as_u64().unwrap();
+    eprintln!("fixed Δt = 200: F_eff rose at step {}", steps + 1);
+    assert!(s["stopped"].as_str().unwrap().starts_with("blew up"));
+    assert_eq!(
+        rows(&out),
+        steps as usize + 2,
+        "header, step 0 … the last good step"
+    );
+    // The checkpoint is the last good state: resuming at once (max_steps = its step) reproduces
+    // the final field bit for bit.
+    let phi = std::fs::read(out.join("phi_final.npy")).unwrap();
+    let o = vesicle(&[
+        "resume",
+        out.to_str().unwrap(),
+        "--set",
+        &format!("max_steps={steps}"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(out.join("phi_final.npy")).unwrap(), phi);
+    // Adaptive: the rise is a rejection, the step is retried smaller and the run goes on.
+    let adaptive = write_scene(
+        tmp.path(),
+        "a.json",
+        &ellipse(
+            json!({"scheme": "sbdf1", "dt": 200.0, "max_steps": 200, "prepare_steps": 0,
+                        "adaptive": {"dt_min": 1e-3}}),
+        ),
+    );
+    let out = tmp.path().join("a");
+    let o = vesicle(&[
+        "run",
+        adaptive.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    assert!(s["rejected_steps"].as_u64().unwrap() > 0, "{s}");
+}

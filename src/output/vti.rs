@@ -52,8 +52,10 @@ fn xml_header(shape: [usize; 3], h: f64, name: &str) -> String {
     let extent = format!("0 {} 0 {} 0 {}", n2 - 1, n1 - 1, n0 - 1);
     let origin = format!("{} {} {}", origin(n2, h), origin(n1, h), origin(n0, h));
     let name = xml_escape(name);
+    let version = env!("CARGO_PKG_VERSION");
     format!(
         r#"<?xml version="1.0"?>
+<!-- written by vesicle {version}; the run's resolved scene is in summary.json beside it -->
 <VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">
   <ImageData WholeExtent="{extent}" Origin="{origin}" Spacing="{h} {h} {h}">
     <Piece Extent="{extent}">

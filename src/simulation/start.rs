@@ -54,7 +54,8 @@ pub fn check_stability(scene: &Scene, grid: &Grid) -> Result<()> {
     }
 }
 
-/// Build the engine a scene asks for, holding `problem.phi` at time 0, no area constraint.
+/// Build the engine a scene asks for, holding `problem.phi` at time 0, no area constraint, with
+/// the energy guard on unless the scene allows unstable steps.
 ///
 /// # Errors
 /// `Error::Config` on field `initial` if the initial field is not finite.
@@ -63,7 +64,7 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
     let c0 = problem.c0.clone();
     let phi = problem.phi.clone();
     let bad = |d: Diverged| Error::config("initial", d.0);
-    Ok(match (scene.method, scene.dynamics) {
+    let mut engine: Box<dyn Engine + Send> = match (scene.method, scene.dynamics) {
         (Method::Fd, _) => Box::new(FdEngine::new(grid, scene.eps, c0, phi, 0.0).map_err(bad)?),
         (Method::Spectral, Dynamics::Conserved) => {
             Box::new(SpectralEngine::new(scene, grid, c0, phi).map_err(bad)?)
@@ -71,7 +72,10 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
         (Method::Spectral, Dynamics::Relaxational) => {
             Box::new(RelaxEngine::new(scene, grid, c0, phi).map_err(bad)?)
         }
-    })
+    };
+    // A stability study asks to see what an unstable Δt does, energy rises included.
+    engine.guard_energy(!scene.allow_unstable);
+    Ok(engine)
 }
 
 /// A simulation after the preparation steps: ready with its area constraint and A0, or

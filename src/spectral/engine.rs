@@ -23,16 +23,10 @@ use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stab
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
-use crate::numerics::{nearest_root, PAR_CHUNK};
+use crate::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK};
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
-
-/// Largest relative rise of F_eff an adaptive step may make (round-off of the sums).
-pub const ENERGY_RISE_TOL: f64 = 1e-11;
-
-/// Largest relative drift of V (and of A under projection) before the run counts as broken.
-pub const CONSTRAINT_TOL: f64 = 1e-9;
 
 /// Per wavenumber: S(k), 1/D(k) with D = a0 + Δt(2ε⁴k⁶ + S) and −Δt c_σ k⁴/D, recomputed only
 /// when Δt or a0 change (every step of a fixed-Δt run reuses them).
@@ -88,9 +82,12 @@ impl std::fmt::Display for Rejection {
             Rejection::Diverged(d) => write!(f, "{}", d.0),
             Rejection::VolumeDrift(d) => write!(f, "volume drifted by {d:.2e} (relative)"),
             Rejection::AreaDrift(d) => write!(f, "area off its target by {d:.2e} (relative)"),
-            Rejection::EnergyRise { before, after } => {
-                write!(f, "F_eff rose from {before:.12e} to {after:.12e}")
-            }
+            Rejection::EnergyRise { before, after } => write!(
+                f,
+                "F_eff rose from {before:.12e} to {after:.12e} (relative {:.2e}): the step is not \
+                 dissipative at this Δt; lower dt or use adaptive steps",
+                (after - before) / before.abs()
+            ),
         }
     }
 }
@@ -141,6 +138,8 @@ pub struct SpectralEngine {
     area: AreaConstraint,
     volume0: f64,
     dt_next: Option<f64>,
+    /// Reject steps that raise F_eff (see `check_constraints`).
+    energy_guard: bool,
 }
 
 impl SpectralEngine {
@@ -177,6 +176,7 @@ impl SpectralEngine {
             sigma: 0.0,
             area: AreaConstraint::none(),
             dt_next: None,
+            energy_guard: true,
         })
     }
 
@@ -323,8 +323,10 @@ impl SpectralEngine {
         Ok((sigma, sigma_after))
     }
 
-    /// Volume (and area under projection) held; under adaptive steps F_eff (at the σ of the
-    /// update) must not rise.
+    /// Volume (and area under projection) held; F_eff (at the σ of the update) must not rise
+    /// where the scheme guarantees that it falls: adaptive steps, and fixed SBDF1 steps (the
+    /// stabilised first-order step is dissipative; SBDF2 is not guaranteed to be, and a ramped
+    /// C0 may raise F legitimately). Off when the energy guard is off (stability studies).
     fn check_constraints(&self, sigma: f64) -> Result<(), Rejection> {
         let m = self.next.measures;
         let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
@@ -337,7 +339,8 @@ impl SpectralEngine {
                 return Err(Rejection::AreaDrift(da));
             }
         }
-        if self.adaptive.is_some() && !self.ev.c0.is_ramped() {
+        let dissipative = self.adaptive.is_some() || self.scheme == Scheme::Sbdf1;
+        if self.energy_guard && dissipative && !self.ev.c0.is_ramped() {
             let before = self.cur.measures.energy + sigma * self.cur.measures.area;
             let after = m.energy + sigma * m.area;
             if after > before + ENERGY_RISE_TOL * before.abs() {
@@ -433,6 +436,10 @@ impl Engine for SpectralEngine {
 
     fn next_dt(&self, dt: f64) -> f64 {
         self.dt_next.unwrap_or(dt)
+    }
+
+    fn guard_energy(&mut self, on: bool) {
+        self.energy_guard = on;
     }
 
     fn name(&self) -> &'static str {
