@@ -56,18 +56,6 @@ fn sub(a: P3, b: P3) -> P3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn cross(a: P3, b: P3) -> P3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: P3, b: P3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 /// The zero of the linear interpolant on the edge p → q.
 fn crossing(p: P3, vp: f64, q: P3, vq: f64) -> P3 {
     let t = vp / (vp - vq);
@@ -78,82 +66,11 @@ fn crossing(p: P3, vp: f64, q: P3, vq: f64) -> P3 {
     ]
 }
 
-/// Six tetrahedra of the unit cube around the diagonal 0–7 (corner index x + 2y + 4z).
-const TETS: [[usize; 4]; 6] = [
-    [0, 1, 3, 7],
-    [0, 1, 5, 7],
-    [0, 2, 3, 7],
-    [0, 2, 6, 7],
-    [0, 4, 5, 7],
-    [0, 4, 6, 7],
-];
-
+/// The closed, outward-oriented mesh of [`crate::output::surface::extract`] (the same
+/// six-tetrahedra split), measured.
 fn measure_3d(phi: &Array3<f64>, h: f64) -> LevelSet {
-    let [n0, n1, n2] = [phi.shape()[0], phi.shape()[1], phi.shape()[2]];
-    let coord = |i: usize, n: usize| (i as f64 + 0.5 - n as f64 / 2.0) * h;
-    let (mut area, mut volume) = (0.0, 0.0);
-    for i in 0..n0 - 1 {
-        for j in 0..n1 - 1 {
-            for k in 0..n2 - 1 {
-                let mut p = [[0.0; 3]; 8];
-                let mut v = [0.0; 8];
-                for (c, (pc, vc)) in p.iter_mut().zip(v.iter_mut()).enumerate() {
-                    let (a, b, d) = (i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
-                    *pc = [coord(a, n0), coord(b, n1), coord(d, n2)];
-                    *vc = phi[[a, b, d]];
-                }
-                if v.iter().all(|&x| x > 0.0) || v.iter().all(|&x| x <= 0.0) {
-                    continue;
-                }
-                for t in TETS {
-                    let (a, vol) = tet_surface(t.map(|c| p[c]), t.map(|c| v[c]));
-                    area += a;
-                    volume += vol;
-                }
-            }
-        }
-    }
-    LevelSet::new(area, volume, 3)
-}
-
-/// Area of the zero set in one tetrahedron and its divergence-theorem volume term.
-fn tet_surface(p: [P3; 4], v: [f64; 4]) -> (f64, f64) {
-    let inside: Vec<usize> = (0..4).filter(|&i| v[i] > 0.0).collect();
-    let outside: Vec<usize> = (0..4).filter(|&i| v[i] <= 0.0).collect();
-    let e = |a: usize, b: usize| crossing(p[a], v[a], p[b], v[b]);
-    let polygon: Vec<P3> = match (inside.len(), outside.len()) {
-        (1, 3) => outside.iter().map(|&o| e(inside[0], o)).collect(),
-        (3, 1) => inside.iter().map(|&i| e(i, outside[0])).collect(),
-        (2, 2) => {
-            let (a, b, c, d) = (inside[0], inside[1], outside[0], outside[1]);
-            vec![e(a, c), e(a, d), e(b, d), e(b, c)]
-        }
-        _ => return (0.0, 0.0),
-    };
-    // Outward: from the inside vertices towards the outside ones.
-    let centroid = |idx: &[usize]| {
-        let s = idx.iter().fold([0.0; 3], |s, &i| {
-            [s[0] + p[i][0], s[1] + p[i][1], s[2] + p[i][2]]
-        });
-        [
-            s[0] / idx.len() as f64,
-            s[1] / idx.len() as f64,
-            s[2] / idx.len() as f64,
-        ]
-    };
-    let out_dir = sub(centroid(&outside), centroid(&inside));
-    let (mut area, mut volume) = (0.0, 0.0);
-    for w in 1..polygon.len() - 1 {
-        let (a, mut b, mut c) = (polygon[0], polygon[w], polygon[w + 1]);
-        let mut n = cross(sub(b, a), sub(c, a));
-        if dot(n, out_dir) < 0.0 {
-            std::mem::swap(&mut b, &mut c);
-            n = [-n[0], -n[1], -n[2]];
-        }
-        area += 0.5 * dot(n, n).sqrt();
-        volume += dot(a, cross(b, c)) / 6.0;
-    }
-    (area, volume)
+    let mesh = crate::output::surface::extract(phi, h);
+    LevelSet::new(mesh.area(), mesh.enclosed_volume(), 3)
 }
 
 fn measure_2d(phi: &Array3<f64>, h: f64) -> LevelSet {
@@ -178,7 +95,8 @@ fn measure_2d(phi: &Array3<f64>, h: f64) -> LevelSet {
 
 /// Length of the zero set in a triangle and the exact area where the linear φ > 0.
 fn triangle_part(p: [P3; 3], v: [f64; 3]) -> (f64, f64) {
-    let full = 0.5 * cross(sub(p[1], p[0]), sub(p[2], p[0]))[2].abs();
+    let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
+    let full = 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]).abs();
     let pos: Vec<usize> = (0..3).filter(|&i| v[i] > 0.0).collect();
     let lone = match pos.len() {
         0 => return (0.0, 0.0),
@@ -194,7 +112,7 @@ fn triangle_part(p: [P3; 3], v: [f64; 3]) -> (f64, f64) {
         crossing(p[lone], v[lone], p[o2], v[o2]),
     );
     let d = sub(b, a);
-    let length = dot(d, d).sqrt();
+    let length = d.iter().map(|x| x * x).sum::<f64>().sqrt();
     // The corner triangle at the lone vertex covers t1·t2 of the triangle.
     let t1 = v[lone] / (v[lone] - v[o1]);
     let t2 = v[lone] / (v[lone] - v[o2]);
