@@ -33,16 +33,16 @@ pub struct Problem {
 ///
 /// # Errors
 /// `Error::Config` if the initial file is unreadable or has the wrong shape, the shape does not
-/// fit its box, or a declared mirror plane is not a symmetry of φ or c0.
+/// fit its box, a c0 file is unreadable, or a declared mirror plane is not a symmetry of φ or c0.
 pub fn build(scene: &Scene) -> Result<Problem> {
     let full_grid = Grid::new(&scene.n, scene.h, &vec![false; scene.dim]);
     let full_phi = initial_field(scene, &full_grid)?;
     check_fits(&full_grid, &full_phi)?;
-    let full_c0 = C0::new(&scene.c0, &full_grid, scene.eps);
+    let full_c0 = C0::new(&scene.c0, &full_grid, scene.eps)?;
     let mirror = mirror_axes(scene, &full_grid, &full_phi, &full_c0)?;
     let grid = Grid::new(&scene.n, scene.h, &mirror);
     let phi = grid.restrict(&full_phi);
-    let c0 = C0::new(&scene.c0, &grid, scene.eps);
+    let c0 = C0::new(&scene.c0, &grid, scene.eps)?;
     Ok(Problem {
         grid,
         phi,
@@ -55,7 +55,8 @@ pub fn build(scene: &Scene) -> Result<Problem> {
 /// from its checkpoint): the grid of the scene's explicit mirror axes and the c0 field.
 ///
 /// # Errors
-/// `Error::Config` on field `symmetry` if the scene does not name its mirror axes.
+/// `Error::Config` on field `symmetry` if the scene does not name its mirror axes, or on
+/// `c0.file` if a c0 file cannot be read.
 pub fn frame(scene: &Scene) -> Result<Problem> {
     let Symmetry::Axes(axes) = &scene.symmetry else {
         return Err(Error::config(
@@ -67,7 +68,7 @@ pub fn frame(scene: &Scene) -> Result<Problem> {
         .map(|a| axes.iter().any(|n| axis_index(n, scene.dim) == Some(a)))
         .collect();
     let grid = Grid::new(&scene.n, scene.h, &mirror);
-    let c0 = C0::new(&scene.c0, &grid, scene.eps);
+    let c0 = C0::new(&scene.c0, &grid, scene.eps)?;
     Ok(Problem {
         phi: grid.zeros(),
         grid,

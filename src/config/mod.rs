@@ -12,7 +12,7 @@ mod scene;
 mod shapes;
 mod validation;
 
-pub use c0::{C0Field, C0Spec};
+pub use c0::{C0Ball, C0Band, C0Cap, C0Field, C0File, C0Spec, Pole};
 pub use scene::{
     axis_index, AdaptiveSettings, AdaptiveSpec, AreaMethod, AreaSpec, AutoTag, Dynamics, Laplacian,
     Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, RECORD_ROWS,
@@ -55,6 +55,9 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
     let mut scene = from_value(value)?;
     if let Initial::File { file } = &mut scene.initial {
         *file = resolve_relative(path, file);
+    }
+    if let C0Spec::Field(C0Field::File(f)) = &mut scene.c0 {
+        f.file = resolve_relative(path, &f.file);
     }
     scene.validate()?;
     crate::memory::check(&scene)?;
@@ -177,8 +180,8 @@ fn objects_where_objects(scene: &Value) -> Result<()> {
     Ok(())
 }
 
-/// Fields read through an intermediate value (`initial`, `c0`, `adaptive`) lose the inner key
-/// of an error: read the sub-object again as its concrete type to name it.
+/// Fields read through an intermediate value (`adaptive`) lose the inner key of an error: read
+/// the sub-object again as its concrete type to name it (`initial` and `c0` mark theirs).
 fn refine(path: &str, scene: &Value) -> Option<Error> {
     fn inner<T: serde::de::DeserializeOwned>(at: &str, v: &Value) -> Option<Error> {
         let e = serde_path_to_error::deserialize::<_, T>(v.clone()).err()?;
@@ -195,14 +198,13 @@ fn refine(path: &str, scene: &Value) -> Option<Error> {
         return None;
     }
     match path {
-        "c0" => inner::<C0Field>(path, v),
         "adaptive" => inner::<AdaptiveSettings>(path, v),
         _ => None,
     }
 }
 
-/// A relative `.npy` path is taken from the scene file's folder if it exists there, else from
-/// the working directory.
+/// A relative `.npy` path (`initial.file`, `c0.file`) is taken from the scene file's folder if
+/// it exists there, else from the working directory.
 fn resolve_relative(scene: &Path, file: &Path) -> PathBuf {
     if file.is_absolute() {
         return file.to_path_buf();

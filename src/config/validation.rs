@@ -1,7 +1,7 @@
 //! [`Scene::validate`]: every check that needs no initial field, each error naming the dotted
 //! key and the reason.
 
-use super::c0::C0Spec;
+use super::c0::{C0Field, C0Spec};
 use super::scene::{axis_index, AreaMethod, Dynamics, Method, Scene, Scheme, Symmetry};
 use super::shapes::{Initial, Shape};
 use crate::error::{Error, Result};
@@ -163,20 +163,47 @@ impl Scene {
     }
 
     fn validate_c0(&self) -> Result<()> {
-        match &self.c0 {
-            C0Spec::Uniform(c) => finite("c0", *c),
-            C0Spec::Field(f) => {
-                finite("c0.inside", f.inside)?;
-                finite("c0.outside", f.outside)?;
-                positive("c0.width", f.width)?;
-                if let Some(r) = f.radius {
+        let f = match &self.c0 {
+            C0Spec::Uniform(c) => return finite("c0", *c),
+            C0Spec::Field(f) => f,
+        };
+        if let Some(t) = f.ramp_time() {
+            positive("c0.ramp_time", t)?;
+        }
+        let blend = |inside: f64, outside: f64, width: f64| -> Result<()> {
+            finite("c0.inside", inside)?;
+            finite("c0.outside", outside)?;
+            positive("c0.width", width)
+        };
+        match f {
+            C0Field::Ball(b) => {
+                blend(b.inside, b.outside, b.width)?;
+                if let Some(r) = b.radius {
                     positive("c0.radius", r)?;
                 }
-                if let Some(t) = f.ramp_time {
-                    positive("c0.ramp_time", t)?;
-                }
-                check_center("c0.center", &f.center, self.dim)
+                check_center("c0.center", &b.center, self.dim)
             }
+            C0Field::Cap(c) => {
+                blend(c.inside, c.outside, c.width)?;
+                if !(c.angle > 0.0 && c.angle < 180.0) {
+                    return Err(Error::config(
+                        "c0.angle",
+                        format!(
+                            "must lie in (0, 180) degrees (the rim's polar angle), got {}",
+                            c.angle
+                        ),
+                    ));
+                }
+                check_axis("c0.axis", &c.axis, self.dim)?;
+                check_center("c0.center", &c.center, self.dim)
+            }
+            C0Field::Band(b) => {
+                blend(b.inside, b.outside, b.width)?;
+                positive("c0.half_width", b.half_width)?;
+                check_axis("c0.axis", &b.axis, self.dim)?;
+                check_center("c0.center", &b.center, self.dim)
+            }
+            C0Field::File(_) => Ok(()),
         }
     }
 
