@@ -135,6 +135,22 @@ impl Grid {
         })
     }
 
+    /// [`Grid::field_from`] evaluated in parallel (rayon, in the current pool): the same
+    /// values.
+    pub fn par_field_from(&self, f: impl Fn([f64; 3]) -> f64 + Sync) -> Array3<f64> {
+        let c = [self.coords(0), self.coords(1), self.coords(2)];
+        let dim = self.dim;
+        let mut out = self.zeros();
+        ndarray::Zip::indexed(&mut out).par_for_each(|(i, j, k), v| {
+            *v = if dim == 2 {
+                f([c[1][j], c[2][k], 0.0])
+            } else {
+                f([c[0][i], c[1][j], c[2][k]])
+            };
+        });
+        out
+    }
+
     /// Unfold a reduced-box field to the full box by mirroring every mirrored axis.
     pub fn unfold(&self, field: &Array3<f64>) -> Array3<f64> {
         let mut out = field.clone();

@@ -9,7 +9,7 @@
 //!
 //! Module map:
 //! * scene → problem: [`config`] (the strict scene file), [`setup`] (grid, initial field, c0),
-//!   [`grid`], [`shapes`], [`model`] (f, f', reduced quantities, c0 fields), [`memory`]
+//!   [`grid`], [`shapes`] (with [`revolution`] for surfaces of revolution), [`model`] (f, f', reduced quantities, c0 fields), [`memory`]
 //!   (the peak-memory estimate a grid must fit);
 //! * engines behind [`engine::Engine`]: [`fd`] (explicit Euler on [`stencil`], the paper's
 //!   reference), [`spectral`] (semi-implicit SBDF1/2 with the exact area projection, on
@@ -54,6 +54,7 @@ pub mod output;
 pub mod record;
 pub mod relax;
 pub mod render;
+pub mod revolution;
 pub mod run;
 pub mod setup;
 pub mod shapes;

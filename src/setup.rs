@@ -32,8 +32,9 @@ pub struct Problem {
 /// Build the problem of `scene`.
 ///
 /// # Errors
-/// `Error::Config` if the initial file is unreadable or has the wrong shape, the shape does not
-/// fit its box, a c0 file is unreadable, or a declared mirror plane is not a symmetry of φ or c0.
+/// `Error::Config` if the initial file is unreadable or has the wrong shape, an `axisym` shape
+/// has no solution at its reduced volume (or its contour is unreadable), the shape does not fit
+/// its box, a c0 file is unreadable, or a declared mirror plane is not a symmetry of φ or c0.
 pub fn build(scene: &Scene) -> Result<Problem> {
     let full_grid = Grid::new(&scene.n, scene.h, &vec![false; scene.dim]);
     let full_phi = initial_field(scene, &full_grid)?;
@@ -80,9 +81,9 @@ pub fn frame(scene: &Scene) -> Result<Problem> {
 fn initial_field(scene: &Scene, grid: &Grid) -> Result<Array3<f64>> {
     match &scene.initial {
         Initial::Shape(shape) => {
-            let shape = shapes::resolve(shape, scene.dim);
-            Ok(grid.field_from(|p| {
-                shapes::profile(shapes::signed_distance(&shape, p, scene.dim), scene.eps)
+            let shape = shapes::prepare(shape, "initial", scene.dim, scene.eps)?;
+            Ok(grid.par_field_from(|p| {
+                shapes::profile(shape.signed_distance(p, scene.dim), scene.eps)
             }))
         }
         Initial::File { file } => {

@@ -1,12 +1,162 @@
 //! Initial shapes as signed distances (positive inside) and the tanh profile
 //! φ = tanh(d / (√2 ε)) built from them (DESIGN.md §4).
+//!
+//! [`prepare`] does the once-per-field work (spheroids to ellipsoids, `axisym` shapes solved or
+//! read and resampled, [`crate::revolution`]); [`Prepared::signed_distance`] is then evaluated at
+//! every grid point.
 
-use crate::config::{axis_index, Difference, Ellipsoid, Shape, SpheroidKind, Union};
+use crate::axisym::{self, Branch};
+use crate::config::{
+    axis_index, Axisym, AxisymBranch, Difference, Ellipsoid, Shape, SpheroidKind, Union,
+};
+use crate::error::{Error, Result};
+use crate::revolution::{self, Meridian};
 use std::f64::consts::PI;
+
+/// Largest resampling step of an `axisym` contour, in units of ε: the polyline's sag
+/// `spacing² κ/8` stays below 1e-3 ε where the curvature radius is ≥ ε.
+pub const AXISYM_SPACING: f64 = 0.05;
+
+/// A shape ready for evaluation at many points.
+#[derive(Clone, Debug)]
+pub enum Prepared {
+    /// A shape evaluated by [`signed_distance`] (spheroids already resolved).
+    Plain(Shape),
+    /// A surface of revolution.
+    Revolution(Revolution),
+    /// d = max d_i.
+    Union(Vec<Prepared>),
+    /// d = min(d_base, −d_minus).
+    Difference(Box<Prepared>, Box<Prepared>),
+}
+
+/// A surface of revolution placed in the box: the generating curve, the symmetry axis
+/// (scene axis) and the centre offset.
+#[derive(Clone, Debug)]
+pub struct Revolution {
+    /// The generating curve, scaled and centred.
+    pub meridian: Meridian,
+    /// Scene axis of symmetry.
+    pub axis: usize,
+    /// Offset of the centre from the box centre (3 entries).
+    pub center: [f64; 3],
+}
+
+impl Prepared {
+    /// Signed distance of `p` (scene coordinates, 3 entries) to the surface, positive inside.
+    pub fn signed_distance(&self, p: [f64; 3], dim: usize) -> f64 {
+        match self {
+            Prepared::Plain(s) => signed_distance(s, p, dim),
+            Prepared::Revolution(r) => {
+                let q = sub(p, Some(&r.center));
+                let (a, b) = match r.axis {
+                    0 => (1, 2),
+                    1 => (0, 2),
+                    _ => (0, 1),
+                };
+                let rho = (q[a] * q[a] + q[b] * q[b]).sqrt();
+                r.meridian.signed_distance(rho, q[r.axis])
+            }
+            Prepared::Union(u) => u
+                .iter()
+                .map(|s| s.signed_distance(p, dim))
+                .fold(f64::NEG_INFINITY, f64::max),
+            Prepared::Difference(b, m) => b.signed_distance(p, dim).min(-m.signed_distance(p, dim)),
+        }
+    }
+}
+
+/// Prepare `shape` (a validated scene's, at key `at`, e.g. `initial`) for evaluation with
+/// interface width `eps`: spheroids become ellipsoids; an `axisym` shape is solved with the
+/// reference solver (default options) or read from its contour, scaled to `r0` and resampled
+/// to [`AXISYM_SPACING`] ε.
+///
+/// # Errors
+/// `Error::Config` naming `<at>.reduced_volume` if the solver does not reach the requested v
+/// on the branch or the shape there intersects itself, `<at>.contour` if the file is
+/// unreadable or not a closed curve.
+pub fn prepare(shape: &Shape, at: &str, dim: usize, eps: f64) -> Result<Prepared> {
+    Ok(match shape {
+        Shape::Axisym(a) => Prepared::Revolution(revolution_of(a, at, dim, eps)?),
+        Shape::Union(u) => Prepared::Union(
+            u.of.iter()
+                .enumerate()
+                .map(|(i, s)| prepare(s, &format!("{at}.of[{i}]"), dim, eps))
+                .collect::<Result<_>>()?,
+        ),
+        Shape::Difference(d) => Prepared::Difference(
+            Box::new(prepare(&d.base, &format!("{at}.base"), dim, eps)?),
+            Box::new(prepare(&d.minus, &format!("{at}.minus"), dim, eps)?),
+        ),
+        other => Prepared::Plain(resolve(other, dim)),
+    })
+}
+
+/// The generating curve of an `axisym` shape, at `R0 = 1`: `(r, z)`.
+///
+/// # Errors
+/// As [`prepare`].
+pub fn axisym_contour(a: &Axisym, at: &str) -> Result<(Vec<f64>, Vec<f64>)> {
+    if let Some(path) = &a.contour {
+        return revolution::read_contour(path)
+            .map_err(|e| Error::config(format!("{at}.contour"), e));
+    }
+    let field = format!("{at}.reduced_volume");
+    let (Some(b), Some(v)) = (a.branch, a.reduced_volume) else {
+        return Err(Error::config(
+            format!("{at}.branch"),
+            "missing: give branch + reduced_volume, or contour",
+        ));
+    };
+    let branch = match b {
+        AxisymBranch::Prolate => Branch::Prolate,
+        AxisymBranch::Oblate => Branch::Oblate,
+        AxisymBranch::Stomatocyte => Branch::Stomatocyte,
+    };
+    let (lo, hi) = b.range();
+    let sol = axisym::solve(branch, v, &axisym::Options::default()).map_err(|e| {
+        let reason = match e {
+            Error::Config { reason, .. } => reason,
+            other => other.to_string(),
+        };
+        Error::config(
+            &field,
+            format!("the reference solver gives no {} shape at v = {v} ({reason}); the branch's range is {lo} < v ≤ {hi}", b.name()),
+        )
+    })?;
+    if sol.self_intersecting() {
+        return Err(Error::config(
+            &field,
+            format!(
+                "the {} shape at v = {v} intersects itself; choose a larger v (the branch's range is {lo} < v ≤ {hi})",
+                b.name()
+            ),
+        ));
+    }
+    Ok((sol.r, sol.z))
+}
+
+fn revolution_of(a: &Axisym, at: &str, dim: usize, eps: f64) -> Result<Revolution> {
+    let (r, z) = axisym_contour(a, at)?;
+    let meridian = Meridian::new(&r, &z, a.r0, AXISYM_SPACING * eps);
+    let mut center = [0.0; 3];
+    if let Some(c) = &a.center {
+        for (ci, x) in center.iter_mut().zip(c) {
+            *ci = *x;
+        }
+    }
+    Ok(Revolution {
+        meridian,
+        axis: axis_of(&a.axis, dim),
+        center,
+    })
+}
 
 /// Signed distance of `p` (scene coordinates, 3 entries, z = 0 in 2D) to the shape's surface,
 /// positive inside. Exact for spheres, capsules and their set operations up to the usual
-/// min/max approximation; first-order (d ≈ (1 − F)/|∇F|) for ellipsoids.
+/// min/max approximation; first-order (d ≈ (1 − F)/|∇F|) for ellipsoids. An `axisym` shape is
+/// prepared on every call (solved or read: slow) with ε = r0/100, and reads NaN if that fails;
+/// build fields with [`prepare`].
 pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
     match shape {
         Shape::Sphere(s) => s.radius - norm(sub(p, s.center.as_deref())),
@@ -39,6 +189,8 @@ pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
         Shape::Difference(d) => {
             signed_distance(&d.base, p, dim).min(-signed_distance(&d.minus, p, dim))
         }
+        Shape::Axisym(a) => prepare(shape, "initial", dim, a.r0 / 100.0)
+            .map_or(f64::NAN, |s| s.signed_distance(p, dim)),
     }
 }
 

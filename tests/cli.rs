@@ -150,6 +150,30 @@ fn write_npy_fixtures(dir: &Path) {
         .collect();
     write("fixture_32x32_f4.npy", npy_bytes("<f4", &[32, 32], &f4));
     write("fixture_not_npy.npy", b"this is not an npy file\n".to_vec());
+    // r,z contours for the axisym shape: a unit sphere (R0 = 1), and broken ones
+    let contour = |radius: f64, last_r: f64, neg: bool| {
+        let mut t = String::from("r,z\n");
+        for i in 0..=40 {
+            let a = std::f64::consts::PI * i as f64 / 40.0;
+            let mut r = radius * a.sin();
+            if i == 40 {
+                r = last_r;
+            }
+            if neg && i == 20 {
+                r = -0.5;
+            }
+            t.push_str(&format!("{r:.12e},{:.12e}\n", radius * (1.0 - a.cos())));
+        }
+        t.into_bytes()
+    };
+    write("fixture_contour_good.csv", contour(1.0, 0.0, false));
+    write("fixture_contour_open.csv", contour(1.0, 0.5, false));
+    write("fixture_contour_negative_r.csv", contour(1.0, 0.0, true));
+    write("fixture_contour_r0_2.csv", contour(2.0, 0.0, false));
+    write(
+        "fixture_contour_garbage.csv",
+        b"r,z\n0.0,0.0\n0.5,abc\n".to_vec(),
+    );
     // wrong dtypes holding the same field
     let i8: Vec<u8> = good
         .iter()

@@ -18,7 +18,8 @@ pub use scene::{
     Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, RECORD_ROWS,
 };
 pub use shapes::{
-    Capsule, Cup, Difference, Ellipsoid, Initial, Shape, Sphere, Spheroid, SpheroidKind, Union,
+    Axisym, AxisymBranch, Capsule, Cup, Difference, Ellipsoid, Initial, Shape, Sphere, Spheroid,
+    SpheroidKind, Union,
 };
 
 use crate::error::{Error, Result};
@@ -53,8 +54,13 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
         apply_override(&mut value, o)?;
     }
     let mut scene = from_value(value)?;
-    if let Initial::File { file } = &mut scene.initial {
-        *file = resolve_relative(path, file);
+    match &mut scene.initial {
+        Initial::File { file } => *file = resolve_relative(path, file),
+        Initial::Shape(shape) => {
+            for contour in shape.contours_mut() {
+                *contour = resolve_relative(path, contour);
+            }
+        }
     }
     if let C0Spec::Field(C0Field::File(f)) = &mut scene.c0 {
         f.file = resolve_relative(path, &f.file);

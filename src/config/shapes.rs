@@ -59,6 +59,8 @@ pub enum Shape {
     Union(Union),
     /// `base` with `minus` removed: d = min(d_base, −d_minus).
     Difference(Difference),
+    /// Surface of revolution from the axisymmetric reference solver or a contour file.
+    Axisym(Axisym),
 }
 
 /// Sphere (circle in 2D) of radius `radius`.
@@ -135,6 +137,79 @@ pub struct Difference {
     pub minus: Box<Shape>,
 }
 
+/// Surface of revolution about `axis`: the stationary shape of the axisymmetric reference
+/// solver (`branch` + `reduced_volume`) or an `r,z` contour file at `R0 = 1` (`contour`, as
+/// `vesicle axisym` writes `contours/<branch>_v<v>.csv`; relative to the scene file's folder),
+/// scaled to `r0`. Exactly one of the two sources. `center` offsets the middle of the shape's
+/// extent along the axis (the mirror centre of a prolate or oblate) from the box centre.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Axisym {
+    #[serde(default)]
+    pub branch: Option<AxisymBranch>,
+    #[serde(default)]
+    pub reduced_volume: Option<f64>,
+    #[serde(default)]
+    pub contour: Option<PathBuf>,
+    pub r0: f64,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Branch of the c0 = 0 shape diagram (`vesicle::axisym::Branch`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AxisymBranch {
+    /// Up–down symmetric, elongated along the axis.
+    Prolate,
+    /// Up–down symmetric, flattened (discocytes at smaller v).
+    Oblate,
+    /// An invaginated cup, not up–down symmetric.
+    Stomatocyte,
+}
+
+impl AxisymBranch {
+    /// Lower-case name, as in the scene file.
+    pub fn name(self) -> &'static str {
+        match self {
+            AxisymBranch::Prolate => "prolate",
+            AxisymBranch::Oblate => "oblate",
+            AxisymBranch::Stomatocyte => "stomatocyte",
+        }
+    }
+
+    /// Reduced volumes `(lo, hi]` where the reference solver's branch exists as a surface
+    /// without self-contact: the oblate touches itself at the poles below v ≈ 0.503 and the
+    /// stomatocyte ends at a limit point, v ≈ 0.6608 (tests/axisym.rs). Where the solver still
+    /// fails inside the range (the stomatocyte's neck closes at small v, self-contact near
+    /// v ≈ 0.2), building the field says so.
+    pub fn range(self) -> (f64, f64) {
+        match self {
+            AxisymBranch::Prolate => (0.0, 1.0),
+            AxisymBranch::Oblate => (0.503, 1.0),
+            AxisymBranch::Stomatocyte => (0.0, 0.6608),
+        }
+    }
+}
+
+impl Shape {
+    /// Every `contour` path inside the shape (for resolving them against the scene's folder).
+    pub fn contours_mut(&mut self) -> Vec<&mut PathBuf> {
+        match self {
+            Shape::Axisym(a) => a.contour.iter_mut().collect(),
+            Shape::Union(u) => u.of.iter_mut().flat_map(|s| s.contours_mut()).collect(),
+            Shape::Difference(d) => {
+                let mut v = d.base.contours_mut();
+                v.extend(d.minus.contours_mut());
+                v
+            }
+            _ => Vec::new(),
+        }
+    }
+}
+
 /// Marks the inner path of a shape's error inside its message (serde keeps no path inside a
 /// hand-written deserializer); [`super::from_value`] turns it back into a dotted field.
 pub(super) const PATH_MARK: char = '\u{1f}';
@@ -169,9 +244,10 @@ impl<'de> Deserialize<'de> for Shape {
             "capsule" => kind(v).map(Shape::Capsule),
             "union" => kind(v).map(Shape::Union),
             "difference" => kind(v).map(Shape::Difference),
+            "axisym" => kind(v).map(Shape::Axisym),
             _ => Err(format!(
                 "{PATH_MARK}shape{PATH_MARK}unknown variant {tag}, expected one of `sphere`, \
-                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `union`, `difference`"
+                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `union`, `difference`, `axisym`"
             )),
         };
         shape.map_err(D::Error::custom)

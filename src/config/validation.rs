@@ -3,7 +3,7 @@
 
 use super::c0::{C0Field, C0Spec};
 use super::scene::{axis_index, AreaMethod, Dynamics, Method, Scene, Scheme, Symmetry};
-use super::shapes::{Initial, Shape};
+use super::shapes::{AxisymBranch, Initial, Shape};
 use crate::error::{Error, Result};
 
 impl Scene {
@@ -350,6 +350,61 @@ fn validate_shape(s: &Shape, at: &str, dim: usize) -> Result<()> {
         Shape::Difference(d) => {
             validate_shape(&d.base, &f("base"), dim)?;
             validate_shape(&d.minus, &f("minus"), dim)
+        }
+        Shape::Axisym(s) => {
+            if dim != 3 {
+                return Err(Error::config(
+                    f("shape"),
+                    format!("axisym is a surface of revolution: it needs dim = 3, got {dim}"),
+                ));
+            }
+            match (&s.contour, s.branch, s.reduced_volume) {
+                (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+                    return Err(Error::config(
+                        f("contour"),
+                        "give either branch + reduced_volume or contour, not both",
+                    ))
+                }
+                (Some(path), None, None) => {
+                    crate::revolution::read_contour(path)
+                        .map_err(|e| Error::config(f("contour"), e))?;
+                }
+                (None, None, _) => {
+                    return Err(Error::config(
+                        f("branch"),
+                        "missing: give branch (prolate, oblate or stomatocyte) + reduced_volume, \
+                         or contour",
+                    ))
+                }
+                (None, Some(_), None) => {
+                    return Err(Error::config(
+                        f("reduced_volume"),
+                        "missing: the branch's shape is chosen by its reduced volume",
+                    ))
+                }
+                (None, Some(b), Some(v)) => {
+                    let (lo, hi) = b.range();
+                    if !(v > lo && v <= hi) {
+                        return Err(Error::config(
+                            f("reduced_volume"),
+                            format!(
+                                "the {} branch exists for {lo} < v ≤ {hi}{}, got {v}",
+                                b.name(),
+                                match b {
+                                    AxisymBranch::Prolate => "",
+                                    AxisymBranch::Oblate =>
+                                        " (below v ≈ 0.503 the oblate intersects itself)",
+                                    AxisymBranch::Stomatocyte =>
+                                        " (the branch ends at its limit point v ≈ 0.6608)",
+                                }
+                            ),
+                        ));
+                    }
+                }
+            }
+            positive(&f("r0"), s.r0)?;
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
         }
     }
 }
