@@ -1,8 +1,8 @@
-//! Fuzzing of the two readers of outside input: the scene loader and the `.npy` reader. For
-//! arbitrary bytes, arbitrary JSON built from the real key names, and valid headers followed
-//! by arbitrary data, neither may panic: every failure is an `Err` with a message. A scene that
-//! passes validation on a small grid also goes through the memory estimate, the problem
-//! set-up and the stability check, which must not panic either.
+//! Fuzzing of the readers of outside input: the scene loader, the `.npy` reader and the
+//! checkpoint reader. For arbitrary bytes, arbitrary JSON built from the real key names, and
+//! valid headers followed by arbitrary data, none may panic: every failure is an `Err` with a
+//! message. A scene that passes validation on a small grid also goes through the memory
+//! estimate, the problem set-up and the stability check, which must not panic either.
 
 use proptest::prelude::*;
 use serde_json::{Map, Value};
@@ -409,4 +409,27 @@ fn npy_valid_file_reads() {
     std::fs::write(file.path(), &bytes).unwrap();
     let a = vesicle::output::npy::read_npy(file.path(), &[4, 4]).unwrap();
     assert_eq!(a[[0, 1, 1]], 5.0);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(600))]
+
+    /// The checkpoint reader on arbitrary bytes, with and without the magic prefix and a
+    /// plausible header length: an error with a message, never a panic.
+    #[test]
+    fn checkpoint_reader_never_panics(
+        bytes in prop::collection::vec(any::<u8>(), 0..400),
+        with_magic in any::<bool>(),
+        header_len in 0u64..512,
+    ) {
+        let mut data = Vec::new();
+        if with_magic {
+            data.extend_from_slice(vesicle::checkpoint::MAGIC);
+            data.extend_from_slice(&header_len.to_le_bytes());
+        }
+        data.extend_from_slice(&bytes);
+        let r = vesicle::checkpoint::Checkpoint::from_bytes(&data, std::path::Path::new("x"));
+        prop_assert!(r.is_err(), "arbitrary bytes were accepted as a checkpoint");
+        prop_assert!(!r.unwrap_err().to_string().is_empty());
+    }
 }
