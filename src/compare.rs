@@ -84,14 +84,7 @@ pub fn run_pair(scene: &Scene) -> Result<Vec<Row>> {
         let target = t_end * j as f64 / ROWS as f64;
         for (name, sim) in [("fd", &mut fd_sim), ("spectral", &mut sp_sim)] {
             sim.run(&StopRules::until(target), &mut [])
-                .map_err(|e| match e {
-                    Error::Blowup { step, t, reason } => Error::Blowup {
-                        step,
-                        t,
-                        reason: format!("{name} engine: {reason}"),
-                    },
-                    other => other,
-                })?;
+                .map_err(|e| e.within(&format!("{name} engine")))?;
         }
         let max_dphi = crate::model::max_abs_diff(fd_sim.engine().phi(), sp_sim.engine().phi());
         let sample = |sim: &Simulation| Sample {

@@ -33,5 +33,20 @@ impl Error {
     }
 }
 
+impl Error {
+    /// The error with `what` (an engine or route name) in front of a blow-up's reason; other
+    /// errors unchanged.
+    pub fn within(self, what: &str) -> Self {
+        match self {
+            Error::Blowup { step, t, reason } => Error::Blowup {
+                step,
+                t,
+                reason: format!("{what}: {reason}"),
+            },
+            other => other,
+        }
+    }
+}
+
 /// Library result type.
 pub type Result<T> = std::result::Result<T, Error>;

@@ -167,17 +167,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
     match area_target {
         Err(e) => {
             simulation.run(&StopRules::steps(0), &mut [&mut recorder])?;
-            let end = Ending {
-                result: Err(e),
-                signal: None,
-            };
             finish(
                 &opts.out,
                 &problem.grid,
                 &simulation,
                 &resolved,
                 &recorder,
-                end,
+                (Err(e), None),
             )
         }
         Ok(_) => {
@@ -299,30 +295,22 @@ fn drive(
             &mut checkpoints,
         ],
     );
-    let end = Ending {
-        result,
-        signal: interrupts.received(),
-    };
-    finish(&opts.out, grid, &simulation, resolved, &recorder, end)
+    let ending = (result, interrupts.received());
+    finish(&opts.out, grid, &simulation, resolved, &recorder, ending)
 }
 
-/// How the step loop ended.
-struct Ending {
-    result: Result<Stopped>,
-    signal: Option<i32>,
-}
-
-/// Write the final outputs and turn the ending into the run's result.
+/// Write the final outputs and turn how the step loop ended (its result, and the signal that
+/// interrupted it) into the run's result.
 fn finish(
     out: &Path,
     grid: &Grid,
     simulation: &Simulation,
     resolved: &Scene,
     recorder: &Recorder,
-    end: Ending,
+    (result, signal): (Result<Stopped>, Option<i32>),
 ) -> Result<Outcome> {
     let last = *recorder.last().expect("the recorder keeps the last state");
-    let text = match &end.result {
+    let text = match &result {
         Ok(stopped) => stopped.as_str().to_string(),
         Err(e) => format!("blew up: {e}"),
     };
@@ -332,11 +320,11 @@ fn finish(
         history: &recorder.history,
     };
     write_final(out, grid, simulation.engine(), resolved, &summary)?;
-    end.result.map(|stopped| Outcome {
+    result.map(|stopped| Outcome {
         last,
         stopped,
         wall_seconds: last.wall_seconds,
-        signal: end.signal,
+        signal,
     })
 }
 

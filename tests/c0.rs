@@ -3,25 +3,12 @@
 //! spectral agree on a patch run as h².
 
 mod common;
-use common::{advance, relax, scene, simulation};
-use serde_json::{json, Value};
+use common::{fd_spectral_gap, relax, scene, simulation, with};
+use serde_json::json;
 use vesicle::engine::Engine;
+use vesicle::model::max_abs_diff as max_diff;
 use vesicle::setup;
 use vesicle::simulation::Simulation;
-
-fn max_diff(a: &ndarray::Array3<f64>, b: &ndarray::Array3<f64>) -> f64 {
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-}
-
-fn with(base: &Value, extra: Value) -> Value {
-    let mut v = base.clone();
-    v.as_object_mut()
-        .unwrap()
-        .extend(extra.as_object().unwrap().clone());
-    v
-}
 
 /// A sphere of radius `radius` (ε = 1, h = ε/2, eighth box with 6ε of bulk beyond the sphere)
 /// with uniform `c0`, relaxed to residual 1e-6 with V and A held (relaxational dynamics: the
@@ -155,25 +142,16 @@ fn fd_spectral_agree_on_a_cap_patch_as_h_squared() {
     let t_end = 0.02;
     let diff = |h: f64| {
         let n = [(20.0 / h).round() as usize, (16.0 / h).round() as usize];
-        let base = json!({
-            "dim": 2, "n": n, "h": h, "eps": 1.0, "t_end": t_end,
-            "initial": {"shape": "ellipsoid", "axes": [7.0, 5.0]},
-            "c0": {"kind": "cap", "inside": 0.6, "outside": -0.2, "angle": 50.0, "axis": "y",
-                   "width": 1.5},
-            "area": {"method": "none"}, "symmetry": ["x"]
-        });
-        let grid = vesicle::grid::Grid::new(&n, h, &[true, false]);
-        let fd_dt = 0.5 * vesicle::fd::stability_bound(&grid, 1.0, 0.0);
-        let fd = scene(with(&base, json!({"method": "fd", "dt": fd_dt})));
-        let sp = scene(with(
-            &base,
-            json!({"method": "spectral", "scheme": "sbdf2", "dt": 2e-4}),
-        ));
-        let (_, mut a) = simulation(&fd);
-        let (_, mut b) = simulation(&sp);
-        advance(&mut a, t_end);
-        advance(&mut b, t_end);
-        max_diff(a.engine().phi(), b.engine().phi())
+        fd_spectral_gap(
+            &json!({
+                "dim": 2, "n": n, "h": h, "eps": 1.0, "t_end": t_end,
+                "initial": {"shape": "ellipsoid", "axes": [7.0, 5.0]},
+                "c0": {"kind": "cap", "inside": 0.6, "outside": -0.2, "angle": 50.0, "axis": "y",
+                       "width": 1.5},
+                "area": {"method": "none"}, "symmetry": ["x"]
+            }),
+            t_end,
+        )
     };
     let d: Vec<f64> = [1.0, 0.5, 0.25].iter().map(|&h| diff(h)).collect();
     eprintln!(

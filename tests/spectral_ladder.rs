@@ -3,23 +3,10 @@
 //! symmetry-reduced boxes.
 
 mod common;
-use common::{advance, engine, log_slope, rel, scene, simulation};
+use common::{advance, engine, fd_spectral_gap, log_slope, rel, scene, simulation, with};
 use serde_json::{json, Value};
+use vesicle::model::max_abs_diff as max_diff;
 use vesicle::simulation::Simulation;
-
-fn max_diff(a: &ndarray::Array3<f64>, b: &ndarray::Array3<f64>) -> f64 {
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-}
-
-fn with(base: &Value, extra: Value) -> Value {
-    let mut v = base.clone();
-    v.as_object_mut()
-        .unwrap()
-        .extend(extra.as_object().unwrap().clone());
-    v
-}
 
 fn prolate3d() -> Value {
     json!({
@@ -79,23 +66,14 @@ fn fd_spectral_difference_falls_as_h_squared() {
     let t_end = 0.02;
     let diff = |h: f64| {
         let n = (24.0 / h).round() as usize;
-        let base = json!({
-            "dim": 2, "n": [n, n], "h": h, "eps": 1.0, "t_end": t_end,
-            "initial": {"shape": "ellipsoid", "axes": [7.0, 5.0]},
-            "c0": 0.3, "area": {"method": "none"}, "symmetry": ["x", "y"]
-        });
-        let grid = vesicle::grid::Grid::new(&[n, n], h, &[true, true]);
-        let fd_dt = 0.5 * vesicle::fd::stability_bound(&grid, 1.0, 0.0);
-        let fd = scene(with(&base, json!({"method": "fd", "dt": fd_dt})));
-        let sp = scene(with(
-            &base,
-            json!({"method": "spectral", "scheme": "sbdf2", "dt": 2e-4}),
-        ));
-        let (_, mut a) = simulation(&fd);
-        let (_, mut b) = simulation(&sp);
-        advance(&mut a, t_end);
-        advance(&mut b, t_end);
-        max_diff(a.engine().phi(), b.engine().phi())
+        fd_spectral_gap(
+            &json!({
+                "dim": 2, "n": [n, n], "h": h, "eps": 1.0, "t_end": t_end,
+                "initial": {"shape": "ellipsoid", "axes": [7.0, 5.0]},
+                "c0": 0.3, "area": {"method": "none"}, "symmetry": ["x", "y"]
+            }),
+            t_end,
+        )
     };
     let d: Vec<f64> = [1.0, 0.5, 0.25].iter().map(|&h| diff(h)).collect();
     eprintln!("max|φ_fd − φ_sp| at t = {t_end}: h = 1: {:.3e}, 1/2: {:.3e}, 1/4: {:.3e}; ratios {:.2}, {:.2}",

@@ -209,6 +209,7 @@ impl Evaluator {
         self.transform.forward(&self.work2, &mut state.nonlinear);
         self.transform.forward(&self.work, &mut self.spare);
         let explicit = self.explicit;
+        let with_residual = sigma.is_some();
         let tension = AREA_PREFACTOR * 2.0 * self.eps * sigma.unwrap_or(0.0);
         // 1/weight = (3/(2√2)) ε k² / area_weight, so w|μ̂|² = area_weight |μ̂|² / ((3/(2√2)) ε k²).
         let per_weight = AREA_PREFACTOR * self.eps;
@@ -221,7 +222,7 @@ impl Evaluator {
                 // ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂
                 ExplicitTerm::Gradient => gradient,
             };
-            if k > 0.0 {
+            if with_residual && k > 0.0 {
                 (gradient + h * (tension * k)).norm_sqr() * aw / (per_weight * k)
             } else {
                 0.0

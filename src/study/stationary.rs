@@ -16,7 +16,7 @@
 //! against wall time) and `residual.png` (energy error against residual).
 
 use crate::config::{AdaptiveSettings, AdaptiveSpec, AreaMethod, Dynamics, Method, Scene, Scheme};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::fd;
 use crate::output;
 use crate::run;
@@ -186,14 +186,8 @@ fn route(
         max_steps: Some(max_steps),
         t_end: None,
     };
-    sim.run(&rules, &mut [&mut probe]).map_err(|e| match e {
-        Error::Blowup { step, t, reason } => Error::Blowup {
-            step,
-            t,
-            reason: format!("{}: {reason}", kind.name),
-        },
-        other => other,
-    })?;
+    sim.run(&rules, &mut [&mut probe])
+        .map_err(|e| e.within(kind.name))?;
     let phi = sim.engine().phi().clone();
     let max_dphi = phi_star.map_or(0.0, |p| crate::model::max_abs_diff(&phi, p));
     Ok((
