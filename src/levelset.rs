@@ -50,6 +50,24 @@ pub fn measure(phi: &Array3<f64>, dim: usize, h: f64) -> LevelSet {
     }
 }
 
+/// [`measure`] made accurate enough for shape diagrams. The piecewise-linear surface of `phi`
+/// has two errors: a volume deficit of the flat facets, O((h/R)²), and an area excess of the
+/// facets' zigzag across a profile resolved by few points (h ≈ ε), which does not fall with R.
+/// So both are measured again on the band-limited interpolant at h/2
+/// ([`crate::upsample::double`]; `phi` must be a full periodic box), and
+///
+/// ```text
+/// A = A_{h/2},   V = (4 V_{h/2} − V_h)/3   (Richardson on the O(h²) deficit)
+/// ```
+///
+/// On the tanh profile of a sphere (ε = h) the reduced volume is off by 4e-4, 1e-4 and 2e-5 at
+/// R = 12h, 18h and 24h, against 3e-3 with [`measure`] (`tests/pictures.rs`).
+pub fn measure_refined(phi: &Array3<f64>, dim: usize, h: f64) -> LevelSet {
+    let coarse = measure(phi, dim, h);
+    let fine = measure(&crate::upsample::double(phi), dim, h / 2.0);
+    LevelSet::new(fine.area, (4.0 * fine.volume - coarse.volume) / 3.0, dim)
+}
+
 type P3 = [f64; 3];
 
 fn sub(a: P3, b: P3) -> P3 {

@@ -63,3 +63,4 @@ pub mod simulation;
 pub mod spectral;
 pub mod stencil;
 pub mod study;
+pub mod upsample;
