@@ -107,6 +107,13 @@ enum Command {
         after_help = "Example:\n  vesicle axisym --out out/axisym --v-min 0.5 --v-max 0.99 --dv 0.01"
     )]
     Axisym(crate::axisym::diagram::DiagramArgs),
+    /// Shape diagram from the phase-field model: every branch and reduced volume of FILE at
+    /// several ε/R0, relaxed by L-BFGS on its reduced box, extrapolated to ε/R0 → 0 and
+    /// compared with the axisymmetric reference (CSV, chart, thumbnails, transitions).
+    #[command(
+        after_help = "Examples:\n  vesicle diagram runs/diagram.json --out out/diagram\n  vesicle diagram runs/diagram.json --list\n  vesicle diagram runs/diagram.json --out out/diagram --case 7\n  vesicle diagram runs/diagram.json --out out/diagram --merge"
+    )]
+    Diagram(crate::diagram::DiagramArgs),
     /// Pictures of a finished run: DIR/frames/frame_<step>.png from its snapshots and final
     /// state (3D: shaded φ = 0 surface, plus surface_<step>.ply), and DIR/movie.gif.
     #[command(
@@ -358,6 +365,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Axisym(args) => {
             crate::axisym::diagram::run(&args)?;
+            Ok(0)
+        }
+        Command::Diagram(args) => {
+            crate::diagram::run(&args)?;
             Ok(0)
         }
         Command::Render {

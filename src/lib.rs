@@ -41,6 +41,8 @@ pub mod checkpoint;
 pub mod cli;
 pub mod compare;
 pub mod config;
+pub mod curves;
+pub mod diagram;
 pub mod engine;
 pub mod error;
 pub mod fd;

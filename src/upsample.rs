@@ -51,10 +51,8 @@ fn double_axis(field: &Array3<f64>, axis: usize) -> Array3<f64> {
         // Non-negative frequencies 0..⌈n/2⌉, negative ones −⌊n/2⌋+1..−1 (or to −n/2 if odd).
         let positive = n.div_ceil(2);
         y[..positive].copy_from_slice(&x[..positive]);
-        for k in positive..n {
-            y[n + k] = x[k];
-        }
-        if n % 2 == 0 {
+        y[n + positive..].copy_from_slice(&x[positive..]);
+        if n.is_multiple_of(2) {
             let nyquist = x[half] * 0.5;
             y[half] = nyquist;
             y[n + half] = nyquist;
@@ -80,7 +78,11 @@ mod tests {
             (TAU * x).cos() * (2.0 * TAU * y).sin() + (3.0 * TAU * z + 0.3).cos() + 0.5
         };
         let phi = Array3::from_shape_fn((nx, ny, nz), |(i, j, k)| {
-            f(i as f64 / nx as f64, j as f64 / ny as f64, k as f64 / nz as f64)
+            f(
+                i as f64 / nx as f64,
+                j as f64 / ny as f64,
+                k as f64 / nz as f64,
+            )
         });
         let fine = double(&phi);
         assert_eq!(fine.shape(), &[12, 16, 20]);
