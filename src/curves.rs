@@ -153,11 +153,10 @@ mod tests {
             .collect();
         let b: Vec<(f64, f64)> = (0..6)
             .map(|i| 0.52 + 0.06 * i as f64)
-            .map(|x| (x, 2.0 - (x - 0.6) * 0.5 + (x - 0.6).powi(2)))
+            .map(|x| (x, 1.7 - (x - 0.6) * 0.5 + (x - 0.6).powi(2)))
             .collect();
-        // 3 − 2x = 2 − 0.5(x − 0.6) + (x − 0.6)²  ⇔  u² + 1.5u + 0.2 − 1 + ... with u = x − 0.6:
-        // 1.8 − 2u = 2 − 0.5u + u²  ⇔  u² + 1.5u + 0.2 = 0  ⇒  u = (−1.5 + √1.45)/2.
-        let root = 0.6 + (-1.5 + 1.45f64.sqrt()) / 2.0;
+        // With u = x − 0.6: 1.8 − 2u = 1.7 − 0.5u + u²  ⇔  u² + 1.5u − 0.1 = 0.
+        let root = 0.6 + (-1.5 + 2.65f64.sqrt()) / 2.0;
         let found = crossings(&a, &b);
         assert_eq!(found.len(), 1, "{found:?}");
         assert!((found[0] - root).abs() < 1e-12, "{} vs {root}", found[0]);
