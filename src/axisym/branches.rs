@@ -380,56 +380,9 @@ pub fn branch_end(branch: Branch, opts: &Options) -> Option<f64> {
     follow(branch, &vs, opts).end
 }
 
-/// Reduced volumes where the energies of two branches cross. Both lists are matched at their
-/// common `v` (to 1e-9); at each sign change of `Δe = e_a − e_b` the cubic through the four
-/// nearest common points (fewer at the ends) is solved by bisection.
+/// Reduced volumes where the energies of two branches cross ([`crate::curves::crossings`] of
+/// their `(v, e)`: local cubics, bisection at each sign change on the shared range).
 pub fn crossings(a: &[Solution], b: &[Solution]) -> Vec<f64> {
-    let mut pts: Vec<(f64, f64)> = a
-        .iter()
-        .filter_map(|sa| {
-            b.iter()
-                .find(|sb| (sb.v - sa.v).abs() < 1e-9)
-                .map(|sb| (sa.v, sa.e - sb.e))
-        })
-        .collect();
-    pts.sort_by(|p, q| p.0.total_cmp(&q.0));
-    let mut roots = Vec::new();
-    for i in 0..pts.len().saturating_sub(1) {
-        let (d0, d1) = (pts[i].1, pts[i + 1].1);
-        if d0 == 0.0 {
-            roots.push(pts[i].0);
-            continue;
-        }
-        if d0 * d1 >= 0.0 {
-            continue;
-        }
-        let lo = i.saturating_sub(1);
-        let hi = (i + 3).min(pts.len());
-        let stencil = &pts[lo..hi];
-        let interp = |x: f64| {
-            stencil
-                .iter()
-                .enumerate()
-                .map(|(j, &(xj, yj))| {
-                    stencil
-                        .iter()
-                        .enumerate()
-                        .filter(|(m, _)| *m != j)
-                        .fold(yj, |acc, (_, &(xm, _))| acc * (x - xm) / (xj - xm))
-                })
-                .sum::<f64>()
-        };
-        let (mut x0, mut x1) = (pts[i].0, pts[i + 1].0);
-        let s0 = interp(x0).signum();
-        for _ in 0..60 {
-            let mid = 0.5 * (x0 + x1);
-            if interp(mid).signum() == s0 {
-                x0 = mid;
-            } else {
-                x1 = mid;
-            }
-        }
-        roots.push(0.5 * (x0 + x1));
-    }
-    roots
+    let points = |c: &[Solution]| c.iter().map(|s| (s.v, s.e)).collect::<Vec<_>>();
+    crate::curves::crossings(&points(a), &points(b))
 }
