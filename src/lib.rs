@@ -24,7 +24,11 @@
 //!   gif), [`levelset`] (sharp φ = 0 measures), [`compare`], [`study`] (stationary routes,
 //!   stability map, work–precision), [`render`] (frames and movie of a finished run), [`cli`];
 //! * [`axisym`]: the sharp-interface reference for the c0 = 0 shape diagram (Ritz method on
-//!   axisymmetric shapes, continuation along the prolate, oblate and stomatocyte branches).
+//!   axisymmetric shapes, continuation along the prolate, oblate and stomatocyte branches);
+//!   [`diagram`]: the same diagram from the phase field (independent cases on reduced boxes,
+//!   a sweep or a cluster array, merged and extrapolated in ε/R0), with [`curves`] (cubic
+//!   interpolation, crossings, power-law fits) and the refined φ = 0 measure of [`levelset`]
+//!   on the band-limited interpolant of [`upsample`].
 //!
 //! ```no_run
 //! use vesicle::simulation::{Simulation, StopRules};
