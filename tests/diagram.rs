@@ -14,6 +14,13 @@ fn vesicle(args: &[&str]) -> Output {
         .expect("run vesicle")
 }
 
+/// `vesicle diagram FILE --out OUT EXTRA…`.
+fn diagram(file: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["diagram", file, "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    vesicle(&args)
+}
+
 fn text(out: &Output) -> String {
     format!(
         "{}{}",
@@ -55,7 +62,7 @@ fn quick_diagram_single_process_and_merged_sweep_agree() {
     let tmp = TempDir::new().unwrap();
     let file = write_quick(tmp.path());
     let single = tmp.path().join("single");
-    let out = vesicle(&["diagram", &file, "--out", single.to_str().unwrap()]);
+    let out = diagram(&file, &single, &[]);
     assert!(out.status.success(), "{}", text(&out));
     let table = String::from_utf8_lossy(&out.stdout).to_string();
     assert!(table.contains("transition prolate/oblate"), "{table}");
@@ -66,23 +73,10 @@ fn quick_diagram_single_process_and_merged_sweep_agree() {
 
     let swept = tmp.path().join("swept");
     for k in 0..9 {
-        let out = vesicle(&[
-            "diagram",
-            &file,
-            "--out",
-            swept.to_str().unwrap(),
-            "--case",
-            &k.to_string(),
-        ]);
+        let out = diagram(&file, &swept, &["--case", &k.to_string()]);
         assert!(out.status.success(), "case {k}: {}", text(&out));
     }
-    let merged = vesicle(&[
-        "diagram",
-        &file,
-        "--out",
-        swept.to_str().unwrap(),
-        "--merge",
-    ]);
+    let merged = diagram(&file, &swept, &["--merge"]);
     assert!(merged.status.success(), "{}", text(&merged));
 
     for name in ["diagram.csv", "transitions.csv", "reference.csv"] {
@@ -128,26 +122,13 @@ fn quick_diagram_single_process_and_merged_sweep_agree() {
     assert!(check.status.success(), "{}", text(&check));
 
     // Merging again, or redoing a case, needs --force; nothing is overwritten silently.
-    let again = vesicle(&[
-        "diagram",
-        &file,
-        "--out",
-        swept.to_str().unwrap(),
-        "--merge",
-    ]);
+    let again = diagram(&file, &swept, &["--merge"]);
     assert_eq!(again.status.code(), Some(2), "{}", text(&again));
     assert!(text(&again).contains("--merge"));
-    let redo = vesicle(&[
-        "diagram",
-        &file,
-        "--out",
-        swept.to_str().unwrap(),
-        "--case",
-        "3",
-    ]);
+    let redo = diagram(&file, &swept, &["--case", "3"]);
     assert_eq!(redo.status.code(), Some(2));
     assert!(text(&redo).contains("--case"));
-    let rerun = vesicle(&["diagram", &file, "--out", single.to_str().unwrap()]);
+    let rerun = diagram(&file, &single, &[]);
     assert_eq!(rerun.status.code(), Some(2));
     assert!(text(&rerun).contains("--out"));
 }
@@ -159,16 +140,9 @@ fn merge_needs_every_case() {
     let tmp = TempDir::new().unwrap();
     let file = write_quick(tmp.path());
     let dir = tmp.path().join("partial");
-    let out = vesicle(&[
-        "diagram",
-        &file,
-        "--out",
-        dir.to_str().unwrap(),
-        "--case",
-        "0",
-    ]);
+    let out = diagram(&file, &dir, &["--case", "0"]);
     assert!(out.status.success(), "{}", text(&out));
-    let merged = vesicle(&["diagram", &file, "--out", dir.to_str().unwrap(), "--merge"]);
+    let merged = diagram(&file, &dir, &["--merge"]);
     assert_eq!(merged.status.code(), Some(2));
     let msg = text(&merged);
     assert!(
@@ -176,14 +150,7 @@ fn merge_needs_every_case() {
         "{msg}"
     );
     assert!(!dir.join("diagram.csv").exists());
-    let out = vesicle(&[
-        "diagram",
-        &file,
-        "--out",
-        dir.to_str().unwrap(),
-        "--case",
-        "9",
-    ]);
+    let out = diagram(&file, &dir, &["--case", "9"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out).contains("--case"));
 }
