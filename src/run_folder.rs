@@ -14,8 +14,6 @@ pub struct RunInfo {
     pub n: Vec<usize>,
     /// Grid spacing.
     pub h: f64,
-    /// Mirror axes of the computed box (names from `spec.symmetry`).
-    pub symmetry: Vec<String>,
     /// The last step (`"steps"`), if recorded.
     pub final_step: Option<usize>,
     /// The last time (`"final"."t"`), if recorded.
@@ -45,7 +43,7 @@ pub fn check_dir(dir: &Path) -> Result<()> {
     }
 }
 
-/// `dim`, `n`, `h`, `symmetry`, the final step and time from `DIR/summary.json` (`"spec"`,
+/// `dim`, `n`, `h`, the final step and time from `DIR/summary.json` (`"spec"`,
 /// `"steps"` and `"final"`).
 ///
 /// # Errors
@@ -84,19 +82,10 @@ pub fn run_info(dir: &Path) -> Result<RunInfo> {
         .ok_or_else(|| bad("spec.h"))?;
     let final_step = v["steps"].as_u64().map(|s| s as usize);
     let final_t = v["final"]["t"].as_f64();
-    let symmetry = spec["symmetry"]
-        .as_array()
-        .map(|a| {
-            a.iter()
-                .filter_map(|s| s.as_str().map(str::to_string))
-                .collect()
-        })
-        .unwrap_or_default();
     Ok(RunInfo {
         dim,
         n,
         h,
-        symmetry,
         final_step,
         final_t,
     })
