@@ -1,4 +1,5 @@
-//! Command-line interface: `vesicle run | resume | check | compare | study | axisym | render`.
+//! Command-line interface: `vesicle run | resume | check | compare | study | axisym | render |
+//! measure`.
 //!
 //! Exit codes: 0 success, 2 invalid input (the message names the field: a scene key, `n` for a
 //! grid whose estimated peak memory exceeds the memory available, `--out` for an output folder
@@ -135,6 +136,22 @@ enum Command {
         #[arg(long, value_name = "CS", default_value_t = 20)]
         delay: u16,
         /// Replace an existing DIR/frames.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Radius profile of a finished 3D run along an axis, for every snapshot and the final
+    /// state: neck radius (budding), dominant wavelength against the tube radius (pearling),
+    /// skewness (pears). Writes DIR/measure.csv and DIR/neck.png and prints a short table.
+    #[command(
+        after_help = "Example:\n  vesicle run runs/budding3d.json --out out/budding3d\n  vesicle measure out/budding3d --axis z"
+    )]
+    Measure {
+        /// Run folder (with summary.json, timeseries.csv and snapshots/phi_<step>.npy).
+        dir: PathBuf,
+        /// Axis of the profile: slices are normal to it.
+        #[arg(long, default_value = "z")]
+        axis: String,
+        /// Replace an existing DIR/measure.csv and DIR/neck.png.
         #[arg(long)]
         force: bool,
     },
@@ -393,6 +410,18 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
                 done.frames.len(),
                 dir.join("frames").display(),
                 gif.unwrap_or_default()
+            );
+            Ok(0)
+        }
+        Command::Measure { dir, axis, force } => {
+            let opts = crate::measure::MeasureOptions { axis, force };
+            let done = crate::measure::measure(&dir, &opts)?;
+            print!("{}", crate::measure::table(&done.rows, 12));
+            eprintln!(
+                "{} states -> {} and {}",
+                done.rows.len(),
+                done.csv.display(),
+                done.chart.display()
             );
             Ok(0)
         }

@@ -22,7 +22,9 @@
 //! * commands and output: [`run`] (a scene or a checkpoint wired to the driver and its
 //!   writers), [`output`] (npy, vti, png, the folder lock; the φ = 0 mesh, ply, shaded views,
 //!   gif), [`levelset`] (sharp φ = 0 measures), [`compare`], [`study`] (stationary routes,
-//!   stability map, work–precision), [`render`] (frames and movie of a finished run), [`cli`];
+//!   stability map, work–precision), [`run_folder`] (a finished run's folder as read back),
+//!   [`render`] (frames and movie of a finished run), [`measure`] (radius profile along an
+//!   axis: neck, pearl wavelength, skewness), [`cli`];
 //! * [`axisym`]: the sharp-interface reference for the c0 = 0 shape diagram (Ritz method on
 //!   axisymmetric shapes, continuation along the prolate, oblate and stomatocyte branches);
 //!   [`diagram`]: the same diagram from the phase field (independent cases on reduced boxes,
@@ -52,6 +54,7 @@ pub mod error;
 pub mod fd;
 pub mod grid;
 pub mod levelset;
+pub mod measure;
 pub mod memory;
 pub mod model;
 pub mod numerics;
@@ -62,6 +65,7 @@ pub mod relax;
 pub mod render;
 pub mod revolution;
 pub mod run;
+pub mod run_folder;
 pub mod setup;
 pub mod shapes;
 pub mod signals;

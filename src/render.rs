@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::output::animation::GifWriter;
 use crate::output::shade::{Bounds, View};
 use crate::output::{self, RgbImage};
-use serde_json::Value;
+use crate::run_folder::{self, RunInfo, State};
 use std::path::{Path, PathBuf};
 
 /// What `vesicle render` draws and writes.
@@ -62,20 +62,6 @@ pub fn axis_index(name: &str) -> Result<usize> {
         .ok_or_else(|| Error::config("--cut", format!("expected x, y or z, got `{name}`")))
 }
 
-/// The run's geometry as saved in `summary.json`.
-struct RunInfo {
-    dim: usize,
-    n: Vec<usize>,
-    h: f64,
-    final_step: Option<usize>,
-}
-
-/// One state to draw: its step and `.npy` file.
-struct State {
-    step: usize,
-    path: PathBuf,
-}
-
 /// Render the run in `dir` (see the module docs).
 ///
 /// # Errors
@@ -83,17 +69,12 @@ struct State {
 /// there are no snapshots, `every` is 0, or `DIR/frames` exists without `force`;
 /// `Error::Io`/`Error::Output` if reading or writing fails.
 pub fn render(dir: &Path, opts: &RenderOptions) -> Result<Rendered> {
-    if !dir.is_dir() {
-        return Err(Error::config(
-            "DIR",
-            format!("{} is not a run folder (it does not exist)", dir.display()),
-        ));
-    }
+    run_folder::check_dir(dir)?;
     if opts.every == 0 {
         return Err(Error::config("--every", "must be at least 1"));
     }
-    let info = run_info(dir)?;
-    let states = states(dir, &info, opts.every)?;
+    let info = run_folder::run_info(dir)?;
+    let states = run_folder::states(dir, &info, opts.every)?;
     let frames_dir = dir.join("frames");
     make_frames_dir(&frames_dir, opts.force)?;
     let name = dir
@@ -167,94 +148,6 @@ fn frame(
     );
     let bounds = Bounds::of_grid([info.n[0], info.n[1], info.n[2]], info.h);
     Ok(output::shade::render(&mesh, &bounds, view, &title)?)
-}
-
-/// `dim`, `n`, `h` and the final step from `DIR/summary.json` (`"spec"` and `"steps"`).
-fn run_info(dir: &Path) -> Result<RunInfo> {
-    let path = dir.join("summary.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        Error::config(
-            "DIR",
-            format!(
-                "cannot read {}: {e} (is this a run folder?)",
-                path.display()
-            ),
-        )
-    })?;
-    let bad = |what: &str| Error::config("DIR", format!("{}: no valid {what}", path.display()));
-    let v: Value = serde_json::from_str(&text).map_err(|_| bad("JSON"))?;
-    let spec = &v["spec"];
-    let dim = spec["dim"]
-        .as_u64()
-        .filter(|d| *d == 2 || *d == 3)
-        .ok_or_else(|| bad("spec.dim (2 or 3)"))? as usize;
-    let n: Vec<usize> = spec["n"]
-        .as_array()
-        .map(|a| {
-            a.iter()
-                .filter_map(|x| x.as_u64().map(|x| x as usize))
-                .collect()
-        })
-        .filter(|n: &Vec<usize>| n.len() == dim && n.iter().all(|&m| m > 0))
-        .ok_or_else(|| bad("spec.n"))?;
-    let h = spec["h"]
-        .as_f64()
-        .filter(|h| *h > 0.0)
-        .ok_or_else(|| bad("spec.h"))?;
-    let final_step = v["steps"].as_u64().map(|s| s as usize);
-    Ok(RunInfo {
-        dim,
-        n,
-        h,
-        final_step,
-    })
-}
-
-/// The states to draw in step order: every `every`-th snapshot from the first, then the
-/// final state unless a snapshot already has its step.
-fn states(dir: &Path, info: &RunInfo, every: usize) -> Result<Vec<State>> {
-    let snap_dir = dir.join("snapshots");
-    let none = || {
-        Error::config(
-            "DIR",
-            format!(
-                "no snapshots {}/phi_<step>.npy: run with --set output.snapshot_every=K",
-                snap_dir.display()
-            ),
-        )
-    };
-    let entries = std::fs::read_dir(&snap_dir).map_err(|_| none())?;
-    let mut snaps: Vec<State> = entries
-        .filter_map(|e| e.ok())
-        .filter_map(|e| {
-            let name = e.file_name().to_string_lossy().to_string();
-            let step = name
-                .strip_prefix("phi_")?
-                .strip_suffix(".npy")?
-                .parse()
-                .ok()?;
-            Some(State {
-                step,
-                path: e.path(),
-            })
-        })
-        .collect();
-    if snaps.is_empty() {
-        return Err(none());
-    }
-    snaps.sort_by_key(|s| s.step);
-    let mut chosen: Vec<State> = snaps.into_iter().step_by(every).collect();
-    let final_path = dir.join("phi_final.npy");
-    if let Some(step) = info.final_step.filter(|_| final_path.is_file()) {
-        if chosen.iter().all(|s| s.step != step) {
-            chosen.push(State {
-                step,
-                path: final_path,
-            });
-            chosen.sort_by_key(|s| s.step);
-        }
-    }
-    Ok(chosen)
 }
 
 /// Create `frames`, refusing an existing one unless `force` (then it is replaced).
