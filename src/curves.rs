@@ -21,15 +21,24 @@ pub fn cubic_at(pts: &[(f64, f64)], x: f64) -> f64 {
         .sum()
 }
 
-/// Where the curves through `a` and `b` (each sorted by `x`, two or more points) cross on the
-/// `x` range they share: the sign changes of `cubic_at(a) − cubic_at(b)` at the points of
-/// both curves, each refined by bisection to round-off.
+/// Where the curves through `a` and `b` (each sorted by `x`, two or more points) cross: the
+/// sign changes of `cubic_at(a) − cubic_at(b)` at the points of both curves, each refined by
+/// bisection to round-off. The range searched is the one both curves cover, widened at each
+/// end by half the spacing of the nearer end points of the curve that ends there (a crossing
+/// just beyond the last point of one curve is found from its end cubic).
 pub fn crossings(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<f64> {
     if a.len() < 2 || b.len() < 2 {
         return Vec::new();
     }
-    let lo = a[0].0.max(b[0].0);
-    let hi = a[a.len() - 1].0.min(b[b.len() - 1].0);
+    let start = |c: &[(f64, f64)]| c[0].0 - 0.5 * (c[1].0 - c[0].0);
+    let end = |c: &[(f64, f64)]| {
+        let n = c.len();
+        c[n - 1].0 + 0.5 * (c[n - 1].0 - c[n - 2].0)
+    };
+    let lo = start(a).max(start(b)).max(a[0].0.min(b[0].0));
+    let hi = end(a)
+        .min(end(b))
+        .min(a[a.len() - 1].0.max(b[b.len() - 1].0));
     let mut xs: Vec<f64> = a
         .iter()
         .chain(b)

@@ -1,33 +1,45 @@
-//! From the cases of a diagram to its best estimates, at the target reduced volumes.
-//!
-//! At finite ε the φ = 0 surface relaxes to another reduced volume than the sharp start's
-//! (by about 0.01 at R0 = 24ε), so the energies of one point at different resolutions are at
-//! different v. They are first brought to the target v₀ along their own resolution's branch:
-//! `e_k(v₀)` is the cubic through the four nearest points of resolution k on that branch
-//! ([`crate::curves::cubic_at`]). Then, with x = ε/R0,
+//! From the cases of a diagram to its best estimates. Each point `(branch, v₀)` computed at
+//! several x = ε/R0 is extrapolated to x → 0 in both of its coordinates,
 //!
 //! ```text
-//! e_k(v₀) = e∞(v₀) + c xₖ^p,
+//! v(x) = v∞ + c_v x^{p_v},   e(x) = e∞ + c_e x^{p_e},
 //! ```
 //!
-//! the order p shared by every point of the diagram fitted by least squares
-//! ([`crate::curves::common_order`]) and `e∞`, `c` per point ([`crate::curves::power_fit`]).
+//! with the orders `p_v`, `p_e` shared by all points and fitted by least squares
+//! ([`crate::curves::common_order`]), and `v∞`, `e∞` by a least-squares fit per point at those
+//! orders ([`crate::curves::power_fit`]). Both coordinates move: at finite ε the φ = 0 surface
+//! relaxes to another reduced volume than the sharp start's (by about 0.01 at R0 = 24ε), so
+//! the pair `(v(x), e(x))` slides along the branch as it converges, and `(v∞, e∞)` is the
+//! point's sharp-interface estimate.
+//!
+//! **Pre-asymptotic resolutions are left out.** Where two sheets of the membrane come within a
+//! few ε of each other (an oblate's centre near v = 0.59 is 0.22 R0 thick: 5.4ε at R0 = 24ε)
+//! their profiles merge and e jumps by several percent instead of converging. A resolution
+//! whose e differs from the next finer one's by more than [`JUMP`] is dropped (with every
+//! coarser one); the point is then fitted from the rest at the shared orders.
 
 use super::case::CaseResult;
-use crate::curves::{common_order, cubic_at, power_fit};
+use crate::curves::{common_order, power_fit};
+
+/// Largest relative change of e from one resolution to the next finer one that counts as
+/// convergence (consecutive resolutions of the committed diagram differ by at most 1.4%
+/// elsewhere).
+pub const JUMP: f64 = 0.02;
 
 /// One point of the diagram: a branch at a target reduced volume, at every resolution.
 #[derive(Clone, Debug)]
 pub struct Point {
     /// Branch name.
     pub branch: String,
-    /// Target reduced volume v₀.
-    pub v: f64,
-    /// The cases, in increasing R0/ε.
+    /// Target reduced volume v₀ (the sharp start's).
+    pub v_target: f64,
+    /// The cases used in the fit, in increasing R0/ε.
     pub cases: Vec<CaseResult>,
-    /// `e_k(v₀)` of each case (same order).
-    pub e_at_target: Vec<f64>,
-    /// Extrapolated reduced energy `e∞(v₀)`.
+    /// Coarser cases left out as pre-asymptotic.
+    pub dropped: Vec<CaseResult>,
+    /// Extrapolated reduced volume `v∞`.
+    pub v: f64,
+    /// Extrapolated reduced energy `e∞`.
     pub e: f64,
 }
 
@@ -36,58 +48,81 @@ impl Point {
     pub fn finest(&self) -> &CaseResult {
         self.cases.last().expect("a point has cases")
     }
+
+    /// `(ε/R0, quantity)` of the cases used.
+    fn series(&self, get: fn(&CaseResult) -> f64) -> (Vec<f64>, Vec<f64>) {
+        (
+            self.cases.iter().map(|c| 1.0 / c.r0).collect(),
+            self.cases.iter().map(get).collect(),
+        )
+    }
 }
 
-/// The energy of `case` brought to its target v along the branch of its resolution in
-/// `results` (the cubic through the nearest four of that branch's `(v, e)`).
-fn at_target(case: &CaseResult, results: &[CaseResult]) -> f64 {
-    let mut branch: Vec<(f64, f64)> = results
-        .iter()
-        .filter(|r| r.branch == case.branch && r.r0 == case.r0)
-        .map(|r| (r.v, r.e))
-        .collect();
-    branch.sort_by(|a, b| a.0.total_cmp(&b.0));
-    cubic_at(&branch, case.v_target)
+/// The fitted orders.
+#[derive(Clone, Copy, Debug)]
+pub struct Orders {
+    /// Order of the φ = 0 reduced volume in ε/R0.
+    pub v: f64,
+    /// Order of the reduced energy in ε/R0.
+    pub e: f64,
 }
 
-/// Group `results` into points (branch and target v; cases in increasing R0), bring each
-/// case to its target v and extrapolate: the points and the fitted order p. `None` if the
-/// order cannot be fitted (fewer than three resolutions).
-pub fn extrapolate(results: &[CaseResult]) -> Option<(Vec<Point>, f64)> {
-    let mut points: Vec<Point> = Vec::new();
+/// Split `cases` (increasing R0) into the pre-asymptotic coarsest ones and the rest.
+fn split(mut cases: Vec<CaseResult>) -> (Vec<CaseResult>, Vec<CaseResult>) {
+    let mut dropped = Vec::new();
+    while cases.len() >= 2 && (cases[0].e / cases[1].e - 1.0).abs() > JUMP {
+        dropped.push(cases.remove(0));
+    }
+    (dropped, cases)
+}
+
+/// Group `results` into points (branch and target v; cases in increasing R0), leave out the
+/// pre-asymptotic resolutions and extrapolate. `None` if the orders cannot be fitted (no point
+/// keeps three resolutions).
+pub fn extrapolate(results: &[CaseResult]) -> Option<(Vec<Point>, Orders)> {
+    let mut groups: Vec<(String, f64, Vec<CaseResult>)> = Vec::new();
     for r in results {
-        let e = at_target(r, results);
-        match points
+        match groups
             .iter_mut()
-            .find(|p| p.branch == r.branch && p.v == r.v_target)
+            .find(|g| g.0 == r.branch && g.1 == r.v_target)
         {
-            Some(p) => {
-                p.cases.push(r.clone());
-                p.e_at_target.push(e);
-            }
-            None => points.push(Point {
-                branch: r.branch.clone(),
-                v: r.v_target,
-                cases: vec![r.clone()],
-                e_at_target: vec![e],
-                e: f64::NAN,
-            }),
+            Some(g) => g.2.push(r.clone()),
+            None => groups.push((r.branch.clone(), r.v_target, vec![r.clone()])),
         }
     }
-    for p in &mut points {
-        let mut order: Vec<usize> = (0..p.cases.len()).collect();
-        order.sort_by(|&a, &b| p.cases[a].r0.total_cmp(&p.cases[b].r0));
-        p.cases = order.iter().map(|&k| p.cases[k].clone()).collect();
-        p.e_at_target = order.iter().map(|&k| p.e_at_target[k]).collect();
-    }
-    let x = |p: &Point| p.cases.iter().map(|c| 1.0 / c.r0).collect::<Vec<f64>>();
-    let series: Vec<(Vec<f64>, Vec<f64>)> = points
-        .iter()
-        .map(|p| (x(p), p.e_at_target.clone()))
+    let mut points: Vec<Point> = groups
+        .into_iter()
+        .map(|(branch, v_target, mut cases)| {
+            cases.sort_by(|a, b| a.r0.total_cmp(&b.r0));
+            let (dropped, cases) = split(cases);
+            Point {
+                branch,
+                v_target,
+                cases,
+                dropped,
+                v: f64::NAN,
+                e: f64::NAN,
+            }
+        })
         .collect();
-    let order = common_order(&series)?;
+    let fitted = |get: fn(&CaseResult) -> f64| {
+        let series: Vec<_> = points.iter().map(|p| p.series(get)).collect();
+        common_order(&series)
+    };
+    let orders = Orders {
+        v: fitted(|c| c.v)?,
+        e: fitted(|c| c.e)?,
+    };
     for p in &mut points {
-        p.e = power_fit(order, &x(p), &p.e_at_target).0;
+        let at = |get: fn(&CaseResult) -> f64, order: f64| {
+            let (x, y) = p.series(get);
+            if x.len() < 2 {
+                y[0]
+            } else {
+                power_fit(order, &x, &y).0
+            }
+        };
+        (p.v, p.e) = (at(|c| c.v, orders.v), at(|c| c.e, orders.e));
     }
-    Some((points, order))
+    Some((points, orders))
 }

@@ -243,7 +243,7 @@ fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Result<
         .collect::<Result<_>>()?;
     report::check_complete(cases.len(), &found)?;
     let results: Vec<CaseResult> = found.into_iter().flatten().collect();
-    let Some((points, order)) = extrapolate::extrapolate(&results) else {
+    let Some((points, orders)) = extrapolate::extrapolate(&results) else {
         return Err(Error::config(
             "r0",
             "the orders in ε/R0 need three or more resolutions with distinct values",
@@ -271,7 +271,7 @@ fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Result<
         .filter(|p| p.exists())
         .collect();
     chart::write_montage(&out.join("thumbnails.png"), &thumbnails, 4)?;
-    let table = report::table(&points, &results, order, &reference);
+    let table = report::table(&points, &results, orders, &reference);
     crate::study::write_text(out, "table.txt", &table)?;
     print!("{table}");
     println!("-> {}", out.display());

@@ -4,7 +4,7 @@
 //! table against the reference.
 
 use super::case::CaseResult;
-use super::extrapolate::Point;
+use super::extrapolate::{Orders, Point};
 use super::reference::{Reference, TRANSITIONS};
 use super::spec::branch_named;
 use crate::axisym::Branch;
@@ -72,29 +72,21 @@ pub fn write_csv(
     results: &[CaseResult],
     reference: &Reference,
 ) -> Result<()> {
-    let resolutions: Vec<String> = points
-        .first()
-        .map(|p| {
-            p.cases
-                .iter()
-                .map(|c| format!(",e_at_v_r{}", c.r0))
-                .collect()
-        })
-        .unwrap_or_default();
-    let mut s = format!(
-        "branch,v,e,e_reference,error,r0_finest,v_finest,e_finest,e_reference_finest,\
-         error_finest,v_diffuse_finest,sigma_finest{}\n",
-        resolutions.concat()
+    let mut s = String::from(
+        "branch,v,e,v_target,e_reference,error,r0_finest,v_finest,e_finest,e_reference_finest,\
+         error_finest,v_diffuse_finest,sigma_finest,resolutions_used\n",
     );
     for p in points {
         let f = p.finest();
         let b = branch_named(&p.branch).expect("listed");
-        let _ = write!(
+        let used: Vec<String> = p.cases.iter().map(|c| c.r0.to_string()).collect();
+        let _ = writeln!(
             s,
-            "{},{},{:.6},{:.6},{:.3e},{},{:.6},{:.6},{:.6},{:.3e},{:.6},{:.6e}",
+            "{},{:.6},{:.6},{},{:.6},{:.3e},{},{:.6},{:.6},{:.6},{:.3e},{:.6},{:.6e},{}",
             p.branch,
             p.v,
             p.e,
+            p.v_target,
             reference.e(b, p.v),
             error(reference, &p.branch, p.v, p.e),
             f.r0,
@@ -103,12 +95,9 @@ pub fn write_csv(
             reference.e(b, f.v),
             error(reference, &p.branch, f.v, f.e),
             f.v_diffuse,
-            f.sigma
+            f.sigma,
+            used.join(" ")
         );
-        for e in &p.e_at_target {
-            let _ = write!(s, ",{e:.6}");
-        }
-        s.push('\n');
     }
     write(out, "diagram.csv", &s)?;
 
@@ -163,14 +152,14 @@ pub fn write_csv(
 pub fn table(
     points: &[Point],
     results: &[CaseResult],
-    order: f64,
+    orders: Orders,
     reference: &Reference,
 ) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<12} {:>6} | {:>5} {:>8} {:>8} {:>8} | {:>8} {:>8}",
-        "branch", "v0", "R0/ε", "v", "e", "error", "e∞(v0)", "error"
+        "{:<12} {:>6} | {:>5} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8}",
+        "branch", "v0", "R0/ε", "v", "e", "error", "v∞", "e∞", "error"
     );
     let (mut worst_raw, mut worst_ext) = ((0.0f64, String::new()), (0.0f64, String::new()));
     for p in points {
@@ -181,17 +170,18 @@ pub fn table(
         );
         let _ = writeln!(
             s,
-            "{:<12} {:>6.3} | {:>5} {:>8.5} {:>8.5} {:>+7.3}% | {:>8.5} {:>+7.3}%",
+            "{:<12} {:>6.3} | {:>5} {:>8.5} {:>8.5} {:>+7.3}% | {:>8.5} {:>8.5} {:>+7.3}%",
             p.branch,
-            p.v,
+            p.v_target,
             f.r0,
             f.v,
             f.e,
             100.0 * er,
+            p.v,
             p.e,
             100.0 * ee
         );
-        let at = format!("{} v0 = {}", p.branch, p.v);
+        let at = format!("{} v0 = {}", p.branch, p.v_target);
         if er.abs() > worst_raw.0 {
             worst_raw = (er.abs(), at.clone());
         }
@@ -201,8 +191,20 @@ pub fn table(
     }
     let _ = writeln!(
         s,
-        "order of the phase-field error in ε/R0 (least squares over all points): {order:.2}"
+        "orders in ε/R0 (least squares over all points): v {:.2}, e {:.2}",
+        orders.v, orders.e
     );
+    for p in points.iter().filter(|p| !p.dropped.is_empty()) {
+        let r0: Vec<String> = p.dropped.iter().map(|c| c.r0.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "{} v0 = {}: R0/ε = {} left out (e jumps by more than {}% to the next resolution)",
+            p.branch,
+            p.v_target,
+            r0.join(", "),
+            100.0 * super::extrapolate::JUMP
+        );
+    }
     let _ = writeln!(
         s,
         "worst |error|: finest resolution {:.3}% ({}), extrapolated {:.3}% ({})",
