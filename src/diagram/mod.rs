@@ -265,6 +265,7 @@ fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Result<
         &report::branch_points(&points, |p| (p.finest().v, p.finest().e)),
         &transitions,
     )?;
+    report::write_error_chart(out, &points, &reference)?;
     let thumbnails: Vec<PathBuf> = cases
         .iter()
         .map(|c| out.join("cases").join(c.folder()).join("thumbnail.png"))

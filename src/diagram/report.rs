@@ -232,11 +232,46 @@ pub fn table(
     let wall: f64 = results.iter().map(|r| r.wall_seconds).sum();
     let _ = writeln!(
         s,
-        "{} cases, {:.0} s of computing in all (one thread each)",
+        "{} cases; their wall times (one thread each) add up to {:.0} s",
         results.len(),
         wall
     );
     s
+}
+
+/// `errors.png`: the relative error `e / e_ref(v) − 1` in percent against v, per branch, of the
+/// finest resolution's raw points and of the extrapolated ones.
+///
+/// # Errors
+/// `Error::Output` if drawing or writing fails.
+pub fn write_error_chart(out: &Path, points: &[Point], reference: &Reference) -> Result<()> {
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for b in Branch::ALL {
+        let mine: Vec<&Point> = points.iter().filter(|p| p.branch == b.name()).collect();
+        let pct = |v: f64, e: f64| 100.0 * (e / reference.e(b, v) - 1.0);
+        series.push((
+            format!("{}, finest ε/R0 (raw)", b.name()),
+            mine.iter()
+                .map(|p| (p.finest().v, pct(p.finest().v, p.finest().e)))
+                .collect(),
+        ));
+        series.push((
+            format!("{}, extrapolated ε/R0 → 0", b.name()),
+            mine.iter().map(|p| (p.v, pct(p.v, p.e))).collect(),
+        ));
+    }
+    let named: Vec<(&str, Vec<(f64, f64)>)> = series
+        .iter()
+        .map(|(n, p)| (n.as_str(), p.clone()))
+        .collect();
+    crate::output::chart::write_timeseries_png(
+        &out.join("errors.png"),
+        &named,
+        "reduced volume v",
+        "e / e_reference(v) − 1  [%]",
+        false,
+    )?;
+    Ok(())
 }
 
 /// Check that `results` cover `expected` cases.
