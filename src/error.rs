@@ -6,8 +6,8 @@ use std::path::PathBuf;
 /// Everything that can go wrong in the library.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// A scene field is invalid: `field` is its dotted key.
-    #[error("invalid scene: `{field}`: {reason}")]
+    /// Invalid input: `field` is the dotted key of a scene or diagram file, or a flag.
+    #[error("invalid input: `{field}`: {reason}")]
     Config { field: String, reason: String },
     /// The run diverged or broke a constraint at step `step`, time `t`.
     #[error("run stopped at step {step}, t = {t:.6e}: {reason}")]

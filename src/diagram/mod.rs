@@ -85,15 +85,16 @@ pub fn run(args: &DiagramArgs) -> Result<()> {
             ));
         }
         let shape = start_shape(case)?;
-        let r = run_case(&spec, case, &shape, &dir)?;
+        let r = run_case(&spec, case, &shape, &dir)
+            .map_err(|e| e.within(&format!("diagram case {k} ({})", case.folder())))?;
         eprintln!("{}", line(&r, 1, 1));
         return Ok(());
     }
     if args.merge {
-        return merge(&spec, &cases, &out, args.force);
+        return merge(&cases, &out, args.force);
     }
     sweep(&spec, &cases, &out, args)?;
-    merge(&spec, &cases, &out, true)
+    merge(&cases, &out, true)
 }
 
 /// The sharp start of `case`.
@@ -200,7 +201,9 @@ fn sweep(spec: &DiagramSpec, cases: &[Case], out: &Path, args: &DiagramArgs) -> 
         while let Some(&(k, _)) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
             let c = &cases[k];
             let dir = out.join("cases").join(c.folder());
-            let r = single.install(|| run_case(spec, c, &shapes[k], &dir))?;
+            let r = single
+                .install(|| run_case(spec, c, &shapes[k], &dir))
+                .map_err(|e| e.within(&format!("diagram case {k} ({})", c.folder())))?;
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             let elapsed = start.elapsed().as_secs_f64();
             let eta = elapsed / n as f64 * (cases.len() - n) as f64;
@@ -227,7 +230,7 @@ fn sweep(spec: &DiagramSpec, cases: &[Case], out: &Path, args: &DiagramArgs) -> 
 }
 
 /// Collect the case results of `out/cases/` into the merged files.
-fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Result<()> {
+fn merge(cases: &[Case], out: &Path, force: bool) -> Result<()> {
     if out.join("diagram.csv").exists() && !force {
         return Err(Error::config(
             "--merge",
@@ -276,6 +279,5 @@ fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Result<
     crate::study::write_text(out, "table.txt", &table)?;
     print!("{table}");
     println!("-> {}", out.display());
-    let _ = spec;
     Ok(())
 }
