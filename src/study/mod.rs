@@ -1,5 +1,6 @@
 //! `vesicle study …`: measurements that compare methods in one run and print ratios.
 
+pub mod fit;
 pub mod precision;
 pub mod stability;
 pub mod stationary;
