@@ -142,8 +142,35 @@ enum Command {
     },
 }
 
+/// A study file and how to run it.
+#[derive(clap::Args, Debug)]
+struct StudyArgs {
+    /// Study file, JSON (runs/studies/*.json).
+    file: PathBuf,
+    /// The quick variant (the file's "quick" block; under a minute).
+    #[arg(long)]
+    quick: bool,
+    #[command(flatten)]
+    output: OutArgs,
+}
+
+impl StudyArgs {
+    /// The output folder: `--out`, or `out/<file stem>[-quick]`.
+    fn folder(&self) -> PathBuf {
+        self.output
+            .folder(&self.file, if self.quick { "-quick" } else { "" })
+    }
+}
+
 #[derive(Subcommand, Debug)]
 enum Study {
+    /// Observed orders in Δt (SBDF1, SBDF2; prepared and raw starts), in h (FD h², spectral
+    /// exponential) and in ε/R0 (prolate, oblate, sphere control, with extrapolated limits),
+    /// each from a least-squares fit.
+    #[command(
+        after_help = "Examples:\n  vesicle study convergence runs/studies/convergence.json --out out/convergence\n  vesicle study convergence runs/studies/convergence.json --quick"
+    )]
+    Convergence(StudyArgs),
     /// What `stop_residual` buys per engine: L-BFGS (the reference), conserved SBDF1 and SBDF2
     /// with adaptive steps, each run to residual 1e-8; steps, wall time and energy error at
     /// every tolerance from 1e-4 to 1e-8, and FD at its bound (extrapolated).
@@ -354,6 +381,22 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
                     dt_max,
                 )
             })?;
+            Ok(0)
+        }
+        Command::Study(Study::Convergence(args)) => {
+            if !args.file.exists() {
+                return Err(Error::config(
+                    "(study file)",
+                    format!("{} does not exist", args.file.display()),
+                ));
+            }
+            let out = args.folder();
+            crate::study::convergence::convergence(
+                &args.file,
+                args.quick,
+                &out,
+                args.output.force,
+            )?;
             Ok(0)
         }
         Command::Axisym(args) => {

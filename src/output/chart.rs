@@ -130,9 +130,24 @@ pub fn colour(i: usize) -> [u8; 3] {
     P[i % P.len()]
 }
 
+/// Where the legend goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Corner {
+    /// Upper left.
+    UpperLeft,
+    /// Upper right.
+    UpperRight,
+    /// Lower left.
+    LowerLeft,
+    /// Lower right.
+    LowerRight,
+}
+
 /// A chart: title, axes, series.
 #[derive(Clone, Debug)]
 pub struct Figure {
+    /// Legend position (upper left by default).
+    pub legend: Corner,
     /// Title drawn above the plot.
     pub title: String,
     /// Horizontal axis.
@@ -147,6 +162,7 @@ impl Figure {
     /// An empty figure.
     pub fn new(title: impl Into<String>, x: Axis, y: Axis) -> Self {
         Figure {
+            legend: Corner::UpperLeft,
             title: title.into(),
             x,
             y,
@@ -264,8 +280,9 @@ impl Figure {
             .y_desc(self.y.label.as_str())
             .axis_desc_style((FONT_FAMILY, 18))
             .label_style((FONT_FAMILY, 14))
-            .x_labels(40)
-            .y_labels(40)
+            .x_labels(labels(self.x.scale))
+            .y_labels(labels(self.y.scale))
+            .max_light_lines(0)
             .x_label_formatter(&xf)
             .y_label_formatter(&yf)
             .light_line_style(RGBColor(235, 235, 235))
@@ -311,7 +328,12 @@ impl Figure {
         if listed {
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
+                .position(match self.legend {
+                    Corner::UpperLeft => SeriesLabelPosition::UpperLeft,
+                    Corner::UpperRight => SeriesLabelPosition::UpperRight,
+                    Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
+                    Corner::LowerRight => SeriesLabelPosition::LowerRight,
+                })
                 .label_font((FONT_FAMILY, 14))
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
@@ -364,6 +386,15 @@ where
     Ok(())
 }
 
+/// How many ticks to ask for: enough on a log axis for the minor ticks 2…9 of each decade, a
+/// readable number on a linear one.
+fn labels(scale: Scale) -> usize {
+    match scale {
+        Scale::Log => 40,
+        Scale::Linear => 10,
+    }
+}
+
 /// Tick labels: on a log axis `1e-5` at decades and nothing between (the minor ticks); on a
 /// linear axis the shortest of fixed and exponent notation.
 fn tick_label(scale: Scale) -> impl Fn(&f64) -> String {
@@ -397,9 +428,11 @@ fn axis_range(values: impl Iterator<Item = f64>, scale: Scale) -> Range<f64> {
     match scale {
         Scale::Log if lo > hi => 0.1..1.0,
         Scale::Log => {
-            let a = lo.log10().floor();
-            let b = hi.log10().ceil().max(a + 1.0);
-            10f64.powf(a)..10f64.powf(b)
+            // Rounded so that a value on a decade stays inside, then nudged outward so that the
+            // end decades survive the axis' own rounding and get their ticks.
+            let a = (lo.log10() + 1e-9).floor();
+            let b = (hi.log10() - 1e-9).ceil().max(a + 1.0);
+            10f64.powf(a) * (1.0 - 1e-9)..10f64.powf(b) * (1.0 + 1e-9)
         }
         Scale::Linear if lo > hi => 0.0..1.0,
         Scale::Linear if lo == hi => {
@@ -449,9 +482,10 @@ mod tests {
     #[test]
     fn log_ranges_are_whole_decades() {
         let r = axis_range([3e-5, 2e-2].into_iter(), Scale::Log);
-        assert!((r.start / 1e-5 - 1.0).abs() < 1e-12 && (r.end / 1e-1 - 1.0).abs() < 1e-12);
+        assert!((r.start / 1e-5 - 1.0).abs() < 1e-8 && (r.end / 1e-1 - 1.0).abs() < 1e-8);
+        assert!(r.start < 1e-5 && r.end > 1e-1);
         let r = axis_range([1e-3].into_iter(), Scale::Log);
-        assert!((r.start / 1e-3 - 1.0).abs() < 1e-12 && (r.end / 1e-2 - 1.0).abs() < 1e-12);
+        assert!((r.start / 1e-3 - 1.0).abs() < 1e-8 && (r.end / 1e-2 - 1.0).abs() < 1e-8);
     }
 
     /// Decades are labelled `1eK`, the minor ticks between them not at all.
