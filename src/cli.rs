@@ -155,6 +155,18 @@ struct StudyArgs {
 }
 
 impl StudyArgs {
+    /// Refuse a study file that does not exist.
+    fn exists(&self) -> Result<(), Error> {
+        if self.file.exists() {
+            Ok(())
+        } else {
+            Err(Error::config(
+                "(study file)",
+                format!("{} does not exist", self.file.display()),
+            ))
+        }
+    }
+
     /// The output folder: `--out`, or `out/<file stem>[-quick]`.
     fn folder(&self) -> PathBuf {
         self.output
@@ -194,26 +206,12 @@ enum Study {
         #[command(flatten)]
         output: OutArgs,
     },
-    /// Map where each time stepper fails: a sweep of fixed Δt for FD, spectral SBDF1 with and
-    /// without stabiliser, and SBDF2, with the FD bound on the chart.
+    /// The stability map: fixed Δt against h for FD, SBDF1 and SBDF2 (S = 0 and default S),
+    /// adaptive runs at several tolerances, the Lagrangian α against Δt; every run classified.
     #[command(
-        after_help = "Example:\n  vesicle study stability runs/stability2d.json --out out/stability --steps 200"
+        after_help = "Example:\n  vesicle study stability runs/studies/stability.json --out out/stability [--quick]"
     )]
-    Stability {
-        #[command(flatten)]
-        scene: SceneArgs,
-        #[command(flatten)]
-        output: OutArgs,
-        /// Fixed steps per run.
-        #[arg(long, default_value_t = 200)]
-        steps: usize,
-        /// Smallest Δt of the sweep.
-        #[arg(long, default_value_t = 1e-5)]
-        dt_min: f64,
-        /// Largest Δt of the sweep.
-        #[arg(long, default_value_t = 10.0)]
-        dt_max: f64,
-    },
+    Stability(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -356,40 +354,14 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             })?;
             Ok(0)
         }
-        Command::Study(Study::Stability {
-            scene: args,
-            output,
-            steps,
-            dt_min,
-            dt_max,
-        }) => {
-            let scene = load(&args)?;
-            if !(dt_min > 0.0 && dt_max > dt_min) || steps == 0 {
-                return Err(Error::config(
-                    "--dt-min",
-                    "need 0 < --dt-min < --dt-max and --steps ≥ 1",
-                ));
-            }
-            let out = output.folder(&args.scene, "-stability");
-            with_threads(&scene, || {
-                crate::study::stability::stability(
-                    &scene,
-                    &out,
-                    output.force,
-                    steps,
-                    dt_min,
-                    dt_max,
-                )
-            })?;
+        Command::Study(Study::Stability(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::study::stability::stability(&args.file, args.quick, &out, args.output.force)?;
             Ok(0)
         }
         Command::Study(Study::Convergence(args)) => {
-            if !args.file.exists() {
-                return Err(Error::config(
-                    "(study file)",
-                    format!("{} does not exist", args.file.display()),
-                ));
-            }
+            args.exists()?;
             let out = args.folder();
             crate::study::convergence::convergence(
                 &args.file,

@@ -64,6 +64,8 @@ pub enum Shape {
     Triangle,
     /// Cross (×).
     Cross,
+    /// Filled diamond.
+    Diamond,
 }
 
 /// How a series is drawn.
@@ -367,6 +369,9 @@ where
                 EmptyElement::at(p) + Polygon::new(vec![(0, -6), (-5, 4), (5, 4)], fill)
             }))?,
             Shape::Cross => chart.draw_series(at.map(|p| Cross::new(p, 5, c.stroke_width(2))))?,
+            Shape::Diamond => chart.draw_series(at.map(|p| {
+                EmptyElement::at(p) + Polygon::new(vec![(0, -6), (-5, 0), (0, 6), (5, 0)], fill)
+            }))?,
         };
     if let Some(name) = name {
         let anno = anno.label(name);
@@ -381,6 +386,12 @@ where
             Shape::Cross => {
                 anno.legend(move |(x, y)| Cross::new((x + 12, y), 5, c.stroke_width(2)))
             }
+            Shape::Diamond => anno.legend(move |(x, y)| {
+                Polygon::new(
+                    vec![(x + 12, y - 6), (x + 7, y), (x + 12, y + 6), (x + 17, y)],
+                    fill,
+                )
+            }),
         };
     }
     Ok(())

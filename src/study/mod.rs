@@ -1,5 +1,6 @@
 //! `vesicle study …`: measurements that compare methods in one run and print ratios.
 
+pub mod classify;
 pub mod convergence;
 pub mod file;
 pub mod fit;
