@@ -102,6 +102,13 @@ pub struct ShapeSpec {
     /// The branch's v (not for a sphere).
     #[serde(default)]
     pub reduced_volume: Option<f64>,
+    /// This shape's ε/R0 values, if not the sweep's.
+    #[serde(default)]
+    pub eps_over_r0: Option<Vec<f64>>,
+    /// Scene keys merged into the sweep's scene for this shape (e.g. no area constraint for
+    /// the sphere).
+    #[serde(default)]
+    pub scene: Option<Value>,
 }
 
 /// One measured point: `(part, series, x, error)` and what else was measured.
@@ -338,7 +345,7 @@ fn eps_part(spec: &EpsSpec, dir: &Path) -> Result<Vec<Row>> {
             None => "sphere".to_string(),
             Some(b) => format!("{} v = {v}", b.name()),
         };
-        for &x in &spec.eps_over_r0 {
+        for &x in shape.eps_over_r0.as_ref().unwrap_or(&spec.eps_over_r0) {
             let r0 = base.eps / x;
             let n_of = |half: f64| points(2.0 * (half * r0 + spec.margin * base.eps), base.h);
             let initial = match branch {
@@ -352,6 +359,7 @@ fn eps_part(spec: &EpsSpec, dir: &Path) -> Result<Vec<Row>> {
                 &[
                     json!({"initial": null}),
                     json!({"n": [n_of(across), n_of(across), n_of(along)], "initial": initial}),
+                    shape.scene.clone().unwrap_or(json!({})),
                 ],
                 field,
                 dir,
