@@ -98,7 +98,7 @@ enum Command {
     /// Studies that compare methods in one run and print ratios (tables, CSV, charts).
     #[command(
         subcommand,
-        after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/stability2d.json --out out/stability"
+        after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/studies/stability.json --out out/stability"
     )]
     Study(Study),
     /// Shape diagram at c0 = 0 from the axisymmetric (sharp-interface) reference solver:
@@ -195,17 +195,13 @@ enum Study {
         #[command(flatten)]
         output: OutArgs,
     },
-    /// Work against precision of the time steppers: FD, SBDF1 and SBDF2 over a ladder of Δt to
-    /// `t_end`, errors against a fine SBDF2 run, charted against wall time.
+    /// Speed against accuracy on the 3D prolate: stationary energy error and transient φ error
+    /// against wall time for FD, conserved SBDF1/SBDF2 (fixed and adaptive) and L-BFGS; Pareto
+    /// charts and the spectral/FD wall-time ratio at each error level.
     #[command(
-        after_help = "Example:\n  vesicle study precision runs/compare2d.json --out out/precision --set t_end=1"
+        after_help = "Example:\n  vesicle study precision runs/studies/precision.json --out out/precision [--quick]"
     )]
-    Precision {
-        #[command(flatten)]
-        scene: SceneArgs,
-        #[command(flatten)]
-        output: OutArgs,
-    },
+    Precision(StudyArgs),
     /// The stability map: fixed Δt against h for FD, SBDF1 and SBDF2 (S = 0 and default S),
     /// adaptive runs at several tolerances, the Lagrangian α against Δt; every run classified.
     #[command(
@@ -343,15 +339,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             })?;
             Ok(0)
         }
-        Command::Study(Study::Precision {
-            scene: args,
-            output,
-        }) => {
-            let scene = load(&args)?;
-            let out = output.folder(&args.scene, "-precision");
-            with_threads(&scene, || {
-                crate::study::precision::precision(&scene, &out, output.force)
-            })?;
+        Command::Study(Study::Precision(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::study::precision::precision(&args.file, args.quick, &out, args.output.force)?;
             Ok(0)
         }
         Command::Study(Study::Stability(args)) => {

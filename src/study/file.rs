@@ -70,7 +70,8 @@ pub fn load<T: DeserializeOwned>(path: &Path, name: &str, quick: bool) -> Result
             .map(|(key, _)| key.to_string());
         let field = match (unknown, path.as_str()) {
             (Some(key), ".") => key,
-            (Some(key), p) => format!("{p}.{key}"),
+            (Some(key), p) if !p.ends_with(&key) => format!("{p}.{key}"),
+            (Some(_), p) => p.to_string(),
             (None, ".") => "(top level)".to_string(),
             (None, p) => p.to_string(),
         };
