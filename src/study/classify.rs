@@ -81,7 +81,11 @@ impl Class {
 /// The class of a run with `steps` and, if a step failed, its `failure` message.
 pub fn classify(steps: &[StepSample], failure: Option<&str>, c: &Criteria) -> Class {
     let failed_constraint = failure.map(|f| f.contains("area") || f.contains("volume"));
-    if failed_constraint == Some(false) || steps.iter().any(|s| !(s.max_phi <= c.max_phi)) {
+    if failed_constraint == Some(false)
+        || steps
+            .iter()
+            .any(|s| s.max_phi.is_nan() || s.max_phi > c.max_phi)
+    {
         return Class::BlownUp;
     }
     if failed_constraint == Some(true) || steps.iter().any(|s| s.area_error > c.area) {

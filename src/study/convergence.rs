@@ -589,14 +589,11 @@ fn fits_csv(fits: &[Quoted]) -> String {
     s
 }
 
+/// A fitted law's legend text and its function.
+type Law = Option<(String, Box<dyn Fn(f64) -> f64>)>;
+
 /// A marker series for the points of `rs` and the fitted law drawn dashed over their x range.
-fn with_fit(
-    fig: &mut Figure,
-    i: usize,
-    name: &str,
-    pts: Vec<(f64, f64)>,
-    law: Option<(String, Box<dyn Fn(f64) -> f64>)>,
-) {
+fn with_fit(fig: &mut Figure, i: usize, name: &str, pts: Vec<(f64, f64)>, law: Law) {
     let shapes = [Shape::Circle, Shape::Square, Shape::Triangle, Shape::Cross];
     if let Some((label, f)) = law {
         let (lo, hi) = pts

@@ -209,7 +209,7 @@ fn stationary(
         max_steps: Some(spec.max_steps),
         t_end: None,
     };
-    let s = at(&[relax.clone()])?;
+    let s = at(std::slice::from_ref(&relax))?;
     let e_of = energy(&s);
     let reference = trace(&s, problem, &reference_rules, &|n: &Now| e_of(n))?;
     let e_star = reference.last().map_or(f64::NAN, |p| p.error);
@@ -447,10 +447,29 @@ fn table(configs: &[Config], spec: &Spec, notes: &str, wall: f64) -> String {
     s
 }
 
+/// The points of a trace worth a CSV row: each one whose error is at least 2% below the last
+/// row's, and the last (a trace has a row per step; this keeps its shape in a small file).
+fn thinned(points: &[Point]) -> Vec<Point> {
+    let finite: Vec<Point> = points
+        .iter()
+        .copied()
+        .filter(|p| p.error.is_finite())
+        .collect();
+    let mut last = f64::INFINITY;
+    let mut rows: Vec<Point> = Vec::new();
+    for (i, p) in finite.iter().enumerate() {
+        if p.error < 0.98 * last || i + 1 == finite.len() {
+            last = p.error;
+            rows.push(*p);
+        }
+    }
+    rows
+}
+
 fn csv(configs: &[Config]) -> String {
     let mut s = String::from("part,family,config,t,wall_seconds,error,residual\n");
     for c in configs {
-        for p in c.points.iter().filter(|p| p.error.is_finite()) {
+        for p in thinned(&c.points) {
             let _ = writeln!(
                 s,
                 "{},{},\"{}\",{},{},{},{}",
@@ -532,10 +551,9 @@ fn charts(out: &Path, configs: &[Config]) -> Result<()> {
         ];
         let mut all = Vec::new();
         for (i, c) in configs.iter().filter(|c| c.part == part).enumerate() {
-            let pts: Vec<(f64, f64)> = c
-                .points
+            let pts: Vec<(f64, f64)> = thinned(&c.points)
                 .iter()
-                .filter(|p| p.error.is_finite() && p.wall > 0.0)
+                .filter(|p| p.wall > 0.0)
                 .map(|p| (p.wall, p.error))
                 .collect();
             all.extend(pts.iter().copied());
@@ -546,9 +564,6 @@ fn charts(out: &Path, configs: &[Config]) -> Result<()> {
             } else {
                 Mark::Points(shapes[i % shapes.len()])
             };
-            // Long traces are thinned to 300 points for small files.
-            let stride = (pts.len() / 300).max(1);
-            let pts = pts.into_iter().step_by(stride).collect();
             fig.push(Series::new(c.name.clone(), pts, colour(i), mark));
         }
         fig.push(Series::new(

@@ -175,7 +175,7 @@ pub fn stability(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Ve
             "need 0 < dt_min < dt_max and per_decade > 0",
         ));
     }
-    if spec.h.is_empty() || spec.h.iter().any(|h| !(*h > 0.0)) {
+    if spec.h.is_empty() || spec.h.iter().any(|h| h.is_nan() || *h <= 0.0) {
         return Err(Error::config("h", "need at least one h > 0"));
     }
     run::check_out_dir(out, force)?;
