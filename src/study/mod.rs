@@ -1,4 +1,9 @@
 //! `vesicle study …`: measurements that compare methods in one run and print ratios.
+//!
+//! * [`convergence`], [`stability`], [`precision`]: studies run from a study file
+//!   (`runs/studies/*.json`, read by [`file`]), with a `--quick` variant; orders from the
+//!   least-squares fits of [`fit`], stability classes from [`classify`];
+//! * [`stationary`]: what each `stop_residual` buys per engine, on a scene file.
 
 pub mod classify;
 pub mod convergence;

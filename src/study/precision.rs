@@ -447,7 +447,7 @@ fn table(configs: &[Config], spec: &Spec, notes: &str, wall: f64) -> String {
     s
 }
 
-/// The points of a trace worth a CSV row: each one whose error is at least 2% below the last
+/// The points of a trace worth a CSV row: each one whose error is at least 10% below the last
 /// row's, and the last (a trace has a row per step; this keeps its shape in a small file).
 fn thinned(points: &[Point]) -> Vec<Point> {
     let finite: Vec<Point> = points
@@ -458,7 +458,7 @@ fn thinned(points: &[Point]) -> Vec<Point> {
     let mut last = f64::INFINITY;
     let mut rows: Vec<Point> = Vec::new();
     for (i, p) in finite.iter().enumerate() {
-        if p.error < 0.98 * last || i + 1 == finite.len() {
+        if p.error < 0.9 * last || i + 1 == finite.len() {
             last = p.error;
             rows.push(*p);
         }
@@ -541,7 +541,7 @@ fn charts(out: &Path, configs: &[Config]) -> Result<()> {
                 "max |phi - phi_ref|"
             }),
         );
-        fig.legend = Corner::LowerLeft;
+        fig.legend = Corner::LowerRight;
         let shapes = [
             Shape::Circle,
             Shape::Square,
@@ -570,7 +570,11 @@ fn charts(out: &Path, configs: &[Config]) -> Result<()> {
             "Pareto front",
             pareto(all),
             [0, 0, 0],
-            Mark::LinePoints(Shape::Cross),
+            if part == "stationary" {
+                Mark::Line
+            } else {
+                Mark::LinePoints(Shape::Cross)
+            },
         ));
         fig.write(&out.join(format!("precision_{part}")))?;
     }
