@@ -99,7 +99,7 @@ enum Command {
     /// Studies that compare methods in one run and print ratios (tables, CSV, charts).
     #[command(
         subcommand,
-        after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/stability2d.json --out out/stability"
+        after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/studies/stability.json --out out/stability"
     )]
     Study(Study),
     /// Shape diagram at c0 = 0 from the axisymmetric (sharp-interface) reference solver:
@@ -166,8 +166,47 @@ enum Command {
     },
 }
 
+/// A study file and how to run it.
+#[derive(clap::Args, Debug)]
+struct StudyArgs {
+    /// Study file, JSON (runs/studies/*.json).
+    file: PathBuf,
+    /// The quick variant (the file's "quick" block; under a minute).
+    #[arg(long)]
+    quick: bool,
+    #[command(flatten)]
+    output: OutArgs,
+}
+
+impl StudyArgs {
+    /// Refuse a study file that does not exist.
+    fn exists(&self) -> Result<(), Error> {
+        if self.file.exists() {
+            Ok(())
+        } else {
+            Err(Error::config(
+                "(study file)",
+                format!("{} does not exist", self.file.display()),
+            ))
+        }
+    }
+
+    /// The output folder: `--out`, or `out/<file stem>[-quick]`.
+    fn folder(&self) -> PathBuf {
+        self.output
+            .folder(&self.file, if self.quick { "-quick" } else { "" })
+    }
+}
+
 #[derive(Subcommand, Debug)]
 enum Study {
+    /// Observed orders in Δt (SBDF1, SBDF2; prepared and raw starts), in h (FD h², spectral
+    /// exponential) and in ε/R0 (prolate, oblate, sphere control, with extrapolated limits),
+    /// each from a least-squares fit.
+    #[command(
+        after_help = "Examples:\n  vesicle study convergence runs/studies/convergence.json --out out/convergence\n  vesicle study convergence runs/studies/convergence.json --quick"
+    )]
+    Convergence(StudyArgs),
     /// What `stop_residual` buys per engine: L-BFGS (the reference), conserved SBDF1 and SBDF2
     /// with adaptive steps, each run to residual 1e-8; steps, wall time and energy error at
     /// every tolerance from 1e-4 to 1e-8, and FD at its bound (extrapolated).
@@ -180,37 +219,19 @@ enum Study {
         #[command(flatten)]
         output: OutArgs,
     },
-    /// Work against precision of the time steppers: FD, SBDF1 and SBDF2 over a ladder of Δt to
-    /// `t_end`, errors against a fine SBDF2 run, charted against wall time.
+    /// Speed against accuracy on the 3D prolate: stationary energy error and transient φ error
+    /// against wall time for FD, conserved SBDF1/SBDF2 (fixed and adaptive) and L-BFGS; Pareto
+    /// charts and the spectral/FD wall-time ratio at each error level.
     #[command(
-        after_help = "Example:\n  vesicle study precision runs/compare2d.json --out out/precision --set t_end=1"
+        after_help = "Example:\n  vesicle study precision runs/studies/precision.json --out out/precision [--quick]"
     )]
-    Precision {
-        #[command(flatten)]
-        scene: SceneArgs,
-        #[command(flatten)]
-        output: OutArgs,
-    },
-    /// Map where each time stepper fails: a sweep of fixed Δt for FD, spectral SBDF1 with and
-    /// without stabiliser, and SBDF2, with the FD bound on the chart.
+    Precision(StudyArgs),
+    /// The stability map: fixed Δt against h for FD, SBDF1 and SBDF2 (S = 0 and default S),
+    /// adaptive runs at several tolerances, the Lagrangian α against Δt; every run classified.
     #[command(
-        after_help = "Example:\n  vesicle study stability runs/stability2d.json --out out/stability --steps 200"
+        after_help = "Example:\n  vesicle study stability runs/studies/stability.json --out out/stability [--quick]"
     )]
-    Stability {
-        #[command(flatten)]
-        scene: SceneArgs,
-        #[command(flatten)]
-        output: OutArgs,
-        /// Fixed steps per run.
-        #[arg(long, default_value_t = 200)]
-        steps: usize,
-        /// Smallest Δt of the sweep.
-        #[arg(long, default_value_t = 1e-5)]
-        dt_min: f64,
-        /// Largest Δt of the sweep.
-        #[arg(long, default_value_t = 10.0)]
-        dt_max: f64,
-    },
+    Stability(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -342,42 +363,27 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             })?;
             Ok(0)
         }
-        Command::Study(Study::Precision {
-            scene: args,
-            output,
-        }) => {
-            let scene = load(&args)?;
-            let out = output.folder(&args.scene, "-precision");
-            with_threads(&scene, || {
-                crate::study::precision::precision(&scene, &out, output.force)
-            })?;
+        Command::Study(Study::Precision(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::study::precision::precision(&args.file, args.quick, &out, args.output.force)?;
             Ok(0)
         }
-        Command::Study(Study::Stability {
-            scene: args,
-            output,
-            steps,
-            dt_min,
-            dt_max,
-        }) => {
-            let scene = load(&args)?;
-            if !(dt_min > 0.0 && dt_max > dt_min) || steps == 0 {
-                return Err(Error::config(
-                    "--dt-min",
-                    "need 0 < --dt-min < --dt-max and --steps ≥ 1",
-                ));
-            }
-            let out = output.folder(&args.scene, "-stability");
-            with_threads(&scene, || {
-                crate::study::stability::stability(
-                    &scene,
-                    &out,
-                    output.force,
-                    steps,
-                    dt_min,
-                    dt_max,
-                )
-            })?;
+        Command::Study(Study::Stability(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::study::stability::stability(&args.file, args.quick, &out, args.output.force)?;
+            Ok(0)
+        }
+        Command::Study(Study::Convergence(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::study::convergence::convergence(
+                &args.file,
+                args.quick,
+                &out,
+                args.output.force,
+            )?;
             Ok(0)
         }
         Command::Axisym(args) => {

@@ -22,9 +22,10 @@
 //! * commands and output: [`run`] (a scene or a checkpoint wired to the driver and its
 //!   writers), [`output`] (npy, vti, png, the folder lock; the φ = 0 mesh, ply, shaded views,
 //!   gif), [`levelset`] (sharp φ = 0 measures), [`compare`], [`study`] (stationary routes,
-//!   stability map, work–precision), [`run_folder`] (a finished run's folder as read back),
-//!   [`render`] (frames and movie of a finished run), [`measure`] (radius profile along an
-//!   axis: neck, pearl wavelength, skewness), [`cli`];
+//!   convergence orders, stability map, work–precision; study files, least-squares fits),
+//!   [`run_folder`] (a finished run's folder as read back), [`render`] (frames and movie of a
+//!   finished run), [`measure`] (radius profile along an axis: neck, pearl wavelength,
+//!   skewness), [`cli`];
 //! * [`axisym`]: the sharp-interface reference for the c0 = 0 shape diagram (Ritz method on
 //!   axisymmetric shapes, continuation along the prolate, oblate and stomatocyte branches);
 //!   [`diagram`]: the same diagram from the phase field (independent cases on reduced boxes,

@@ -1,24 +1,465 @@
-//! Line charts of time series (e.g. reduced energy or residual against time) as PNG files.
+//! Charts as PNG and SVG: line, dashed and marker series on linear or true logarithmic axes.
+//!
+//! A log axis is plotters' logarithmic coordinate (positions ∝ log10 of the value), its range
+//! widened outward to whole decades, with a labelled tick at every decade (`1e-5`) and unlabelled
+//! minor ticks between. A [`Figure`] is a title, two [`Axis`] and a list of [`Series`]; each
+//! series has a colour, a [`Mark`] and an optional legend entry. [`Figure::write`] draws it to
+//! `STEM.png` and `STEM.svg`.
 
 use super::{ensure_font, write_rgb_png, OutputError, FONT_FAMILY};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use std::ops::Range;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Chart size in pixels.
-const SIZE: (u32, u32) = (900, 560);
+const SIZE: (u32, u32) = (900, 600);
 /// Relative padding added to the data range on a linear axis.
 const PAD: f64 = 0.05;
 
-/// A named series of `(x, y)` points.
-type Series<'a> = (&'a str, Vec<(f64, f64)>);
+/// How an axis maps values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scale {
+    /// Linear.
+    Linear,
+    /// Logarithmic (base 10, decade ticks); values ≤ 0 are not drawn.
+    Log,
+}
 
-/// Write a line chart of `series` (each a name and its `(x, y)` points) with axis labels
-/// `x_label` / `y_label`, the y axis logarithmic if `log_y`.
+/// An axis: its label (with units) and scale.
+#[derive(Clone, Debug)]
+pub struct Axis {
+    /// Axis title, with units.
+    pub label: String,
+    /// Linear or logarithmic.
+    pub scale: Scale,
+}
+
+impl Axis {
+    /// A linear axis.
+    pub fn linear(label: impl Into<String>) -> Self {
+        Axis {
+            label: label.into(),
+            scale: Scale::Linear,
+        }
+    }
+
+    /// A logarithmic axis.
+    pub fn log(label: impl Into<String>) -> Self {
+        Axis {
+            label: label.into(),
+            scale: Scale::Log,
+        }
+    }
+}
+
+/// Marker shape of a point series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    /// Filled circle.
+    Circle,
+    /// Filled square.
+    Square,
+    /// Filled triangle.
+    Triangle,
+    /// Cross (×).
+    Cross,
+    /// Filled diamond.
+    Diamond,
+}
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mark {
+    /// A solid line through the points.
+    Line,
+    /// A dashed line (fitted slopes, bounds).
+    Dashed,
+    /// Markers only.
+    Points(Shape),
+    /// A solid line with markers.
+    LinePoints(Shape),
+}
+
+/// One series: points, colour, how it is drawn, legend text (`None`: not in the legend).
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Legend entry.
+    pub name: Option<String>,
+    /// The `(x, y)` points.
+    pub points: Vec<(f64, f64)>,
+    /// RGB colour.
+    pub colour: [u8; 3],
+    /// Line, dashes or markers.
+    pub mark: Mark,
+}
+
+impl Series {
+    /// A series named `name` (in the legend), colour `colour`, drawn as `mark`.
+    pub fn new(
+        name: impl Into<String>,
+        points: Vec<(f64, f64)>,
+        colour: [u8; 3],
+        mark: Mark,
+    ) -> Self {
+        Series {
+            name: Some(name.into()),
+            points,
+            colour,
+            mark,
+        }
+    }
+
+    /// The same series without a legend entry.
+    pub fn unlisted(mut self) -> Self {
+        self.name = None;
+        self
+    }
+}
+
+/// The `i`-th colour of a palette of well separated colours (cycling).
+pub fn colour(i: usize) -> [u8; 3] {
+    const P: [[u8; 3]; 8] = [
+        [31, 119, 180],
+        [214, 39, 40],
+        [44, 160, 44],
+        [255, 127, 14],
+        [148, 103, 189],
+        [140, 86, 75],
+        [227, 119, 194],
+        [23, 190, 207],
+    ];
+    P[i % P.len()]
+}
+
+/// Where the legend goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Corner {
+    /// Upper left.
+    UpperLeft,
+    /// Upper right.
+    UpperRight,
+    /// Lower left.
+    LowerLeft,
+    /// Lower right.
+    LowerRight,
+}
+
+/// A chart: title, axes, series.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// Legend position (upper left by default).
+    pub legend: Corner,
+    /// Title drawn above the plot.
+    pub title: String,
+    /// Horizontal axis.
+    pub x: Axis,
+    /// Vertical axis.
+    pub y: Axis,
+    /// What is drawn, in order (later series on top).
+    pub series: Vec<Series>,
+}
+
+impl Figure {
+    /// An empty figure.
+    pub fn new(title: impl Into<String>, x: Axis, y: Axis) -> Self {
+        Figure {
+            legend: Corner::UpperLeft,
+            title: title.into(),
+            x,
+            y,
+            series: Vec::new(),
+        }
+    }
+
+    /// Add a series.
+    pub fn push(&mut self, s: Series) -> &mut Self {
+        self.series.push(s);
+        self
+    }
+
+    /// Write `stem.png` and `stem.svg` (the stem's extension, if any, is replaced); the paths
+    /// written.
+    ///
+    /// # Errors
+    /// [`OutputError`] if a file cannot be written or the chart cannot be drawn.
+    pub fn write(&self, stem: &Path) -> Result<[PathBuf; 2], OutputError> {
+        let png = stem.with_extension("png");
+        let svg = stem.with_extension("svg");
+        self.write_png(&png)?;
+        self.write_svg(&svg)?;
+        Ok([png, svg])
+    }
+
+    /// Write the chart as a PNG file.
+    ///
+    /// # Errors
+    /// As [`Figure::write`].
+    pub fn write_png(&self, path: &Path) -> Result<(), OutputError> {
+        ensure_font(path)?;
+        let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
+            self.draw_on(&root)
+                .and_then(|()| root.present())
+                .map_err(|e| OutputError::format(path, format!("cannot draw chart: {e}")))?;
+        }
+        write_rgb_png(path, SIZE.0, SIZE.1, &rgb)
+    }
+
+    /// Write the chart as an SVG file.
+    ///
+    /// # Errors
+    /// As [`Figure::write`].
+    pub fn write_svg(&self, path: &Path) -> Result<(), OutputError> {
+        ensure_font(path)?;
+        let mut text = String::new();
+        {
+            let root = SVGBackend::with_string(&mut text, SIZE).into_drawing_area();
+            self.draw_on(&root)
+                .and_then(|()| root.present())
+                .map_err(|e| OutputError::format(path, format!("cannot draw chart: {e}")))?;
+        }
+        std::fs::write(path, text).map_err(|e| OutputError::io(path, e))
+    }
+
+    /// The drawable points of every series (finite; positive on a log axis).
+    fn drawable(&self) -> Vec<Vec<(f64, f64)>> {
+        let ok = |v: f64, s: Scale| v.is_finite() && (s == Scale::Linear || v > 0.0);
+        self.series
+            .iter()
+            .map(|s| {
+                s.points
+                    .iter()
+                    .copied()
+                    .filter(|&(x, y)| ok(x, self.x.scale) && ok(y, self.y.scale))
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        let data = self.drawable();
+        let xr = axis_range(data.iter().flatten().map(|p| p.0), self.x.scale);
+        let yr = axis_range(data.iter().flatten().map(|p| p.1), self.y.scale);
+        match (self.x.scale, self.y.scale) {
+            (Scale::Linear, Scale::Linear) => self.draw(root, &data, xr, yr),
+            (Scale::Linear, Scale::Log) => self.draw(root, &data, xr, yr.log_scale()),
+            (Scale::Log, Scale::Linear) => self.draw(root, &data, xr.log_scale(), yr),
+            (Scale::Log, Scale::Log) => self.draw(root, &data, xr.log_scale(), yr.log_scale()),
+        }
+    }
+
+    fn draw<DB, X, Y>(
+        &self,
+        root: &DrawingArea<DB, plotters::coord::Shift>,
+        data: &[Vec<(f64, f64)>],
+        xs: X,
+        ys: Y,
+    ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+    where
+        DB: DrawingBackend,
+        X: AsRangedCoord<Value = f64>,
+        X::CoordDescType: ValueFormatter<f64>,
+        Y: AsRangedCoord<Value = f64>,
+        Y::CoordDescType: ValueFormatter<f64>,
+    {
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, (FONT_FAMILY, 20))
+            .margin(20)
+            .x_label_area_size(55)
+            .y_label_area_size(95)
+            .build_cartesian_2d(xs, ys)?;
+        let xf = tick_label(self.x.scale);
+        let yf = tick_label(self.y.scale);
+        chart
+            .configure_mesh()
+            .x_desc(self.x.label.as_str())
+            .y_desc(self.y.label.as_str())
+            .axis_desc_style((FONT_FAMILY, 18))
+            .label_style((FONT_FAMILY, 14))
+            .x_labels(labels(self.x.scale))
+            .y_labels(labels(self.y.scale))
+            .max_light_lines(0)
+            .x_label_formatter(&xf)
+            .y_label_formatter(&yf)
+            .light_line_style(RGBColor(235, 235, 235))
+            .bold_line_style(RGBColor(200, 200, 200))
+            .draw()?;
+        let mut listed = false;
+        for (s, pts) in self.series.iter().zip(data) {
+            let c = RGBColor(s.colour[0], s.colour[1], s.colour[2]);
+            let line = c.stroke_width(2);
+            if matches!(s.mark, Mark::Line | Mark::LinePoints(_)) {
+                let anno = chart.draw_series(LineSeries::new(pts.iter().copied(), line))?;
+                if let Some(name) = &s.name {
+                    listed = true;
+                    anno.label(name.as_str())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], line));
+                }
+            }
+            if s.mark == Mark::Dashed {
+                let dashes = DashedLineSeries::new(pts.iter().copied(), 8, 5, line);
+                let anno = chart.draw_series(dashes)?;
+                if let Some(name) = &s.name {
+                    listed = true;
+                    anno.label(name.as_str()).legend(move |(x, y)| {
+                        EmptyElement::at((x, y))
+                            + PathElement::new(vec![(0, 0), (9, 0)], line)
+                            + PathElement::new(vec![(15, 0), (24, 0)], line)
+                    });
+                }
+            }
+            let shape = match s.mark {
+                Mark::Points(shape) => shape,
+                Mark::LinePoints(shape) => shape,
+                Mark::Line | Mark::Dashed => continue,
+            };
+            // A line-and-marker series is listed once, by its line.
+            let name = match s.mark {
+                Mark::Points(_) => s.name.as_deref(),
+                _ => None,
+            };
+            listed |= name.is_some();
+            markers(&mut chart, pts, shape, c, name)?;
+        }
+        if listed {
+            chart
+                .configure_series_labels()
+                .position(match self.legend {
+                    Corner::UpperLeft => SeriesLabelPosition::UpperLeft,
+                    Corner::UpperRight => SeriesLabelPosition::UpperRight,
+                    Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
+                    Corner::LowerRight => SeriesLabelPosition::LowerRight,
+                })
+                .label_font((FONT_FAMILY, 14))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()?;
+        }
+        Ok(())
+    }
+}
+
+/// Markers of `shape` and colour `c` at `pts`, listed in the legend as `name` if given.
+fn markers<DB: DrawingBackend, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    pts: &[(f64, f64)],
+    shape: Shape,
+    c: RGBColor,
+    name: Option<&str>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let fill = c.filled();
+    let at = pts.iter().copied();
+    let anno =
+        match shape {
+            Shape::Circle => chart.draw_series(at.map(|p| Circle::new(p, 5, fill)))?,
+            Shape::Square => chart.draw_series(
+                at.map(|p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], fill)),
+            )?,
+            Shape::Triangle => chart.draw_series(at.map(|p| {
+                EmptyElement::at(p) + Polygon::new(vec![(0, -6), (-5, 4), (5, 4)], fill)
+            }))?,
+            Shape::Cross => chart.draw_series(at.map(|p| Cross::new(p, 5, c.stroke_width(2))))?,
+            Shape::Diamond => chart.draw_series(at.map(|p| {
+                EmptyElement::at(p) + Polygon::new(vec![(0, -6), (-5, 0), (0, 6), (5, 0)], fill)
+            }))?,
+        };
+    if let Some(name) = name {
+        let anno = anno.label(name);
+        match shape {
+            Shape::Circle => anno.legend(move |(x, y)| Circle::new((x + 12, y), 5, fill)),
+            Shape::Square => {
+                anno.legend(move |(x, y)| Rectangle::new([(x + 8, y - 4), (x + 16, y + 4)], fill))
+            }
+            Shape::Triangle => anno.legend(move |(x, y)| {
+                Polygon::new(vec![(x + 12, y - 6), (x + 7, y + 4), (x + 17, y + 4)], fill)
+            }),
+            Shape::Cross => {
+                anno.legend(move |(x, y)| Cross::new((x + 12, y), 5, c.stroke_width(2)))
+            }
+            Shape::Diamond => anno.legend(move |(x, y)| {
+                Polygon::new(
+                    vec![(x + 12, y - 6), (x + 7, y), (x + 12, y + 6), (x + 17, y)],
+                    fill,
+                )
+            }),
+        };
+    }
+    Ok(())
+}
+
+/// How many ticks to ask for: enough on a log axis for the minor ticks 2…9 of each decade, a
+/// readable number on a linear one.
+fn labels(scale: Scale) -> usize {
+    match scale {
+        Scale::Log => 40,
+        Scale::Linear => 10,
+    }
+}
+
+/// Tick labels: on a log axis `1e-5` at decades and nothing between (the minor ticks); on a
+/// linear axis the shortest of fixed and exponent notation.
+fn tick_label(scale: Scale) -> impl Fn(&f64) -> String {
+    move |v: &f64| match scale {
+        Scale::Log => {
+            let e = v.log10();
+            if (e - e.round()).abs() < 1e-6 {
+                format!("1e{}", e.round() as i32)
+            } else {
+                String::new()
+            }
+        }
+        Scale::Linear => {
+            let a = v.abs();
+            if a == 0.0 || (1e-3..1e4).contains(&a) {
+                let s = format!("{v:.4}");
+                s.trim_end_matches('0').trim_end_matches('.').to_string()
+            } else {
+                format!("{v:.1e}")
+            }
+        }
+    }
+}
+
+/// The axis range of `values`: padded by [`PAD`] on a linear axis, widened to whole decades
+/// on a log axis; a unit range (or the decade 0.1..1) when there are none.
+fn axis_range(values: impl Iterator<Item = f64>, scale: Scale) -> Range<f64> {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    match scale {
+        Scale::Log if lo > hi => 0.1..1.0,
+        Scale::Log => {
+            // Rounded so that a value on a decade stays inside, then nudged outward so that the
+            // end decades survive the axis' own rounding and get their ticks.
+            let a = (lo.log10() + 1e-9).floor();
+            let b = (hi.log10() - 1e-9).ceil().max(a + 1.0);
+            10f64.powf(a) * (1.0 - 1e-9)..10f64.powf(b) * (1.0 + 1e-9)
+        }
+        Scale::Linear if lo > hi => 0.0..1.0,
+        Scale::Linear if lo == hi => {
+            let w = if lo == 0.0 { 1.0 } else { lo.abs() * 0.1 };
+            lo - w..hi + w
+        }
+        Scale::Linear => lo - PAD * (hi - lo)..hi + PAD * (hi - lo),
+    }
+}
+
+/// Write a line chart of `series` (each a name and its `(x, y)` points) against a linear x axis
+/// labelled `x_label`, the y axis labelled `y_label` and logarithmic if `log_y`, as the PNG
+/// `path` (the time-series charts of a run).
 ///
-/// Points with a non-finite coordinate, and on a log axis points with `y <= 0`, are skipped;
-/// with no points left an empty chart with a unit range is drawn.
+/// # Errors
+/// As [`Figure::write`].
 pub fn write_timeseries_png(
     path: &Path,
     series: &[(&str, Vec<(f64, f64)>)],
@@ -26,113 +467,67 @@ pub fn write_timeseries_png(
     y_label: &str,
     log_y: bool,
 ) -> Result<(), OutputError> {
-    ensure_font(path)?;
-    let data: Vec<Series> = series
-        .iter()
-        .map(|(name, pts)| (*name, plottable(pts, log_y)))
-        .collect();
-    let xs = padded(data_range(&data, |p| p.0), false);
-    let ys = padded(data_range(&data, |p| p.1), log_y);
-    let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
-        let labels = (x_label, y_label);
-        let drawn = if log_y {
-            draw(&root, &data, xs, ys.log_scale(), labels, Some(&log_label))
+    let y = if log_y {
+        Axis::log(y_label)
+    } else {
+        Axis::linear(y_label)
+    };
+    let mut fig = Figure::new("", Axis::linear(x_label), y);
+    for (i, (name, pts)) in series.iter().enumerate() {
+        let mark = if pts.len() < 2 {
+            Mark::Points(Shape::Circle)
         } else {
-            draw(&root, &data, xs, ys, labels, None)
+            Mark::Line
         };
-        drawn
-            .and_then(|()| root.present())
-            .map_err(|e| OutputError::format(path, format!("cannot draw chart: {e}")))?;
+        fig.push(Series::new(*name, pts.clone(), colour(i), mark));
     }
-    write_rgb_png(path, SIZE.0, SIZE.1, &rgb)
+    fig.write_png(path)
 }
 
-/// The points of `pts` that can be drawn: finite, and with `y > 0` on a log axis.
-fn plottable(pts: &[(f64, f64)], log_y: bool) -> Vec<(f64, f64)> {
-    pts.iter()
-        .copied()
-        .filter(|(x, y)| x.is_finite() && y.is_finite() && (!log_y || *y > 0.0))
-        .collect()
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// Smallest and largest value of `coord` over all points, if any.
-fn data_range(data: &[Series], coord: impl Fn(&(f64, f64)) -> f64) -> Option<(f64, f64)> {
-    data.iter()
-        .flat_map(|(_, pts)| pts.iter().map(&coord))
-        .fold(None, |acc, v| match acc {
-            None => Some((v, v)),
-            Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
-        })
-}
-
-/// An axis range around `range` with some padding (multiplicative on a log axis); a unit
-/// range when there is no data, and a widened one when all values are equal.
-fn padded(range: Option<(f64, f64)>, log: bool) -> Range<f64> {
-    match (range, log) {
-        (None, false) => 0.0..1.0,
-        (None, true) => 0.1..1.0,
-        (Some((lo, hi)), true) if lo == hi => lo / 10.0..hi * 10.0,
-        (Some((lo, hi)), true) => lo / (hi / lo).powf(PAD)..hi * (hi / lo).powf(PAD),
-        (Some((lo, hi)), false) if lo == hi => {
-            let w = if lo == 0.0 { 1.0 } else { lo.abs() * 0.1 };
-            lo - w..hi + w
-        }
-        (Some((lo, hi)), false) => lo - PAD * (hi - lo)..hi + PAD * (hi - lo),
+    /// A log range is widened to whole decades: [3e-5, 2e-2] → [1e-5, 1e-1]; a single decade
+    /// value still spans one decade.
+    #[test]
+    fn log_ranges_are_whole_decades() {
+        let r = axis_range([3e-5, 2e-2].into_iter(), Scale::Log);
+        assert!((r.start / 1e-5 - 1.0).abs() < 1e-8 && (r.end / 1e-1 - 1.0).abs() < 1e-8);
+        assert!(r.start < 1e-5 && r.end > 1e-1);
+        let r = axis_range([1e-3].into_iter(), Scale::Log);
+        assert!((r.start / 1e-3 - 1.0).abs() < 1e-8 && (r.end / 1e-2 - 1.0).abs() < 1e-8);
     }
-}
 
-/// Tick label of a log axis, e.g. `1e-5` (the default would print `9.999999e-5`).
-fn log_label(v: &f64) -> String {
-    format!("{v:.0e}")
-}
+    /// Decades are labelled `1eK`, the minor ticks between them not at all.
+    #[test]
+    fn log_ticks_label_decades_only() {
+        let f = tick_label(Scale::Log);
+        assert_eq!(f(&1e-5), "1e-5");
+        assert_eq!(f(&100.0), "1e2");
+        assert_eq!(f(&3e-5), "");
+    }
 
-/// Draw axes, mesh, the series and a legend on `root`.
-fn draw<DB, Y>(
-    root: &DrawingArea<DB, plotters::coord::Shift>,
-    data: &[Series],
-    xs: Range<f64>,
-    ys: Y,
-    (x_label, y_label): (&str, &str),
-    y_format: Option<&dyn Fn(&f64) -> String>,
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
-where
-    DB: DrawingBackend,
-    Y: AsRangedCoord<Value = f64>,
-    Y::CoordDescType: ValueFormatter<f64>,
-{
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(root)
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(90)
-        .build_cartesian_2d(xs, ys)?;
-    let mut mesh = chart.configure_mesh();
-    mesh.x_desc(x_label)
-        .y_desc(y_label)
-        .axis_desc_style((FONT_FAMILY, 18))
-        .label_style((FONT_FAMILY, 14));
-    if let Some(f) = y_format {
-        mesh.y_label_formatter(f);
+    /// Both files are written, and the SVG holds the axis label and a legend entry.
+    #[test]
+    fn figure_writes_png_and_svg() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut fig = Figure::new("t", Axis::log("dt [time]"), Axis::log("error"));
+        fig.push(Series::new(
+            "SBDF1",
+            vec![(0.1, 1e-2), (0.05, 5e-3), (0.025, 2.5e-3)],
+            colour(0),
+            Mark::LinePoints(Shape::Circle),
+        ));
+        fig.push(Series::new(
+            "slope 1",
+            vec![(0.1, 2e-2), (0.025, 5e-3)],
+            colour(1),
+            Mark::Dashed,
+        ));
+        let [png, svg] = fig.write(&dir.path().join("c")).unwrap();
+        assert!(std::fs::metadata(png).unwrap().len() > 1000);
+        let text = std::fs::read_to_string(svg).unwrap();
+        assert!(text.contains("dt [time]") && text.contains("SBDF1") && text.contains("1e-2"));
     }
-    mesh.draw()?;
-    for (i, (name, pts)) in data.iter().enumerate() {
-        let color = Palette99::pick(i).to_rgba();
-        let marker = if pts.len() < 2 { 3 } else { 0 };
-        chart
-            .draw_series(
-                LineSeries::new(pts.iter().copied(), color.stroke_width(2)).point_size(marker),
-            )?
-            .label(*name)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2))
-            });
-    }
-    chart
-        .configure_series_labels()
-        .label_font((FONT_FAMILY, 15))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
 }
