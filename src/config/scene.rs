@@ -274,10 +274,11 @@ pub struct StabilizerSpec {
 }
 
 impl Stabilizer {
-    /// The default of each scheme, measured with `vesicle study stability` (runs/stability2d.json,
-    /// 200 steps): SBDF1 with S = 4k² + 4ε²k⁴ (half the bulk linearisation's lower-order part,
-    /// the least S that makes it unconditionally stable) never raised F up to Δt = 5.6;
-    /// SBDF2 with that S raised F from Δt = 0.1 on, with S = 8k² + 8ε²k⁴ not up to Δt = 10.
+    /// The default of each scheme, measured with `vesicle study stability` (base scene
+    /// runs/stability2d.json, 200 steps): SBDF1 with S = 4k² + 4ε²k⁴ (half the bulk
+    /// linearisation's lower-order part, the least S that makes it unconditionally stable) never
+    /// raised F up to Δt = 5.6; SBDF2 with that S raised F from Δt = 0.1 on, with
+    /// S = 8k² + 8ε²k⁴ not up to Δt = 10.
     pub fn default_for(scheme: Scheme) -> Self {
         match scheme {
             Scheme::Sbdf1 => Stabilizer { s2: 4.0, s4: 4.0 },
