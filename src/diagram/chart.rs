@@ -19,8 +19,19 @@ const COLOURS: [RGBColor; 3] = [
     RGBColor(44, 160, 44),
 ];
 
+/// A transition between two branches, as drawn.
+#[derive(Clone, Debug)]
+pub struct Transition {
+    /// `a/b`.
+    pub name: String,
+    /// The reference volume (a dashed vertical line).
+    pub reference: f64,
+    /// Where the extrapolated phase-field branches cross, `(v, e)` (a black cross).
+    pub crossing: Option<(f64, f64)>,
+}
+
 /// Write the diagram chart: `extrapolated` and `finest` are per branch of [`Branch::ALL`],
-/// `(v, e)` points; `transitions` the reference transition volumes with their names.
+/// `(v, e)` points; `transitions` the reference transitions and the phase-field crossings.
 ///
 /// # Errors
 /// `Error::Output` if drawing or writing fails.
@@ -29,7 +40,7 @@ pub fn write_chart(
     reference: &Reference,
     extrapolated: &[Vec<(f64, f64)>],
     finest: &[Vec<(f64, f64)>],
-    transitions: &[(String, f64)],
+    transitions: &[Transition],
 ) -> Result<()> {
     ensure_font(path)?;
     let all = extrapolated.iter().chain(finest).flatten();
@@ -71,7 +82,7 @@ fn draw(
     reference: &Reference,
     extrapolated: &[Vec<(f64, f64)>],
     finest: &[Vec<(f64, f64)>],
-    transitions: &[(String, f64)],
+    transitions: &[Transition],
 ) -> DrawResult {
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(root)
@@ -122,8 +133,9 @@ fn draw(
             .legend(move |(x, y)| Circle::new((x + 12, y), 7, colour.stroke_width(1)));
     }
     let grey = RGBColor(110, 110, 110);
-    for (k, (name, v)) in transitions.iter().enumerate() {
-        if !v.is_finite() || !vs.contains(v) {
+    for (k, t) in transitions.iter().enumerate() {
+        let v = t.reference;
+        if !v.is_finite() || !vs.contains(&v) {
             continue;
         }
         let (lo, hi) = (es.start, es.end);
@@ -132,17 +144,29 @@ fn draw(
             .map(|i| {
                 let a = lo + (hi - lo) * i as f64 / 40.0;
                 let b = lo + (hi - lo) * (i + 1) as f64 / 40.0;
-                PathElement::new(vec![(*v, a), (*v, b)], grey.stroke_width(1))
+                PathElement::new(vec![(v, a), (v, b)], grey.stroke_width(1))
             })
             .collect();
         chart.draw_series(dashes)?;
         let y = hi - (hi - lo) * (0.04 + 0.05 * k as f64);
+        let found = t
+            .crossing
+            .map_or(String::new(), |(x, _)| format!(", phase field {x:.4}"));
         chart.draw_series(std::iter::once(Text::new(
-            format!(" {name} v = {v:.4}"),
-            (*v, y),
+            format!(" {}: reference v = {v:.4}{found}", t.name),
+            (v, y),
             (FONT_FAMILY, 14).into_font().color(&grey),
         )))?;
     }
+    let crossings: Vec<(f64, f64)> = transitions.iter().filter_map(|t| t.crossing).collect();
+    chart
+        .draw_series(
+            crossings
+                .iter()
+                .map(|&p| Cross::new(p, 7, BLACK.stroke_width(2))),
+        )?
+        .label("phase-field crossings (extrapolated branches)")
+        .legend(|(x, y)| Cross::new((x + 12, y), 6, BLACK.stroke_width(2)));
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::LowerLeft)

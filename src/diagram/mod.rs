@@ -257,14 +257,30 @@ fn merge(cases: &[Case], out: &Path, force: bool) -> Result<()> {
     });
     let reference = reference::Reference::new(v_lo - 0.03, v_hi + 0.03);
     report::write_csv(out, &points, &results, &reference)?;
-    let transitions: Vec<(String, f64)> = report::transitions(&points, &reference)
+    let extrapolated = report::branch_points(&points, |p| (p.v, p.e));
+    // Each transition: its name, the reference volume, and the extrapolated crossing as a
+    // point of the diagram (e on the first of the two branches).
+    let transitions: Vec<chart::Transition> = report::transitions(&points, &reference)
         .into_iter()
-        .map(|(name, t)| (name, t[0]))
+        .zip(reference::TRANSITIONS)
+        .map(|((name, t), (a, _))| {
+            let branch = &extrapolated[axisym::Branch::ALL
+                .iter()
+                .position(|b| *b == a)
+                .expect("listed")];
+            let crossing = (t[1].is_finite() && !branch.is_empty())
+                .then(|| (t[1], crate::curves::cubic_at(branch, t[1])));
+            chart::Transition {
+                name,
+                reference: t[0],
+                crossing,
+            }
+        })
         .collect();
     chart::write_chart(
         &out.join("diagram.png"),
         &reference,
-        &report::branch_points(&points, |p| (p.v, p.e)),
+        &extrapolated,
         &report::branch_points(&points, |p| (p.finest().v, p.finest().e)),
         &transitions,
     )?;
