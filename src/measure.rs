@@ -311,16 +311,7 @@ pub fn measure(dir: &Path, opts: &MeasureOptions) -> Result<Measured> {
 
 /// `(step, t)` pairs of `DIR/timeseries.csv`, in file order.
 fn step_times(dir: &Path) -> Result<Vec<(usize, f64)>> {
-    let path = dir.join("timeseries.csv");
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        Error::config(
-            "DIR",
-            format!(
-                "cannot read {}: {e} (is this a run folder?)",
-                path.display()
-            ),
-        )
-    })?;
+    let (path, text) = run_folder::read_file(dir, "timeseries.csv")?;
     let bad = || Error::config("DIR", format!("{}: no `step,t,…` rows", path.display()));
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().ok_or_else(bad)?.split(',').collect();

@@ -43,14 +43,12 @@ pub fn check_dir(dir: &Path) -> Result<()> {
     }
 }
 
-/// `dim`, `n`, `h`, the final step and time from `DIR/summary.json` (`"spec"`,
-/// `"steps"` and `"final"`).
+/// `DIR/name` and its text.
 ///
 /// # Errors
-/// `Error::Config` naming `DIR` when the file is missing, not JSON, or lacks a valid
-/// `spec.dim`, `spec.n` or `spec.h`.
-pub fn run_info(dir: &Path) -> Result<RunInfo> {
-    let path = dir.join("summary.json");
+/// `Error::Config` naming `DIR` if the file cannot be read.
+pub fn read_file(dir: &Path, name: &str) -> Result<(PathBuf, String)> {
+    let path = dir.join(name);
     let text = std::fs::read_to_string(&path).map_err(|e| {
         Error::config(
             "DIR",
@@ -60,6 +58,17 @@ pub fn run_info(dir: &Path) -> Result<RunInfo> {
             ),
         )
     })?;
+    Ok((path, text))
+}
+
+/// `dim`, `n`, `h`, the final step and time from `DIR/summary.json` (`"spec"`,
+/// `"steps"` and `"final"`).
+///
+/// # Errors
+/// `Error::Config` naming `DIR` when the file is missing, not JSON, or lacks a valid
+/// `spec.dim`, `spec.n` or `spec.h`.
+pub fn run_info(dir: &Path) -> Result<RunInfo> {
+    let (path, text) = read_file(dir, "summary.json")?;
     let bad = |what: &str| Error::config("DIR", format!("{}: no valid {what}", path.display()));
     let v: Value = serde_json::from_str(&text).map_err(|_| bad("JSON"))?;
     let spec = &v["spec"];
