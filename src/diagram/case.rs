@@ -87,12 +87,17 @@ pub fn grid_for(shape: &axisym::Solution, r0: f64, spec: &DiagramSpec) -> [usize
 }
 
 /// Mirror planes a branch keeps about the z axis.
-fn symmetry(branch: Branch) -> serde_json::Value {
+fn mirror_planes(branch: Branch) -> &'static [&'static str] {
     if branch.up_down_symmetric() {
-        json!(["x", "y", "z"])
+        &["x", "y", "z"]
     } else {
-        json!(["x", "y"])
+        &["x", "y"]
     }
+}
+
+/// Points computed on the reduced box of a `branch` case whose full box is `n`.
+pub fn computed_points(branch: Branch, n: [usize; 3]) -> usize {
+    n.iter().product::<usize>() >> mirror_planes(branch).len()
 }
 
 /// The scene of `case` (contour file `contour.csv` beside it).
@@ -112,7 +117,7 @@ pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json:
         "stop_residual": spec.stop_residual,
         "initial": {"shape": "axisym", "contour": "contour.csv", "r0": case.r0, "axis": "z"},
         "prepare_steps": spec.prepare_steps,
-        "symmetry": symmetry(case.branch),
+        "symmetry": mirror_planes(case.branch),
         "threads": 1,
         "output": {"png": false, "vti": false}
     })

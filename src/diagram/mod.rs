@@ -137,8 +137,7 @@ fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
     let mut total = 0usize;
     for (c, s) in cases.iter().zip(&shapes) {
         let n = case::grid_for(s, c.r0, spec);
-        let mirrors = if c.branch.up_down_symmetric() { 8 } else { 4 };
-        let points = n.iter().product::<usize>() / mirrors;
+        let points = case::computed_points(c.branch, n);
         total += points;
         println!(
             "{:>4}  {:<12} {:>6} {:>6}  {:>4}x{:>4}x{:>4}  {:>10}",

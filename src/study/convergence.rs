@@ -12,7 +12,8 @@
 //!   FD error = C h^p; spectral error = C exp(b ε/h) (straight on a semi-log chart).
 //! * **eps**: shapes of the c0 = 0 diagram (axisymmetric starts at the branch's v, R0 = ε/x)
 //!   relaxed to the scene's `stop_residual` at ε/R0 = x; v from the φ = 0 surface
-//!   ([`crate::levelset`]), e_ref(v) from [`crate::axisym::solve`] at that v (1 for a sphere).
+//!   ([`crate::levelset::measure_refined`]), e_ref(v) from [`crate::axisym::solve`] at that v
+//!   (1 for a sphere).
 //!   Fits: |e − e_ref| = C x^p; e = e0 + c x^p (the extrapolated limit; also for v); for the
 //!   sphere |e − 1| = C exp(b R0/ε).
 
@@ -365,7 +366,7 @@ fn eps_part(spec: &EpsSpec, dir: &Path) -> Result<Vec<Row>> {
                 dir,
             )?;
             let r = relaxed(&s)?;
-            let level = crate::levelset::measure(&r.phi, 3, s.h);
+            let level = crate::levelset::measure_refined(&r.phi, 3, s.h);
             let e_ref = match branch {
                 None => 1.0,
                 Some(b) => crate::axisym::solve(b, level.reduced_volume, &opts)

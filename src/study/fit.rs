@@ -5,8 +5,8 @@
 //! * [`power`]: e = C x^p, the linear fit of ln e against ln x (p the observed order).
 //! * [`exponential`]: e = C exp(b x), the linear fit of ln e against x (spectral convergence,
 //!   the sphere's phase-field error in R0/ε).
-//! * [`limit`]: e(x) = e0 + c x^p, the extrapolated limit e0: for each p of a grid the fit is
-//!   linear in (e0, c); the p with the least residual is kept.
+//! * [`limit`]: e(x) = e0 + c x^p, the extrapolated limit e0: linear in (e0, c) at each p, the
+//!   p with the least residual kept (the fit of [`crate::curves`], shared with the diagram).
 
 use std::fmt;
 
@@ -179,53 +179,34 @@ impl Limit {
 
 impl fmt::Display for Limit {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        let (lo, hi) = crate::curves::ORDERS;
         write!(
             f,
-            "limit {:.6} (least squares e = e0 + c x^p over p in [{P_MIN}, {P_MAX}]: p = {:.2}, c = {:.4e}, RMS residual {:.2e}, {} points)",
+            "limit {:.6} (least squares e = e0 + c x^p over p in [{lo}, {hi}]: p = {:.2}, c = {:.4e}, RMS residual {:.2e}, {} points)",
             self.e0, self.p, self.c, self.rms, self.n
         )
     }
 }
 
-/// Smallest exponent tried by [`limit`].
-pub const P_MIN: f64 = 0.5;
-/// Largest exponent tried by [`limit`].
-pub const P_MAX: f64 = 6.0;
-
-/// The fit e = e0 + c x^p through `(x, e)` (x > 0), p on a grid of step 0.005 in
-/// [[`P_MIN`], [`P_MAX`]]; `None` with fewer than three points. With exactly three points the
-/// fit interpolates them.
+/// The fit e = e0 + c x^p through `(x, e)` (x > 0): p by [`crate::curves::common_order`] on
+/// this one series, then e0 and c by [`crate::curves::power_fit`]; `None` with fewer than
+/// three points or no spread in e. With exactly three points the fit interpolates them.
 pub fn limit(x: &[f64], e: &[f64]) -> Option<Limit> {
-    let pts: Vec<(f64, f64)> = x
+    let (xs, es): (Vec<f64>, Vec<f64>) = x
         .iter()
         .zip(e)
-        .map(|(&a, &b)| (a, b))
-        .filter(|(a, b)| *a > 0.0 && b.is_finite())
-        .collect();
-    if pts.len() < 3 {
-        return None;
-    }
-    let steps = ((P_MAX - P_MIN) / 0.005).round() as usize;
-    (0..=steps)
-        .filter_map(|i| {
-            let p = P_MIN + 0.005 * i as f64;
-            let xp: Vec<f64> = pts.iter().map(|q| q.0.powf(p)).collect();
-            let ys: Vec<f64> = pts.iter().map(|q| q.1).collect();
-            let l = linear(&xp, &ys)?;
-            let ss: f64 = xp
-                .iter()
-                .zip(&ys)
-                .map(|(a, b)| (b - l.intercept - l.slope * a).powi(2))
-                .sum();
-            Some(Limit {
-                e0: l.intercept,
-                c: l.slope,
-                p,
-                rms: (ss / pts.len() as f64).sqrt(),
-                n: pts.len(),
-            })
-        })
-        .min_by(|a, b| a.rms.total_cmp(&b.rms))
+        .filter(|(a, b)| **a > 0.0 && b.is_finite())
+        .map(|(a, b)| (*a, *b))
+        .unzip();
+    let p = crate::curves::common_order(&[(xs.clone(), es.clone())])?;
+    let (e0, c, rss) = crate::curves::power_fit(p, &xs, &es);
+    Some(Limit {
+        e0,
+        c,
+        p,
+        rms: (rss / xs.len() as f64).sqrt(),
+        n: xs.len(),
+    })
 }
 
 #[cfg(test)]
@@ -267,7 +248,7 @@ mod tests {
     }
 
     /// e = 1.2 + 0.8 x² sampled at four x: the extrapolated limit 1.2 and the exponent 2 are
-    /// recovered (to the p grid's step, and e0 to 1e-9).
+    /// recovered (both to 1e-9: the order search is refined by golden section).
     #[test]
     fn limit_recovers_e0_and_the_exponent() {
         let x = [0.1, 0.075, 0.05, 0.025];
