@@ -33,6 +33,16 @@ const ARMIJO: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up.
 const MAX_BACKTRACKS: usize = 40;
 
+/// Full-size per-wavenumber tables (see [`crate::spectral::evaluator::Symbols`]).
+struct Tables {
+    /// |k|².
+    k2: Vec<f64>,
+    /// Parseval weight × cell volume: ∫ u v dx = Σ_k w Re(û v̂*).
+    weight: Vec<f64>,
+    /// (3/(2√2)) ε |k|² w: A = Σ_k area_weight |φ̂|².
+    area_weight: Vec<f64>,
+}
+
 /// One stored L-BFGS pair (s, y) with ρ = 1/⟨y, s⟩_M and ⟨y, y⟩_M.
 struct Pair {
     s: Array3<Complex64>,
@@ -50,6 +60,8 @@ pub struct RelaxEngine {
     metric: Vec<f64>,
     /// Parseval weight × M(k): ⟨u, v⟩_M = Σ wm Re(u v*).
     wm: Vec<f64>,
+    /// |k|², w and the area weights, flattened.
+    tables: Tables,
     /// ⟨M⁻¹â, M⁻¹â⟩_M of the current state.
     qq: f64,
     /// Preconditioned projected gradient r of the current state.
@@ -79,17 +91,15 @@ impl RelaxEngine {
         let mut ev = Evaluator::new(grid, scene.eps, c0, scene.laplacian, ExplicitTerm::Gradient);
         let cur = ev.state_of(&phi, 0.0)?;
         let e2 = scene.eps * scene.eps;
-        let metric: Vec<f64> = ev
-            .symbols
-            .k2
-            .iter()
-            .map(|&k| 2.0 * e2 * e2 * k * k + 8.0 + 8.0 * e2 * k)
-            .collect();
-        let wm = metric
-            .iter()
-            .zip(&ev.symbols.weight)
-            .map(|(m, w)| m * w)
-            .collect();
+        let metric_at = |k: f64| 2.0 * e2 * e2 * k * k + 8.0 + 8.0 * e2 * k;
+        let sym = &ev.symbols;
+        let metric = sym.table(|k, _| metric_at(k));
+        let wm = sym.table(|k, w| metric_at(k) * w);
+        let tables = Tables {
+            k2: sym.table(|k, _| k),
+            weight: sym.table(|_, w| w),
+            area_weight: sym.table(|k, w| sym.area_prefactor * k * w),
+        };
         let zeros = Array3::zeros(cur.hat.raw_dim());
         let mut e = RelaxEngine {
             trial: ev.blank(),
@@ -97,6 +107,7 @@ impl RelaxEngine {
             cur,
             metric,
             wm,
+            tables,
             qq: 0.0,
             grad: zeros.clone(),
             grad_trial: zeros.clone(),
@@ -124,6 +135,7 @@ impl RelaxEngine {
     fn refresh_gradient(&mut self) {
         let g = gradient(
             &self.ev,
+            &self.tables,
             &self.metric,
             &self.wm,
             self.area.method,
@@ -203,7 +215,7 @@ impl RelaxEngine {
             self.dir.as_slice().expect("std"),
         );
         let q = self.area_dir.as_slice().expect("std");
-        let aw = &self.ev.symbols.area_weight;
+        let aw = &self.tables.area_weight;
         // t = x + α d, with the sums of A(t + τq) = A_PP + 2τ A_PQ + τ² A_QQ in the same pass.
         let (app, apq, aqq) = self
             .trial
@@ -299,6 +311,7 @@ impl RelaxEngine {
 /// so a reduced box reads the same as the full one) and ⟨q, q⟩_M.
 fn gradient(
     ev: &Evaluator,
+    tables: &Tables,
     metric: &[f64],
     wm: &[f64],
     method: AreaMethod,
@@ -307,8 +320,8 @@ fn gradient(
     grad: &mut Array3<Complex64>,
 ) -> (f64, f64, f64) {
     let c_sigma = 3.0 / std::f64::consts::SQRT_2 * ev.eps;
-    let k2 = &ev.symbols.k2;
-    let weight = &ev.symbols.weight;
+    let k2 = &tables.k2;
+    let weight = &tables.weight;
     let hat = state.hat.as_slice().expect("standard layout");
     area_dir
         .as_slice_mut()
@@ -457,6 +470,7 @@ impl Engine for RelaxEngine {
         }
         let (sigma, residual, qq) = gradient(
             &self.ev,
+            &self.tables,
             &self.metric,
             &self.wm,
             self.area.method,

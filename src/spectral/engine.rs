@@ -23,40 +23,83 @@ use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stab
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
-use crate::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK};
+use crate::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL};
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
-/// Per wavenumber: S(k), 1/D(k) with D = a0 + Δt(2ε⁴k⁶ + S) and −Δt c_σ k⁴/D, recomputed only
-/// when Δt or a0 change (every step of a fixed-Δt run reuses them).
-#[derive(Default)]
-struct UpdateTables {
-    coef: Vec<[f64; 3]>,
-    key: Option<(f64, f64)>,
+/// The SBDF update at one wavenumber (see the module documentation), for one step's Δt and
+/// coefficients.
+#[derive(Clone, Copy)]
+struct Update {
+    /// (a0, a1, a2, b1, b2).
+    a: [f64; 5],
+    dt: f64,
+    /// s2 and s4 ε² of the stabiliser S = s2 k² + s4 ε² k⁴.
+    s2: f64,
+    s4e2: f64,
+    /// 2ε⁴.
+    e4x2: f64,
+    /// c_σ = 3/√2 ε.
+    c_sigma: f64,
 }
 
-impl UpdateTables {
-    fn update(&mut self, k2: &[f64], eps: f64, st: &Stabilizer, dt: f64, a0: f64) {
-        if self.key == Some((dt, a0)) {
-            return;
+impl Update {
+    /// P̂ and Q̂ at |k|² = `k` from φ̂ⁿ, N̂ⁿ (`h1`, `n1`) and φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (`h0`, `n0`):
+    /// P̂ = [−a1 φ̂ⁿ − a2 φ̂ⁿ⁻¹ + Δt(b1(N̂ⁿ + Sφ̂ⁿ) + b2(N̂ⁿ⁻¹ + Sφ̂ⁿ⁻¹))]/D,
+    /// Q̂ = −Δt c_σ k⁴ (b1 φ̂ⁿ + b2 φ̂ⁿ⁻¹)/D, D = a0 + Δt(2ε⁴k⁶ + S).
+    #[inline(always)]
+    fn at(
+        &self,
+        k: f64,
+        h1: Complex64,
+        n1: Complex64,
+        h0: Complex64,
+        n0: Complex64,
+    ) -> (Complex64, Complex64) {
+        let [a0, a1, a2, b1, b2] = self.a;
+        let s = self.s2 * k + self.s4e2 * k * k;
+        let inv = 1.0 / (a0 + self.dt * (self.e4x2 * k * k * k + s));
+        let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * self.dt;
+        let qc = -self.dt * self.c_sigma * k * k * inv;
+        (rhs * inv, (h1 * b1 + h0 * b2) * qc)
+    }
+}
+
+/// φ̂ⁿ, N̂ⁿ and (SBDF2) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, flattened; a row of zeros stands for the last two under
+/// SBDF1.
+#[derive(Clone, Copy)]
+struct Inputs<'a> {
+    cur: (&'a [Complex64], &'a [Complex64]),
+    prev: Option<(&'a [Complex64], &'a [Complex64])>,
+    zeros: &'a [Complex64],
+}
+
+impl<'a> Inputs<'a> {
+    /// The inputs of a step from `cur` (and `prev` when the formula uses it, a2 ≠ 0).
+    fn new(
+        cur: &'a State,
+        prev: Option<&'a (Array3<Complex64>, Array3<Complex64>)>,
+        a2: f64,
+        zeros: &'a [Complex64],
+    ) -> Self {
+        let flat = |a: &'a Array3<Complex64>| a.as_slice().expect("standard layout");
+        Inputs {
+            cur: (flat(&cur.hat), flat(&cur.nonlinear)),
+            prev: prev.filter(|_| a2 != 0.0).map(|(h, n)| (flat(h), flat(n))),
+            zeros,
         }
-        let e2 = eps * eps;
-        let c_sigma = 3.0 / std::f64::consts::SQRT_2 * eps;
-        if self.coef.len() != k2.len() {
-            self.coef = vec![[0.0; 3]; k2.len()];
-        }
-        self.coef
-            .par_chunks_mut(PAR_CHUNK)
-            .zip(k2.par_chunks(PAR_CHUNK))
-            .for_each(|(c, k)| {
-                for (c, &k) in c.iter_mut().zip(k) {
-                    let s = st.s2 * k + st.s4 * e2 * k * k;
-                    let inv = 1.0 / (a0 + dt * (2.0 * e2 * e2 * k * k * k + s));
-                    *c = [s, inv, -dt * c_sigma * k * k * inv];
-                }
-            });
-        self.key = Some((dt, a0));
+    }
+
+    /// Row `r` (of length `s2`) of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹.
+    #[inline]
+    fn row(&self, r: usize, s2: usize) -> [&'a [Complex64]; 4] {
+        let range = r * s2..(r + 1) * s2;
+        let (h0, n0) = match self.prev {
+            Some((h, n)) => (&h[range.clone()], &n[range.clone()]),
+            None => (&self.zeros[..s2], &self.zeros[..s2]),
+        };
+        [&self.cur.0[range.clone()], &self.cur.1[range], h0, n0]
     }
 }
 
@@ -127,8 +170,6 @@ pub struct SpectralEngine {
     adaptive: Option<AdaptiveSettings>,
     cur: State,
     next: State,
-    /// Per-wavenumber coefficients of the update for the current Δt.
-    tables: UpdateTables,
     /// φ̂^{n−1} and N̂^{n−1} (SBDF2).
     prev: Option<(Array3<Complex64>, Array3<Complex64>)>,
     dt_prev: f64,
@@ -140,6 +181,8 @@ pub struct SpectralEngine {
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see `check_constraints`).
     energy_guard: bool,
+    /// One spectral row of zeros (φ̂ⁿ⁻¹ and N̂ⁿ⁻¹ under SBDF1).
+    zero_row: Vec<Complex64>,
 }
 
 impl SpectralEngine {
@@ -156,6 +199,7 @@ impl SpectralEngine {
             ExplicitTerm::ConservedRhs,
         );
         let cur = ev.state_of(&phi, 0.0)?;
+        let ev_row_len = ev.symbols.row_len();
         let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
             dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
             dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
@@ -172,11 +216,11 @@ impl SpectralEngine {
             prev: None,
             dt_prev: scene.dt,
             max_change: 0.0,
-            tables: UpdateTables::default(),
             sigma: 0.0,
             area: AreaConstraint::none(),
             dt_next: None,
             energy_guard: true,
+            zero_row: vec![Complex64::default(); ev_row_len],
         })
     }
 
@@ -197,91 +241,102 @@ impl SpectralEngine {
         }
     }
 
-    /// Write P̂ into `next.hat` and Q̂ into `spare`; return (A_PP, A_PQ, A_QQ).
-    fn affine_update(&mut self, dt: f64) -> (f64, f64, f64) {
-        let [a0, a1, a2, b1, b2] = self.coefficients(dt);
-        let c = PAR_CHUNK;
-        let cur_hat = self.cur.hat.as_slice().expect("standard layout");
-        let cur_n = self.cur.nonlinear.as_slice().expect("standard layout");
-        let prev = match &self.prev {
-            Some((h, n)) if a2 != 0.0 => {
-                Some((h.as_slice().expect("std"), n.as_slice().expect("std")))
-            }
-            _ => None,
-        };
-        self.tables
-            .update(&self.ev.symbols.k2, self.ev.eps, &self.stabilizer, dt, a0);
-        let coef = &self.tables.coef;
-        let p_out = self.next.hat.as_slice_mut().expect("standard layout");
-        let q_out = self.ev.spare.as_slice_mut().expect("standard layout");
-        let aw = &self.ev.symbols.area_weight;
-        // P = [−a1 φ̂ⁿ − a2 φ̂ⁿ⁻¹ + Δt(b1(N̂ⁿ + Sφ̂ⁿ) + b2(N̂ⁿ⁻¹ + Sφ̂ⁿ⁻¹))]/D,
-        // Q = −Δt c_σ k⁴ (b1 φ̂ⁿ + b2 φ̂ⁿ⁻¹)/D, D = a0 + Δt(2ε⁴k⁶ + S); returns w k²-weighted
-        // |P|², Re(P Q*), |Q|².
-        let body = |[s, inv, qc]: [f64; 3],
-                    w: f64,
-                    h1: Complex64,
-                    n1: Complex64,
-                    h0: Complex64,
-                    n0: Complex64,
-                    p: &mut Complex64,
-                    q: &mut Complex64| {
-            let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * dt;
-            *p = rhs * inv;
-            *q = (h1 * b1 + h0 * b2) * qc;
-            (
-                w * p.norm_sqr(),
-                w * (p.re * q.re + p.im * q.im),
-                w * q.norm_sqr(),
-            )
-        };
-        let add = |x: (f64, f64, f64), y: (f64, f64, f64)| (x.0 + y.0, x.1 + y.1, x.2 + y.2);
-        p_out
-            .par_chunks_mut(c)
-            .zip(q_out.par_chunks_mut(c))
-            .enumerate()
-            .map(|(j, (p, q))| {
-                let r = j * c..j * c + p.len();
-                let (k, w, h1, n1) = (
-                    &coef[r.clone()],
-                    &aw[r.clone()],
-                    &cur_hat[r.clone()],
-                    &cur_n[r.clone()],
-                );
-                let rows = p.iter_mut().zip(q.iter_mut()).zip(k).zip(w).zip(h1).zip(n1);
-                match prev {
-                    Some((h0, n0)) => rows
-                        .zip(&h0[r.clone()])
-                        .zip(&n0[r])
-                        .map(|(((((((p, q), &k), &w), &h1), &n1), &h0), &n0)| {
-                            body(k, w, h1, n1, h0, n0, p, q)
-                        })
-                        .fold((0.0, 0.0, 0.0), add),
-                    None => rows
-                        .map(|(((((p, q), &k), &w), &h1), &n1)| {
-                            body(
-                                k,
-                                w,
-                                h1,
-                                n1,
-                                Complex64::default(),
-                                Complex64::default(),
-                                p,
-                                q,
-                            )
-                        })
-                        .fold((0.0, 0.0, 0.0), add),
-                }
-            })
-            .reduce(|| (0.0, 0.0, 0.0), add)
+    /// The step's update at this Δt.
+    fn update(&self, dt: f64) -> Update {
+        let e2 = self.ev.eps * self.ev.eps;
+        Update {
+            a: self.coefficients(dt),
+            dt,
+            s2: self.stabilizer.s2,
+            s4e2: self.stabilizer.s4 * e2,
+            e4x2: 2.0 * e2 * e2,
+            c_sigma: 3.0 / std::f64::consts::SQRT_2 * self.ev.eps,
+        }
     }
 
-    /// σ used in this step's update, or `None` if the projection has no real root.
-    fn choose_sigma(&self, (app, apq, aqq): (f64, f64, f64)) -> Option<f64> {
+    /// The area of the step's result as a function of σ, A(P̂ + σQ̂) = A_PP + 2σ A_PQ + σ² A_QQ:
+    /// returns (A_PP, A_PQ, A_QQ) = Σ_k a (|P̂|², Re(P̂ Q̂*), |Q̂|²), a = (3/(2√2)) ε |k|² w.
+    /// A read-only sweep: nothing is stored.
+    fn area_quadratic(&self, dt: f64) -> (f64, f64, f64) {
+        let u = self.update(dt);
+        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2], &self.zero_row);
+        let sym = &self.ev.symbols;
+        let s2 = sym.row_len();
+        let (rows, per_task) = (self.cur.hat.len() / s2, sym.task_len() / s2);
+        let [kl, wl] = [&sym.k2[2], &sym.weight[2]];
+        let [pp, pq, qq] = (0..rows.div_ceil(per_task))
+            .into_par_iter()
+            .map(|t| {
+                let mut acc = [0.0; 3];
+                for r in t * per_task..((t + 1) * per_task).min(rows) {
+                    let (kb, wb) = sym.row(r);
+                    let [h1, n1, h0, n0] = inputs.row(r, s2);
+                    for l in 0..s2 {
+                        let k = kb + kl[l];
+                        let (p, q) = u.at(k, h1[l], n1[l], h0[l], n0[l]);
+                        let a = sym.area_prefactor * k * (wb * wl[l]);
+                        acc[0] += a * p.norm_sqr();
+                        acc[1] += a * (p.re * q.re + p.im * q.im);
+                        acc[2] += a * q.norm_sqr();
+                    }
+                }
+                acc
+            })
+            .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
+        (pp, pq, qq)
+    }
+
+    /// φ̂^{n+1} = P̂ + σQ̂ into `next.hat`, with the inputs of the evaluation's inverse
+    /// transforms written in the same sweep (a copy into `next.nonlinear`, −|k|²φ̂^{n+1} into
+    /// the evaluator's spare; see [`Evaluator::finish`]); returns A(φ̂^{n+1}).
+    fn write_update(&mut self, dt: f64, sigma: f64) -> f64 {
+        let u = self.update(dt);
+        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2], &self.zero_row);
+        let sym = &self.ev.symbols;
+        let (s2, task) = (sym.row_len(), sym.task_len());
+        let [kl, wl] = [&sym.k2[2], &sym.weight[2]];
+        let hat = self.next.hat.as_slice_mut().expect("standard layout");
+        let copy = self.next.nonlinear.as_slice_mut().expect("standard layout");
+        let lap = self.ev.spare.as_slice_mut().expect("standard layout");
+        hat.par_chunks_mut(task)
+            .zip(copy.par_chunks_mut(task))
+            .zip(lap.par_chunks_mut(task))
+            .enumerate()
+            .map(|(t, ((hat, copy), lap))| {
+                let rows = hat
+                    .chunks_exact_mut(s2)
+                    .zip(copy.chunks_exact_mut(s2))
+                    .zip(lap.chunks_exact_mut(s2));
+                let mut area = 0.0;
+                for (j, ((hat, copy), lap)) in rows.enumerate() {
+                    let r = t * task / s2 + j;
+                    let (kb, wb) = sym.row(r);
+                    let [h1, n1, h0, n0] = inputs.row(r, s2);
+                    for l in 0..s2 {
+                        let k = kb + kl[l];
+                        let (p, q) = u.at(k, h1[l], n1[l], h0[l], n0[l]);
+                        let h = p + q * sigma;
+                        hat[l] = h;
+                        copy[l] = h;
+                        lap[l] = h * (-k);
+                        area += sym.area_prefactor * k * (wb * wl[l]) * h.norm_sqr();
+                    }
+                }
+                area
+            })
+            .sum()
+    }
+
+    /// σ used in this step's update, or `None` if the projection has no real root (only the
+    /// projection needs the sweep of [`SpectralEngine::area_quadratic`]).
+    fn choose_sigma(&self, dt: f64) -> Option<f64> {
         match self.area.method {
             AreaMethod::None => Some(0.0),
             AreaMethod::Lagrangian => Some(self.sigma),
-            AreaMethod::Projection => nearest_root(aqq, apq, app - self.area.target, self.sigma),
+            AreaMethod::Projection => {
+                let (app, apq, aqq) = self.area_quadratic(dt);
+                nearest_root(aqq, apq, app - self.area.target, self.sigma)
+            }
         }
     }
 
@@ -299,21 +354,14 @@ impl SpectralEngine {
     /// Try one step of size `dt`: on success `next` holds the new state (its residual at the
     /// new σ) and the σ of the update and of the new state are returned.
     fn attempt(&mut self, t: f64, dt: f64) -> Result<(f64, f64), Rejection> {
-        let sums = self.affine_update(dt);
-        let sigma = self.choose_sigma(sums).ok_or(Rejection::NoRealRoot)?;
-        let q = self.ev.spare.as_slice().expect("standard layout");
-        self.next
-            .hat
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(PAR_CHUNK)
-            .zip(q.par_chunks(PAR_CHUNK))
-            .for_each(|(p, q)| p.iter_mut().zip(q).for_each(|(p, q)| *p += q * sigma));
+        let sigma = self.choose_sigma(dt).ok_or(Rejection::NoRealRoot)?;
+        let area = self.write_update(dt, sigma);
         let sigma_after = self.sigma_after(sigma);
         self.max_change = self
             .ev
-            .evaluate(
+            .finish(
                 &mut self.next,
+                area,
                 t + dt,
                 Some(&self.cur.phi),
                 Some(sigma_after),

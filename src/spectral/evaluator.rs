@@ -1,5 +1,13 @@
 //! Evaluation of a state from its spectrum φ̂: φ, ∇²φ, Φ, F_sc, A, V and the explicit term,
 //! with two inverse and two forward real transforms (planned once, no allocation per call).
+//!
+//! An evaluation is three sweeps besides the transforms: a spectral one that prepares the two
+//! inverse transforms' inputs (φ̂ and −k²φ̂) and sums A, one over real space (f, f'Φ and the
+//! sums of F, V, max|φ|), and a spectral one that combines the forward transforms into the
+//! explicit term and sums the residual. |k|² and the Parseval weights come from per-axis
+//! tables ([`Symbols`]), not from full-size arrays. An engine that can write the two inverse
+//! inputs itself, in the sweep that makes φ̂ (as the time step does), skips the first sweep
+//! ([`Evaluator::finish`]).
 
 use super::transform::Transform;
 use crate::config::Laplacian;
@@ -31,16 +39,77 @@ pub struct State {
     pub residual: f64,
 }
 
-/// Per-wavenumber tables.
+/// Per-axis tables of the spectrum. At spectral index (i0, i1, i2)
+///
+/// ```text
+/// |k|² = k2[0][i0] + k2[1][i1] + k2[2][i2],     w = weight[0][i0] · weight[1][i1] · weight[2][i2],
+/// ```
+///
+/// with w the Parseval weight times the cell volume (and mirror factor, folded into axis 0), so
+/// that ∫ u v dx = Σ_k w Re(û v̂*) over the full box, and A = Σ_k (3/(2√2)) ε |k|² w |φ̂|².
+/// Passes walk the spectrum row by row (a row is the last axis): a row's first two terms are
+/// taken once ([`Symbols::row`]) and the loop along the row reads the two short last-axis tables.
 pub struct Symbols {
-    /// |k|² (or the FD symbol).
-    pub k2: Vec<f64>,
-    /// Parseval weight × cell volume: ∫ u v dx = Σ_k weight Re(û v̂*). Kept only for the
-    /// gradient (relaxational) evaluator; empty for the conserved one, which needs no inner
-    /// products (half a value per grid point saved).
-    pub weight: Vec<f64>,
-    /// (3/(2√2)) ε |k|² × weight: A = Σ_k area_weight |φ̂|².
-    pub area_weight: Vec<f64>,
+    /// |k|² per axis (or the FD symbol, see [`axis_symbol`]).
+    pub k2: [Vec<f64>; 3],
+    /// Parseval weight per axis, cell volume × mirror factor folded into axis 0.
+    pub weight: [Vec<f64>; 3],
+    /// (3/(2√2)) ε.
+    pub area_prefactor: f64,
+}
+
+impl Symbols {
+    /// The tables of transform `t` on `grid`.
+    pub fn new(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Self {
+        let k2 = t.wavenumbers(grid.h).map(|ks| {
+            ks.iter()
+                .map(|&k| axis_symbol(k, grid.h, laplacian))
+                .collect::<Vec<f64>>()
+        });
+        let mut weight = t.parseval_weights();
+        let dv = grid.cell_volume() * grid.mirror_factor();
+        weight[0].iter_mut().for_each(|w| *w *= dv);
+        Symbols {
+            k2,
+            weight,
+            area_prefactor: AREA_PREFACTOR * eps,
+        }
+    }
+
+    /// Length of a spectral row (the last axis).
+    pub fn row_len(&self) -> usize {
+        self.k2[2].len()
+    }
+
+    /// Spectral values per parallel task: a whole number of rows.
+    pub fn task_len(&self) -> usize {
+        (PAR_CHUNK / self.row_len()).max(1) * self.row_len()
+    }
+
+    /// Axes 0 and 1's share of |k|² and of w on spectral row `r` (`i0 = r / s1`, `i1 = r % s1`).
+    #[inline]
+    pub fn row(&self, r: usize) -> (f64, f64) {
+        let s1 = self.k2[1].len();
+        let (i0, i1) = (r / s1, r % s1);
+        (
+            self.k2[0][i0] + self.k2[1][i1],
+            self.weight[0][i0] * self.weight[1][i1],
+        )
+    }
+
+    /// The full-size table of `f(|k|², w)`, flattened like the spectrum (for engines that reuse
+    /// a per-wavenumber factor in many passes).
+    pub fn table(&self, f: impl Fn(f64, f64) -> f64) -> Vec<f64> {
+        let rows = self.k2[0].len() * self.k2[1].len();
+        let mut out = Vec::with_capacity(rows * self.row_len());
+        for r in 0..rows {
+            let (kb, wb) = self.row(r);
+            for (&k, &w) in self.k2[2].iter().zip(&self.weight[2]) {
+                out.push(f(kb + k, wb * w));
+            }
+        }
+        out
+    }
 }
 
 /// Evaluates a state from its φ̂: the transforms, tables and scratch, planned once.
@@ -51,7 +120,8 @@ pub struct Evaluator {
     pub transform: Transform,
     pub symbols: Symbols,
     explicit: ExplicitTerm,
-    /// Spectral scratch (the engines also use it between evaluations).
+    /// Spectral scratch: the input of the ∇²φ inverse transform, then FT[f] (the engines also
+    /// use it between evaluations).
     pub spare: Array3<Complex64>,
     /// Real scratch: ∇²φ, then f.
     work: Array3<f64>,
@@ -64,13 +134,7 @@ impl Evaluator {
     pub fn new(grid: Grid, eps: f64, c0: C0, laplacian: Laplacian, explicit: ExplicitTerm) -> Self {
         let transform = Transform::new(grid.shape, grid.kinds, rayon::current_num_threads());
         Evaluator {
-            symbols: symbols(
-                &transform,
-                &grid,
-                eps,
-                laplacian,
-                explicit == ExplicitTerm::Gradient,
-            ),
+            symbols: Symbols::new(&transform, &grid, eps, laplacian),
             spare: Array3::zeros(transform.spectral_shape()),
             work: grid.zeros(),
             work2: grid.zeros(),
@@ -104,13 +168,9 @@ impl Evaluator {
         }
     }
 
-    /// From `state.hat`, compute φ, ∇²φ, Φ, F_sc, A, V and N̂ at time `t`
-    /// (two inverse and two forward transforms).
-    ///
-    /// With `previous` (the state before a step) it also returns max|φ − φ_previous|, fused into
-    /// the pointwise pass; otherwise 0. With `sigma` it also sets `state.residual`, the RMS of
-    /// μ − μ̄ over the full box by Parseval, fused into the last spectral pass:
-    /// μ̂ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂ + (3/√2) ε σ k² φ̂ (k ≠ 0).
+    /// From `state.hat` (first projected onto the spectra of real fields), compute φ, ∇²φ, Φ,
+    /// F_sc, A, V and the explicit term at time `t`; see [`Evaluator::finish`] for `previous`
+    /// and `sigma`.
     pub fn evaluate(
         &mut self,
         state: &mut State,
@@ -119,144 +179,241 @@ impl Evaluator {
         sigma: Option<f64>,
     ) -> Result<f64, Diverged> {
         self.transform.hermitian_symmetrize(&mut state.hat);
-        // φ = IFT[φ̂]
-        self.spare.assign(&state.hat);
-        self.transform.inverse(&mut self.spare, &mut state.phi);
-        // ∇²φ = IFT[−k² φ̂], and A = Σ area_weight |φ̂|² in the same pass.
-        let (k2, aw) = (&self.symbols.k2, &self.symbols.area_weight);
-        let hat = state.hat.as_slice().expect("standard layout");
-        let c = PAR_CHUNK;
-        let area: f64 = self
-            .spare
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(c)
-            .zip(hat.par_chunks(c))
-            .zip(k2.par_chunks(c))
-            .zip(aw.par_chunks(c))
-            .map(|(((s, h), k), w)| {
-                let mut a = 0.0;
-                for (((s, h), k), w) in s.iter_mut().zip(h).zip(k).zip(w) {
-                    *s = h * (-k);
-                    a += w * h.norm_sqr();
-                }
-                a
-            })
-            .sum();
+        let area = inverse_inputs(
+            &self.symbols,
+            state.hat.as_slice().expect("standard layout"),
+            state.nonlinear.as_slice_mut().expect("standard layout"),
+            self.spare.as_slice_mut().expect("standard layout"),
+        );
+        self.finish(state, area, t, previous, sigma)
+    }
+
+    /// The evaluation after its first sweep: `state.hat` holds φ̂ (a real field's spectrum),
+    /// `state.nonlinear` a copy of it, `self.spare` −|k|²φ̂, and `area` = A(φ̂) (what
+    /// [`inverse_inputs`] writes and returns). Computes φ, ∇²φ, Φ, F_sc, A, V and the explicit
+    /// term at time `t` (two inverse and two forward transforms).
+    ///
+    /// With `previous` (the state before a step) it also returns max|φ − φ_previous|, fused into
+    /// the pointwise pass; otherwise 0. With `sigma` it also sets `state.residual`, the RMS of
+    /// μ − μ̄ over the full box by Parseval, fused into the last spectral pass:
+    /// μ̂ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂ + (3/√2) ε σ k² φ̂ (k ≠ 0).
+    ///
+    /// # Errors
+    /// [`Diverged`] if φ is not finite or too large.
+    pub fn finish(
+        &mut self,
+        state: &mut State,
+        area: f64,
+        t: f64,
+        previous: Option<&Array3<f64>>,
+        sigma: Option<f64>,
+    ) -> Result<f64, Diverged> {
+        self.transform.inverse(&mut state.nonlinear, &mut state.phi);
         self.transform.inverse(&mut self.spare, &mut self.work);
-        // Φ = f − ε²∇²φ, F = ∫Φ²; work ← f, work2 ← f'Φ
         let r = self.c0.ramp(t);
-        let e2 = self.eps * self.eps;
         let (uniform, field) = self.c0.parts(r);
         let phi = state.phi.as_slice().expect("standard layout");
         let old = previous.map_or(phi, |p| p.as_slice().expect("standard layout"));
-        let c = PAR_CHUNK;
-        // Per point: f, Φ = f − ε²∇²φ, f'Φ; sums Φ², max|φ|, Σφ, max|φ − φ_old|.
-        let body = |p: f64, ec0: f64, lap: &mut f64, fphi: &mut f64, o: f64| {
-            let f = bulk(p, ec0);
-            let big = f - e2 * *lap;
-            *lap = f;
-            *fphi = bulk_derivative(p, ec0) * big;
-            (big * big, p.abs(), p, (p - o).abs())
-        };
-        let add = |a: (f64, f64, f64, f64), b: (f64, f64, f64, f64)| {
-            (a.0 + b.0, a.1.max(b.1), a.2 + b.2, a.3.max(b.3))
-        };
-        let zero = (0.0, 0.0, 0.0, 0.0);
-        let (energy, max_abs, sum_phi, change) = self
-            .work
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(c)
-            .zip(
-                self.work2
-                    .as_slice_mut()
-                    .expect("standard layout")
-                    .par_chunks_mut(c),
-            )
-            .enumerate()
-            .map(|(j, (w, w2))| {
-                let range = j * c..j * c + w.len();
-                let points = phi[range.clone()]
-                    .iter()
-                    .zip(&old[range.clone()])
-                    .zip(w.iter_mut())
-                    .zip(w2.iter_mut());
-                match field {
-                    Some(ec0) => points
-                        .zip(&ec0[range])
-                        .map(|((((&p, &o), lap), fphi), &e)| body(p, r * e, lap, fphi, o))
-                        .fold(zero, add),
-                    None => points
-                        .map(|(((&p, &o), lap), fphi)| body(p, uniform, lap, fphi, o))
-                        .fold(zero, add),
-                }
-            })
-            .reduce(|| zero, add);
+        let sums = pointwise(
+            self.eps,
+            phi,
+            old,
+            (uniform, field.map(|f| (r, f))),
+            self.work.as_slice_mut().expect("standard layout"),
+            self.work2.as_slice_mut().expect("standard layout"),
+        );
         let dv = self.grid.cell_volume() * self.grid.mirror_factor();
         state.measures = Measures {
-            energy: energy * dv,
+            energy: sums.phi_sq * dv,
             area,
             // V = Σ (1 + φ)/2 h^d
-            volume: 0.5 * (phi.len() as f64 + sum_phi) * dv,
+            volume: 0.5 * (phi.len() as f64 + sums.phi) * dv,
         };
-        if model::diverged(max_abs, state.measures.energy) {
+        if model::diverged(sums.max_abs, state.measures.energy) {
             return Err(Diverged(format!(
-                "max|φ| = {max_abs:.3e}, F = {:.3e}: the state diverged",
-                state.measures.energy
+                "max|φ| = {:.3e}, F = {:.3e}: the state diverged",
+                sums.max_abs, state.measures.energy
             )));
         }
         self.transform.forward(&self.work2, &mut state.nonlinear);
         self.transform.forward(&self.work, &mut self.spare);
-        let explicit = self.explicit;
-        let with_residual = sigma.is_some();
-        let tension = AREA_PREFACTOR * 2.0 * self.eps * sigma.unwrap_or(0.0);
-        // 1/weight = (3/(2√2)) ε k² / area_weight, so w|μ̂|² = area_weight |μ̂|² / ((3/(2√2)) ε k²).
-        let per_weight = AREA_PREFACTOR * self.eps;
-        // N̂ (or ĝ) from FT[f'Φ] (in n), FT[f] (g) and φ̂ (h); returns w|μ̂|² (0 at k = 0).
-        let combine = |n: &mut Complex64, g: Complex64, h: Complex64, k: f64, aw: f64| {
-            let gradient = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k);
-            *n = match explicit {
-                // N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f]
-                ExplicitTerm::ConservedRhs => *n * (-2.0 * k) + g * (-2.0 * e2 * k * k),
-                // ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂
-                ExplicitTerm::Gradient => gradient,
-            };
-            if with_residual && k > 0.0 {
-                (gradient + h * (tension * k)).norm_sqr() * aw / (per_weight * k)
-            } else {
-                0.0
-            }
-        };
-        let hat = state.hat.as_slice().expect("standard layout");
-        let weighted_sq: f64 = state
-            .nonlinear
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(c)
-            .zip(
-                self.spare
-                    .as_slice()
-                    .expect("standard layout")
-                    .par_chunks(c),
-            )
-            .zip(hat.par_chunks(c))
-            .zip(self.symbols.k2.par_chunks(c))
-            .zip(self.symbols.area_weight.par_chunks(c))
-            .map(|((((n, g), h), k), aw)| {
-                let mut sum = 0.0;
-                for ((((n, &g), &h), &k), &aw) in n.iter_mut().zip(g).zip(h).zip(k).zip(aw) {
-                    sum += combine(n, g, h, k, aw);
-                }
-                sum
-            })
-            .sum();
+        let weighted_sq = combine(
+            &self.symbols,
+            self.eps,
+            self.explicit,
+            sigma,
+            state.hat.as_slice().expect("standard layout"),
+            self.spare.as_slice().expect("standard layout"),
+            state.nonlinear.as_slice_mut().expect("standard layout"),
+        );
+        self.transform.hermitian_symmetrize(&mut state.nonlinear);
         state.residual = match sigma {
             Some(_) => (weighted_sq / self.grid.full_volume()).sqrt(),
             None => f64::NAN,
         };
-        Ok(change)
+        Ok(sums.change)
     }
+}
+
+/// The first sweep of an evaluation: `copy = φ̂` and `lap = −|k|²φ̂` (the inputs of the two
+/// inverse transforms, which overwrite them); returns A = Σ_k (3/(2√2)) ε |k|² w |φ̂|².
+pub fn inverse_inputs(
+    sym: &Symbols,
+    hat: &[Complex64],
+    copy: &mut [Complex64],
+    lap: &mut [Complex64],
+) -> f64 {
+    let (s2, task) = (sym.row_len(), sym.task_len());
+    copy.par_chunks_mut(task)
+        .zip(lap.par_chunks_mut(task))
+        .zip(hat.par_chunks(task))
+        .enumerate()
+        .map(|(t, ((copy, lap), hat))| {
+            let rows = copy
+                .chunks_exact_mut(s2)
+                .zip(lap.chunks_exact_mut(s2))
+                .zip(hat.chunks_exact(s2));
+            let mut area = 0.0;
+            for (r, ((copy, lap), hat)) in rows.enumerate() {
+                let (kb, wb) = sym.row(t * task / s2 + r);
+                let cols = copy.iter_mut().zip(lap.iter_mut()).zip(hat);
+                for (((c, l), &h), (&kl, &wl)) in cols.zip(sym.k2[2].iter().zip(&sym.weight[2])) {
+                    let k = kb + kl;
+                    *c = h;
+                    *l = h * (-k);
+                    area += sym.area_prefactor * k * (wb * wl) * h.norm_sqr();
+                }
+            }
+            area
+        })
+        .sum()
+}
+
+/// Sums of the pointwise pass.
+struct PointSums {
+    /// Σ Φ².
+    phi_sq: f64,
+    /// Σ φ.
+    phi: f64,
+    /// max |φ|.
+    max_abs: f64,
+    /// max |φ − φ_old|.
+    change: f64,
+}
+
+/// The real-space sweep: with `lap` = ∇²φ on entry, Φ = f(φ) − ε²∇²φ, `lap ← f(φ)` and
+/// `fphi ← f'(φ) Φ`, with εC0 = `uniform` or r × the field; returns Σ Φ², Σ φ, max|φ| and
+/// max|φ − φ_old|.
+fn pointwise(
+    eps: f64,
+    phi: &[f64],
+    old: &[f64],
+    (uniform, field): (f64, Option<(f64, &[f64])>),
+    lap: &mut [f64],
+    fphi: &mut [f64],
+) -> PointSums {
+    let e2 = eps * eps;
+    let body = |p: f64, ec0: f64, o: f64, lap: &mut f64, fphi: &mut f64, acc: &mut PointSums| {
+        let f = bulk(p, ec0);
+        let big = f - e2 * *lap;
+        *lap = f;
+        *fphi = bulk_derivative(p, ec0) * big;
+        acc.phi_sq += big * big;
+        acc.phi += p;
+        acc.max_abs = acc.max_abs.max(p.abs());
+        acc.change = acc.change.max((p - o).abs());
+    };
+    let c = PAR_CHUNK;
+    lap.par_chunks_mut(c)
+        .zip(fphi.par_chunks_mut(c))
+        .enumerate()
+        .map(|(j, (lap, fphi))| {
+            let range = j * c..j * c + lap.len();
+            let mut acc = PointSums {
+                phi_sq: 0.0,
+                phi: 0.0,
+                max_abs: 0.0,
+                change: 0.0,
+            };
+            let points = phi[range.clone()]
+                .iter()
+                .zip(&old[range.clone()])
+                .zip(lap.iter_mut().zip(fphi.iter_mut()));
+            match field {
+                Some((r, ec0)) => {
+                    for (((&p, &o), (l, f)), &e) in points.zip(&ec0[range]) {
+                        body(p, r * e, o, l, f, &mut acc);
+                    }
+                }
+                None => {
+                    for ((&p, &o), (l, f)) in points {
+                        body(p, uniform, o, l, f, &mut acc);
+                    }
+                }
+            }
+            acc
+        })
+        .reduce(
+            || PointSums {
+                phi_sq: 0.0,
+                phi: 0.0,
+                max_abs: 0.0,
+                change: 0.0,
+            },
+            |a, b| PointSums {
+                phi_sq: a.phi_sq + b.phi_sq,
+                phi: a.phi + b.phi,
+                max_abs: a.max_abs.max(b.max_abs),
+                change: a.change.max(b.change),
+            },
+        )
+}
+
+/// The last spectral sweep: from FT[f'Φ] (in `n`), FT[f] (`g`) and φ̂ (`h`) write the explicit
+/// term into `n`: N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f] (conserved) or ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] +
+/// 2ε⁴k⁴ φ̂ (gradient). With `sigma` returns Σ_{k≠0} w |μ̂|², μ̂ = ĝ + (3/√2) ε σ k² φ̂
+/// (0 without).
+fn combine(
+    sym: &Symbols,
+    eps: f64,
+    explicit: ExplicitTerm,
+    sigma: Option<f64>,
+    h: &[Complex64],
+    g: &[Complex64],
+    n: &mut [Complex64],
+) -> f64 {
+    let e2 = eps * eps;
+    let with_residual = sigma.is_some();
+    let tension = 2.0 * sym.area_prefactor * sigma.unwrap_or(0.0);
+    let (s2, task) = (sym.row_len(), sym.task_len());
+    n.par_chunks_mut(task)
+        .zip(g.par_chunks(task))
+        .zip(h.par_chunks(task))
+        .enumerate()
+        .map(|(t, ((n, g), h))| {
+            let rows = n
+                .chunks_exact_mut(s2)
+                .zip(g.chunks_exact(s2))
+                .zip(h.chunks_exact(s2));
+            let mut sum = 0.0;
+            for (r, ((n, g), h)) in rows.enumerate() {
+                let (kb, wb) = sym.row(t * task / s2 + r);
+                let cols = n.iter_mut().zip(g).zip(h);
+                for (((n, &g), &h), (&kl, &wl)) in cols.zip(sym.k2[2].iter().zip(&sym.weight[2])) {
+                    let k = kb + kl;
+                    let gradient = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k);
+                    *n = match explicit {
+                        ExplicitTerm::ConservedRhs => *n * (-2.0 * k) + g * (-2.0 * e2 * k * k),
+                        ExplicitTerm::Gradient => gradient,
+                    };
+                    if with_residual && k > 0.0 {
+                        sum += (wb * wl) * (gradient + h * (tension * k)).norm_sqr();
+                    }
+                }
+            }
+            sum
+        })
+        .sum()
 }
 
 /// One axis's share of the Laplacian's symbol: k² (spectral) or (4/h²) sin²(kh/2) (the
@@ -265,45 +422,5 @@ pub fn axis_symbol(k: f64, h: f64, laplacian: Laplacian) -> f64 {
     match laplacian {
         Laplacian::Spectral => k * k,
         Laplacian::Fd => (2.0 / h * (0.5 * k * h).sin()).powi(2),
-    }
-}
-
-/// |k|² (or the FD symbol) and the area weights of every spectral index (flattened, standard
-/// layout).
-pub fn symbols(
-    t: &Transform,
-    grid: &Grid,
-    eps: f64,
-    laplacian: Laplacian,
-    keep_weight: bool,
-) -> Symbols {
-    let k = t.wavenumbers(grid.h).map(|ks| {
-        ks.iter()
-            .map(|&k| axis_symbol(k, grid.h, laplacian))
-            .collect::<Vec<f64>>()
-    });
-    let w = t.parseval_weights();
-    let [s0, s1, s2] = t.spectral_shape();
-    let mut k2 = Vec::with_capacity(s0 * s1 * s2);
-    let mut area_weight = Vec::with_capacity(s0 * s1 * s2);
-    let mut weight = Vec::with_capacity(if keep_weight { s0 * s1 * s2 } else { 0 });
-    let dv = grid.cell_volume() * grid.mirror_factor();
-    for i in 0..s0 {
-        for j in 0..s1 {
-            for l in 0..s2 {
-                let kk = k[0][i] + k[1][j] + k[2][l];
-                k2.push(kk);
-                let wt = dv * w[0][i] * w[1][j] * w[2][l];
-                if keep_weight {
-                    weight.push(wt);
-                }
-                area_weight.push(AREA_PREFACTOR * eps * kk * wt);
-            }
-        }
-    }
-    Symbols {
-        k2,
-        weight,
-        area_weight,
     }
 }
