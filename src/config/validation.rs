@@ -105,6 +105,12 @@ impl Scene {
         if self.lbfgs_memory == 0 {
             return Err(Error::config("lbfgs_memory", "must be at least 1"));
         }
+        if self.lbfgs_memory > crate::relax::MAX_MEMORY {
+            return Err(Error::config(
+                "lbfgs_memory",
+                format!("must be at most {}", crate::relax::MAX_MEMORY),
+            ));
+        }
         if !(self.stabilizer().s2 >= 0.0 && self.stabilizer().s2.is_finite()) {
             return Err(Error::config("stabilizer.s2", "must be finite and ≥ 0"));
         }

@@ -48,20 +48,28 @@ impl Update {
     /// P̂ and Q̂ at |k|² = `k` from φ̂ⁿ, N̂ⁿ (`h1`, `n1`) and φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (`h0`, `n0`):
     /// P̂ = [−a1 φ̂ⁿ − a2 φ̂ⁿ⁻¹ + Δt(b1(N̂ⁿ + Sφ̂ⁿ) + b2(N̂ⁿ⁻¹ + Sφ̂ⁿ⁻¹))]/D,
     /// Q̂ = −Δt c_σ k⁴ (b1 φ̂ⁿ + b2 φ̂ⁿ⁻¹)/D, D = a0 + Δt(2ε⁴k⁶ + S).
+    /// `PREV` false drops the φ̂ⁿ⁻¹, N̂ⁿ⁻¹ terms at compile time (SBDF1); else they are
+    /// `h0[l]`, `n0[l]`.
     #[inline(always)]
-    fn at(
+    fn at<const PREV: bool>(
         &self,
         k: f64,
         h1: Complex64,
         n1: Complex64,
-        h0: Complex64,
-        n0: Complex64,
+        h0: &[Complex64],
+        n0: &[Complex64],
+        l: usize,
     ) -> (Complex64, Complex64) {
         let [a0, a1, a2, b1, b2] = self.a;
         let s = self.s2 * k + self.s4e2 * k * k;
         let inv = 1.0 / (a0 + self.dt * (self.e4x2 * k * k * k + s));
-        let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * self.dt;
         let qc = -self.dt * self.c_sigma * k * k * inv;
+        if !PREV {
+            let rhs = h1 * (-a1) + (n1 + h1 * s) * (b1 * self.dt);
+            return (rhs * inv, h1 * (b1 * qc));
+        }
+        let (h0, n0) = (h0[l], n0[l]);
+        let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * self.dt;
         (rhs * inv, (h1 * b1 + h0 * b2) * qc)
     }
 }
@@ -258,6 +266,21 @@ impl SpectralEngine {
     /// returns (A_PP, A_PQ, A_QQ) = Σ_k a (|P̂|², Re(P̂ Q̂*), |Q̂|²), a = (3/(2√2)) ε |k|² w.
     /// A read-only sweep: nothing is stored.
     fn area_quadratic(&self, dt: f64) -> (f64, f64, f64) {
+        if self.uses_prev(dt) {
+            self.area_quadratic_with::<true>(dt)
+        } else {
+            self.area_quadratic_with::<false>(dt)
+        }
+    }
+
+    /// Whether this step's formula reads φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (SBDF2 after its first step).
+    fn uses_prev(&self, dt: f64) -> bool {
+        self.prev.is_some() && self.coefficients(dt)[2] != 0.0
+    }
+
+    /// [`SpectralEngine::area_quadratic`]; `PREV` false compiles the SBDF1 form (no
+    /// φ̂ⁿ⁻¹, N̂ⁿ⁻¹ terms).
+    fn area_quadratic_with<const PREV: bool>(&self, dt: f64) -> (f64, f64, f64) {
         let u = self.update(dt);
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2], &self.zero_row);
         let sym = &self.ev.symbols;
@@ -273,7 +296,7 @@ impl SpectralEngine {
                     let [h1, n1, h0, n0] = inputs.row(r, s2);
                     for l in 0..s2 {
                         let k = kb + kl[l];
-                        let (p, q) = u.at(k, h1[l], n1[l], h0[l], n0[l]);
+                        let (p, q) = u.at::<PREV>(k, h1[l], n1[l], h0, n0, l);
                         let a = sym.area_prefactor * k * (wb * wl[l]);
                         acc[0] += a * p.norm_sqr();
                         acc[1] += a * (p.re * q.re + p.im * q.im);
@@ -290,6 +313,15 @@ impl SpectralEngine {
     /// transforms written in the same sweep (a copy into `next.nonlinear`, −|k|²φ̂^{n+1} into
     /// the evaluator's spare; see [`Evaluator::finish`]); returns A(φ̂^{n+1}).
     fn write_update(&mut self, dt: f64, sigma: f64) -> f64 {
+        if self.uses_prev(dt) {
+            self.write_update_with::<true>(dt, sigma)
+        } else {
+            self.write_update_with::<false>(dt, sigma)
+        }
+    }
+
+    /// [`SpectralEngine::write_update`]; `PREV` as in [`SpectralEngine::area_quadratic_with`].
+    fn write_update_with<const PREV: bool>(&mut self, dt: f64, sigma: f64) -> f64 {
         let u = self.update(dt);
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2], &self.zero_row);
         let sym = &self.ev.symbols;
@@ -314,7 +346,7 @@ impl SpectralEngine {
                     let [h1, n1, h0, n0] = inputs.row(r, s2);
                     for l in 0..s2 {
                         let k = kb + kl[l];
-                        let (p, q) = u.at(k, h1[l], n1[l], h0[l], n0[l]);
+                        let (p, q) = u.at::<PREV>(k, h1[l], n1[l], h0, n0, l);
                         let h = p + q * sigma;
                         hat[l] = h;
                         copy[l] = h;
