@@ -338,7 +338,7 @@ impl FdEngine {
         self.measures = measures;
         self.sigma = sigma;
         self.t = t + dt;
-        self.mu_mean = self.mu_mean + m1;
+        self.mu_mean += m1;
         self.residual = (m2 - m1 * m1).max(0.0).sqrt();
         Ok(StepReport {
             dt,
@@ -550,10 +550,14 @@ mod tests {
             with(json!({"c0": ball})),
             with(json!({"symmetry": ["x", "y", "z"], "c0": 0.2})),
             with(json!({"symmetry": ["x"], "n": [24, 22, 26], "h": 1.1})),
-            with(json!({"dim": 2, "n": [32, 28], "initial": {"shape": "spheroid",
-                "reduced_volume": 0.8, "r0": 6.0}, "c0": ball})),
-            with(json!({"c0": {"inside": 0.4, "outside": 0.0, "radius": 4.0, "width": 2.0,
-                "ramp_time": 0.003}})),
+            with(
+                json!({"dim": 2, "n": [32, 28], "initial": {"shape": "spheroid",
+                "reduced_volume": 0.8, "r0": 6.0}, "c0": ball}),
+            ),
+            with(
+                json!({"c0": {"inside": 0.4, "outside": 0.0, "radius": 4.0, "width": 2.0,
+                "ramp_time": 0.003}}),
+            ),
         ];
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()

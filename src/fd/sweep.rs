@@ -323,7 +323,11 @@ impl Pipe {
     #[inline(always)]
     fn potential(&mut self, s: &Slab, z: isize, phi: &[f64], mu: &mut [f64], sums: &mut Sums) {
         let (l, p) = (s.l, s.l.plane());
-        let phis = [s.phi(z - 1, phi, &self.halo), s.phi(z, phi, &self.halo), s.phi(z + 1, phi, &self.halo)];
+        let phis = [
+            s.phi(z - 1, phi, &self.halo),
+            s.phi(z, phi, &self.halo),
+            s.phi(z + 1, phi, &self.halo),
+        ];
         let big = &mut self.big[ring(z) * p..][..p];
         let (c0, scale) = match s.f.c0 {
             Some(c) => (l.plane_of(c, z), s.k.ramp),
