@@ -9,7 +9,7 @@ use rayon::prelude::*;
 /// Index of the neighbour below `i` on an axis of length `n`: periodic wrap, or the mirror
 /// ghost φ_{−1} = φ_0.
 #[inline]
-fn below(i: usize, n: usize, kind: AxisKind) -> usize {
+pub(crate) fn below(i: usize, n: usize, kind: AxisKind) -> usize {
     match (i, kind) {
         (0, AxisKind::Periodic) => n - 1,
         (0, AxisKind::Mirror) => 0,
@@ -19,7 +19,7 @@ fn below(i: usize, n: usize, kind: AxisKind) -> usize {
 
 /// Index of the neighbour above `i`: periodic wrap, or the mirror ghost φ_m = φ_{m−1}.
 #[inline]
-fn above(i: usize, n: usize, kind: AxisKind) -> usize {
+pub(crate) fn above(i: usize, n: usize, kind: AxisKind) -> usize {
     match (i + 1 == n, kind) {
         (true, AxisKind::Periodic) => 0,
         (true, AxisKind::Mirror) => n - 1,
