@@ -1,11 +1,13 @@
 //! One complete time step of each engine (criterion): the spectral SBDF1 step (four real
-//! transforms, the fused pointwise passes and the area projection) and the FD explicit-Euler
-//! step, on full periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads.
-//! Compare with `benches/fft.rs` (the transforms alone) and DESIGN.md §3's C/FFTW figures
-//! (3.7 ms at 64³, 49 ms at 128³, one thread).
+//! transforms, the fused sweeps and the area projection) and the FD explicit-Euler step, on full
+//! periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads; and one L-BFGS
+//! iteration of the relaxational engine against one conserved step on the 48³ prolate of
+//! DESIGN.md §7. Compare with `benches/fft.rs` (the transforms alone) and with the C floors of
+//! `../shared/bench` timed in the same session (README, "Performance").
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use serde_json::json;
+use std::time::{Duration, Instant};
 use vesicle::config;
 use vesicle::engine::Engine;
 use vesicle::setup;
@@ -13,13 +15,17 @@ use vesicle::simulation::Simulation;
 
 /// A prepared engine for a prolate (v = 0.85, R0 = n/4) on an n³ box.
 fn engine(method: &str, n: usize, symmetry: serde_json::Value) -> Box<dyn Engine + Send> {
-    let scene = config::from_value(json!({
+    engine_of(json!({
         "dim": 3, "n": [n, n, n], "h": 1.0, "eps": 1.0, "method": method,
         "dt": if method == "fd" { 4e-4 } else { 0.5 }, "max_steps": 1,
         "initial": {"shape": "spheroid", "reduced_volume": 0.85, "r0": n as f64 / 4.0},
         "symmetry": symmetry
     }))
-    .expect("scene");
+}
+
+/// The engine of a scene given as JSON.
+fn engine_of(scene: serde_json::Value) -> Box<dyn Engine + Send> {
+    let scene = config::from_value(scene).expect("scene");
     let problem = setup::build(&scene).expect("problem");
     Simulation::of_scene(&scene, &problem)
         .expect("engine")
@@ -67,9 +73,73 @@ fn bench_steps(c: &mut Criterion) {
     group.finish();
 }
 
+/// The 48³ full-box prolate of DESIGN.md §7 (`runs/prolate3d_full.json`) with `dynamics`.
+fn prolate48(dynamics: &str) -> Box<dyn Engine + Send> {
+    let mut scene = json!({
+        "dim": 3, "n": [48, 48, 48], "h": 1.0, "eps": 1.0, "method": "spectral",
+        "dynamics": dynamics, "dt": 0.5, "max_steps": 1,
+        "initial": {"shape": "ellipsoid", "axes": [17.0, 10.0, 10.0]}
+    });
+    if dynamics == "relaxational" {
+        scene["dt"] = json!(1.0);
+    }
+    engine_of(scene)
+}
+
+/// One L-BFGS iteration and one conserved SBDF1 step on the 48³ prolate. Every timed
+/// iteration is one of iterations 10 to 39 of a fresh relaxation (the memory full, the line
+/// search past its start-up), so the figure does not drift as the shape converges.
+fn bench_relaxation(c: &mut Criterion) {
+    let mut group = c.benchmark_group("relax");
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool");
+        let fresh = || {
+            let mut e = prolate48("relaxational");
+            (0..10).for_each(|i| {
+                e.step(i as f64, 1.0).expect("iteration");
+            });
+            e
+        };
+        let mut e = pool.install(fresh);
+        let mut taken = 0;
+        let id = BenchmarkId::new("lbfgs_iteration", format!("48^3/t{threads}"));
+        group.bench_function(id, |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    if taken == 30 {
+                        e = pool.install(fresh);
+                        taken = 0;
+                    }
+                    let start = Instant::now();
+                    pool.install(|| e.step(0.0, 1.0).expect("iteration"));
+                    total += start.elapsed();
+                    taken += 1;
+                }
+                total
+            })
+        });
+        let mut e = pool.install(|| prolate48("conserved"));
+        let mut t = 0.0;
+        let id = BenchmarkId::new("conserved_step", format!("48^3/t{threads}"));
+        group.bench_function(id, |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    e.step(t, 0.5).expect("step");
+                    t += 0.5;
+                })
+            })
+        });
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();
-    targets = bench_steps
+    targets = bench_steps, bench_relaxation
 }
 criterion_main!(benches);

@@ -802,6 +802,19 @@ impl Engine for RelaxEngine {
         let array = |v: &Vec<Complex64>| {
             SavedArray::Complex(Array3::from_shape_vec(shape, v.clone()).expect("spectral shape"))
         };
+        // The Gram entries and this iteration's inner products as they were accumulated, so
+        // that a resumed run is bitwise the uninterrupted one.
+        let n = self.pairs.len();
+        let gram = Array3::from_shape_fn((2, n, n), |(g, i, j)| {
+            [&self.sy, &self.yy][g][i * MAX_MEMORY + j]
+        });
+        let last = Array3::from_shape_fn((1, 2, n), |(_, g, j)| {
+            [&self.last.s_r, &self.last.y_r][g][j]
+        });
+        saved = saved
+            .scalar("fresh", if self.fresh { 1.0 } else { 0.0 })
+            .array("gram", SavedArray::Real(gram))
+            .array("inner_products", SavedArray::Real(last));
         for (i, p) in self.pairs.iter().enumerate() {
             saved = saved
                 .scalar(&format!("rho_{i}"), 1.0 / self.sy[i * MAX_MEMORY + i])
@@ -834,7 +847,23 @@ impl Engine for RelaxEngine {
             };
             self.pairs.push_back(pair);
         }
-        self.rebuild_gram();
+        let n = n as usize;
+        match (
+            saved.real("gram", &[2, n, n]),
+            saved.real("inner_products", &[1, 2, n]),
+        ) {
+            (Ok(gram), Ok(last)) => {
+                for ((g, i, j), v) in gram.indexed_iter() {
+                    [&mut self.sy, &mut self.yy][g][i * MAX_MEMORY + j] = *v;
+                }
+                for ((_, g, j), v) in last.indexed_iter() {
+                    [&mut self.last.s_r, &mut self.last.y_r][g][j] = *v;
+                }
+                self.fresh = saved.get("fresh")? != 0.0;
+            }
+            // A checkpoint from before the Gram was kept: recompute it.
+            _ => self.rebuild_gram(),
+        }
         self.ev
             .evaluate(&mut self.cur, t, None, None)
             .map_err(|d| d.0)?;
