@@ -54,7 +54,8 @@ struct Pair {
     y: Vec<Complex64>,
 }
 
-/// Per-wavenumber factors from the per-axis tables: |k|², w, M(k) and q/φ̂ = c_σ k²/M.
+/// The constants of the preconditioner M(k) and of q/φ̂ = c_σ k²/M (|k|² and w come from the
+/// per-axis tables).
 #[derive(Clone, Copy)]
 struct Metric {
     e2: f64,
@@ -381,7 +382,7 @@ impl RelaxEngine {
     fn write_direction(&mut self, d: &mut Direction) {
         let sym = &self.ev.symbols;
         let m = self.metric;
-        let (n, off) = (d.n, d.off);
+        let off = d.off;
         let pairs = &self.pairs;
         let (r, hat) = (flat(&self.grad), flat(&self.cur.hat));
         let (s2, task) = (sym.row_len(), sym.task_len());
@@ -418,7 +419,6 @@ impl RelaxEngine {
                 qd
             })
             .sum();
-        debug_assert!(n <= self.pairs.len());
         let project = self.area.method != AreaMethod::None && self.qq > 0.0;
         d.c_q = if project { -qd / self.qq } else { 0.0 };
         d.slope += d.c_q * self.last.qr;

@@ -74,13 +74,11 @@ impl Update {
     }
 }
 
-/// φ̂ⁿ, N̂ⁿ and (SBDF2) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, flattened; a row of zeros stands for the last two under
-/// SBDF1.
+/// φ̂ⁿ, N̂ⁿ and (SBDF2) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, flattened.
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
     cur: (&'a [Complex64], &'a [Complex64]),
     prev: Option<(&'a [Complex64], &'a [Complex64])>,
-    zeros: &'a [Complex64],
 }
 
 impl<'a> Inputs<'a> {
@@ -89,23 +87,22 @@ impl<'a> Inputs<'a> {
         cur: &'a State,
         prev: Option<&'a (Array3<Complex64>, Array3<Complex64>)>,
         a2: f64,
-        zeros: &'a [Complex64],
     ) -> Self {
         let flat = |a: &'a Array3<Complex64>| a.as_slice().expect("standard layout");
         Inputs {
             cur: (flat(&cur.hat), flat(&cur.nonlinear)),
             prev: prev.filter(|_| a2 != 0.0).map(|(h, n)| (flat(h), flat(n))),
-            zeros,
         }
     }
 
-    /// Row `r` (of length `s2`) of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹.
+    /// Row `r` (of length `s2`) of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (the last two empty without a previous
+    /// step: the SBDF1 form of [`Update::at`] does not read them).
     #[inline]
     fn row(&self, r: usize, s2: usize) -> [&'a [Complex64]; 4] {
         let range = r * s2..(r + 1) * s2;
         let (h0, n0) = match self.prev {
             Some((h, n)) => (&h[range.clone()], &n[range.clone()]),
-            None => (&self.zeros[..s2], &self.zeros[..s2]),
+            None => (&[][..], &[][..]),
         };
         [&self.cur.0[range.clone()], &self.cur.1[range], h0, n0]
     }
@@ -189,8 +186,6 @@ pub struct SpectralEngine {
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see `check_constraints`).
     energy_guard: bool,
-    /// One spectral row of zeros (φ̂ⁿ⁻¹ and N̂ⁿ⁻¹ under SBDF1).
-    zero_row: Vec<Complex64>,
 }
 
 impl SpectralEngine {
@@ -207,7 +202,6 @@ impl SpectralEngine {
             ExplicitTerm::ConservedRhs,
         );
         let cur = ev.state_of(&phi, 0.0)?;
-        let ev_row_len = ev.symbols.row_len();
         let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
             dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
             dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
@@ -228,7 +222,6 @@ impl SpectralEngine {
             area: AreaConstraint::none(),
             dt_next: None,
             energy_guard: true,
-            zero_row: vec![Complex64::default(); ev_row_len],
         })
     }
 
@@ -282,7 +275,7 @@ impl SpectralEngine {
     /// φ̂ⁿ⁻¹, N̂ⁿ⁻¹ terms).
     fn area_quadratic_with<const PREV: bool>(&self, dt: f64) -> (f64, f64, f64) {
         let u = self.update(dt);
-        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2], &self.zero_row);
+        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
         let s2 = sym.row_len();
         let (rows, per_task) = (self.cur.hat.len() / s2, sym.task_len() / s2);
@@ -323,7 +316,7 @@ impl SpectralEngine {
     /// [`SpectralEngine::write_update`]; `PREV` as in [`SpectralEngine::area_quadratic_with`].
     fn write_update_with<const PREV: bool>(&mut self, dt: f64, sigma: f64) -> f64 {
         let u = self.update(dt);
-        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2], &self.zero_row);
+        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
         let (s2, task) = (sym.row_len(), sym.task_len());
         let [kl, wl] = [&sym.k2[2], &sym.weight[2]];

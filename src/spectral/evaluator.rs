@@ -96,20 +96,6 @@ impl Symbols {
             self.weight[0][i0] * self.weight[1][i1],
         )
     }
-
-    /// The full-size table of `f(|k|², w)`, flattened like the spectrum (for engines that reuse
-    /// a per-wavenumber factor in many passes).
-    pub fn table(&self, f: impl Fn(f64, f64) -> f64) -> Vec<f64> {
-        let rows = self.k2[0].len() * self.k2[1].len();
-        let mut out = Vec::with_capacity(rows * self.row_len());
-        for r in 0..rows {
-            let (kb, wb) = self.row(r);
-            for (&k, &w) in self.k2[2].iter().zip(&self.weight[2]) {
-                out.push(f(kb + k, wb * w));
-            }
-        }
-        out
-    }
 }
 
 /// Evaluates a state from its φ̂: the transforms, tables and scratch, planned once.
@@ -257,7 +243,7 @@ impl Evaluator {
 
 /// The first sweep of an evaluation: `copy = φ̂` and `lap = −|k|²φ̂` (the inputs of the two
 /// inverse transforms, which overwrite them); returns A = Σ_k (3/(2√2)) ε |k|² w |φ̂|².
-pub fn inverse_inputs(
+fn inverse_inputs(
     sym: &Symbols,
     hat: &[Complex64],
     copy: &mut [Complex64],
