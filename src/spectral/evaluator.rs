@@ -20,12 +20,40 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
 
 /// Which explicit term [`Evaluator::evaluate`] leaves in `State::nonlinear`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ExplicitTerm {
     /// The conserved flow's explicit part N̂ = −2|k|² FT[f'Φ] − 2ε²|k|⁴ FT[f].
     ConservedRhs,
-    /// The full gradient ĝ = FT[δF_sc/δφ] = 2 FT[f'Φ] + 2ε²|k|² FT[f] + 2ε⁴|k|⁴ φ̂.
-    Gradient,
+    /// The full gradient ĝ = FT[δF_sc/δφ] = 2 FT[f'Φ] + 2ε²|k|² FT[f] + 2ε⁴|k|⁴ φ̂, with the
+    /// area multiplier's sums in the metric given (`State::multiplier_sums`).
+    Gradient(Metric),
+}
+
+/// The relaxational engine's metric ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*) (DESIGN.md §7), M(k) =
+/// 2ε⁴k⁴ + 8 + 8ε²k² (the Hessian of F_sc in the bulk), and the area gradient's preconditioned
+/// direction q = M⁻¹â = (c_σ|k|²/M) φ̂, c_σ = 3ε/√2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Metric {
+    /// ε².
+    pub e2: f64,
+    /// c_σ = 3ε/√2 (â = c_σ |k|² φ̂).
+    pub c_sigma: f64,
+}
+
+impl Metric {
+    /// The metric for interface width `eps`.
+    pub fn new(eps: f64) -> Self {
+        Metric {
+            e2: eps * eps,
+            c_sigma: 3.0 / std::f64::consts::SQRT_2 * eps,
+        }
+    }
+
+    /// M(k) = 2ε⁴k⁴ + 8 + 8ε²k² at |k|² = `k`.
+    #[inline(always)]
+    pub fn at(&self, k: f64) -> f64 {
+        2.0 * self.e2 * self.e2 * k * k + 8.0 + 8.0 * self.e2 * k
+    }
 }
 
 /// A state of the engine: φ in both spaces, its explicit term N̂ and its measures.
@@ -37,6 +65,9 @@ pub struct State {
     /// RMS over the full box of μ − μ̄ at the σ given to [`Evaluator::evaluate`] (NaN when none
     /// was given).
     pub residual: f64,
+    /// With [`ExplicitTerm::Gradient`]: (⟨q, q⟩_M, ⟨ĝ, q⟩), q = M⁻¹â, whose ratio is the area
+    /// multiplier that makes M⁻¹(ĝ + σâ) tangent to A = A0 (zeros otherwise).
+    pub multiplier_sums: (f64, f64),
 }
 
 /// Per-axis tables of the spectrum. At spectral index (i0, i1, i2)
@@ -151,6 +182,7 @@ impl Evaluator {
             phi: self.grid.zeros(),
             measures: Measures::default(),
             residual: f64::NAN,
+            multiplier_sums: (0.0, 0.0),
         }
     }
 
@@ -223,7 +255,7 @@ impl Evaluator {
         }
         self.transform.forward(&self.work2, &mut state.nonlinear);
         self.transform.forward(&self.work, &mut self.spare);
-        let weighted_sq = combine(
+        let combined = combine(
             &self.symbols,
             self.eps,
             self.explicit,
@@ -234,9 +266,10 @@ impl Evaluator {
         );
         self.transform.hermitian_symmetrize(&mut state.nonlinear);
         state.residual = match sigma {
-            Some(_) => (weighted_sq / self.grid.full_volume()).sqrt(),
+            Some(_) => (combined.residual_sq / self.grid.full_volume()).sqrt(),
             None => f64::NAN,
         };
+        state.multiplier_sums = (combined.qq, combined.gq);
         Ok(sums.change)
     }
 }
@@ -355,10 +388,31 @@ fn pointwise(
         )
 }
 
+/// The sums of [`combine`].
+#[derive(Clone, Copy, Default)]
+struct CombineSums {
+    /// Σ_{k≠0} w |μ̂|².
+    residual_sq: f64,
+    /// ⟨q, q⟩_M = Σ w M |q̂|², q̂ = (c_σ k²/M) φ̂.
+    qq: f64,
+    /// ⟨ĝ, q⟩ = Σ w Re(ĝ q̂*).
+    gq: f64,
+}
+
+impl CombineSums {
+    fn add(self, o: Self) -> Self {
+        CombineSums {
+            residual_sq: self.residual_sq + o.residual_sq,
+            qq: self.qq + o.qq,
+            gq: self.gq + o.gq,
+        }
+    }
+}
+
 /// The last spectral sweep: from FT[f'Φ] (in `n`), FT[f] (`g`) and φ̂ (`h`) write the explicit
 /// term into `n`: N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f] (conserved) or ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] +
-/// 2ε⁴k⁴ φ̂ (gradient). With `sigma` returns Σ_{k≠0} w |μ̂|², μ̂ = ĝ + (3/√2) ε σ k² φ̂
-/// (0 without).
+/// 2ε⁴k⁴ φ̂ (gradient, with the multiplier's sums ⟨q, q⟩_M and ⟨ĝ, q⟩ in its metric). With
+/// `sigma` it also sums Σ_{k≠0} w |μ̂|², μ̂ = ĝ + (3/√2) ε σ k² φ̂.
 fn combine(
     sym: &Symbols,
     eps: f64,
@@ -367,7 +421,7 @@ fn combine(
     h: &[Complex64],
     g: &[Complex64],
     n: &mut [Complex64],
-) -> f64 {
+) -> CombineSums {
     let e2 = eps * eps;
     let with_residual = sigma.is_some();
     let tension = 2.0 * sym.area_prefactor * sigma.unwrap_or(0.0);
@@ -381,25 +435,32 @@ fn combine(
                 .chunks_exact_mut(s2)
                 .zip(g.chunks_exact(s2))
                 .zip(h.chunks_exact(s2));
-            let mut sum = 0.0;
+            let mut sums = CombineSums::default();
             for (r, ((n, g), h)) in rows.enumerate() {
                 let (kb, wb) = sym.row(t * task / s2 + r);
                 let cols = n.iter_mut().zip(g).zip(h);
                 for (((n, &g), &h), (&kl, &wl)) in cols.zip(sym.k2[2].iter().zip(&sym.weight[2])) {
                     let k = kb + kl;
+                    let w = wb * wl;
                     let gradient = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k);
                     *n = match explicit {
                         ExplicitTerm::ConservedRhs => *n * (-2.0 * k) + g * (-2.0 * e2 * k * k),
-                        ExplicitTerm::Gradient => gradient,
+                        ExplicitTerm::Gradient(m) => {
+                            // w M |q̂|² = w c_σ k (c_σ k/M) |φ̂|².
+                            let q_over_h = m.c_sigma * k / m.at(k);
+                            sums.qq += w * m.c_sigma * k * q_over_h * h.norm_sqr();
+                            sums.gq += w * q_over_h * (gradient.re * h.re + gradient.im * h.im);
+                            gradient
+                        }
                     };
                     if with_residual && k > 0.0 {
-                        sum += (wb * wl) * (gradient + h * (tension * k)).norm_sqr();
+                        sums.residual_sq += w * (gradient + h * (tension * k)).norm_sqr();
                     }
                 }
             }
-            sum
+            sums
         })
-        .sum()
+        .reduce(CombineSums::default, CombineSums::add)
 }
 
 /// One axis's share of the Laplacian's symbol: k² (spectral) or (4/h²) sin²(kh/2) (the

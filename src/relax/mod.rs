@@ -1,0 +1,931 @@
+//! `"dynamics": "relaxational"`: the fastest route to the conserved flow's stationary states
+//! (DESIGN.md §7), a preconditioned L-BFGS on the constrained energy.
+//!
+//! Minimise F_sc(φ) subject to V(φ) = V0 (the k = 0 mode is never changed) and A(φ) = A0.
+//! With the metric ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*), M(k) = 2ε⁴k⁴ + 8 + 8ε²k² (the Hessian of
+//! F_sc in the bulk), the preconditioned gradient is
+//!
+//! ```text
+//! r = M⁻¹ (ĝ + σ â),   ĝ = FT[δF_sc/δφ],   â = FT[δA/δφ] = (3/√2) ε k² φ̂,   r(0) = 0,
+//! σ = −⟨ĝ, M⁻¹â⟩ / ⟨â, M⁻¹â⟩            (r tangent to A = A0),
+//! ```
+//!
+//! the search direction is the two-loop recursion in the M metric, projected onto the tangent
+//! space; a trial point φ + α d is retracted onto A = A0 along q = M⁻¹â (a quadratic in the step,
+//! as in the spectral projection), and α is backtracked until Armijo's condition on F_sc holds.
+//! The memory is reset when the direction is not a descent direction. At a stationary point
+//! μ = δF_sc/δφ + σ δA/δφ is constant: the residual reported is the RMS of μ − mean(μ).
+//! `t` advances by the nominal `dt` per iteration and is not physical time.
+//!
+//! **Cost.** The two-loop recursion is run on coefficients, not on vectors (the "vector-free"
+//! form): its inner products are all combinations of ⟨s_i, r⟩, ⟨y_i, r⟩, ⟨q, y_i⟩, ⟨r, r⟩,
+//! ⟨q, r⟩ and of the Gram entries ⟨s_i, y_j⟩, ⟨y_i, y_j⟩, so the direction
+//! d = −c_r r − Σ c_y,i y_i − Σ c_s,i s_i + c_q q is written in one sweep. An iteration is three
+//! sweeps besides the evaluation:
+//! * the direction, which also sums the six coefficients of the area of φ̂ + α d' + β q as a
+//!   quadratic in (α, β), so that the retraction's root needs no sweep of its own;
+//! * the trial state, written with the evaluation's two inverse inputs (the evaluation's last
+//!   sweep sums the multiplier's ⟨q, q⟩_M and ⟨ĝ, q⟩);
+//! * the gradient r of the accepted state with the new pair (s, y), which also takes the inner
+//!   products of r, q and the new pair with every stored pair: the next iteration's recursion
+//!   and the Gram matrix's new row and column.
+//!
+//! Rows are walked in pieces of [`PIECE`] values whose per-wavenumber factors are formed once,
+//! and the loops run over the spectra as interleaved (re, im) reals; the reductions are the
+//! vectorised kernels of [`kernels`].
+
+mod kernels;
+
+use crate::config::{AreaMethod, Scene};
+use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
+use crate::grid::Grid;
+use crate::model::{Measures, C0};
+use crate::numerics::nearest_root;
+use crate::spectral::evaluator::{Evaluator, ExplicitTerm, Metric, State, Symbols};
+use kernels::{dot3, pair_sums};
+use ndarray::Array3;
+use rayon::prelude::*;
+use rustfft::num_complex::Complex64;
+use std::collections::VecDeque;
+
+/// Armijo constant: accept when F(φ + αd) ≤ F(φ) + c α ⟨∇F, d⟩.
+const ARMIJO: f64 = 1e-4;
+/// Backtracking halvings before the line search gives up.
+const MAX_BACKTRACKS: usize = 40;
+/// Values per piece of a row: a piece's factors and work vectors stay in L1.
+const PIECE: usize = 64;
+/// Largest L-BFGS memory (the coefficient recursion keeps its sums in fixed arrays).
+pub const MAX_MEMORY: usize = 32;
+
+/// One stored L-BFGS pair (s, y), flattened like the spectrum.
+struct Pair {
+    s: Vec<Complex64>,
+    y: Vec<Complex64>,
+}
+
+/// ⟨s_i, r⟩_M, ⟨y_i, r⟩_M and ⟨q, y_i⟩_M of the current state per pair (oldest first), and
+/// ⟨r, r⟩_M, ⟨q, r⟩_M.
+#[derive(Clone, Copy)]
+struct InnerProducts {
+    s_r: [f64; MAX_MEMORY],
+    y_r: [f64; MAX_MEMORY],
+    q_y: [f64; MAX_MEMORY],
+    rr: f64,
+    qr: f64,
+}
+
+/// The unprojected direction d' = −c_r r − Σ c_y,i y_i − Σ c_s,i s_i over the pairs from
+/// position `off`, its projection coefficient (d = d' + c_q q), slope ⟨r, d⟩_M,
+/// and the area sums of φ̂ + α d' + β q (see [`AreaSums`]).
+#[derive(Clone, Copy)]
+struct Direction {
+    off: usize,
+    c_r: f64,
+    c_y: [f64; MAX_MEMORY],
+    c_s: [f64; MAX_MEMORY],
+    c_q: f64,
+    slope: f64,
+    area: AreaSums,
+}
+
+/// A(x + α d' + β q) = xx + 2α xd + α² dd + 2β (xq + α qd) + β² qq, the sums weighted by
+/// (3/(2√2)) ε |k|² w (x = φ̂, q = (c_σ|k|²/M) φ̂).
+#[derive(Clone, Copy, Default)]
+struct AreaSums {
+    xx: f64,
+    xq: f64,
+    qq: f64,
+    xd: f64,
+    qd: f64,
+    dd: f64,
+}
+
+impl AreaSums {
+    fn add(self, o: Self) -> Self {
+        AreaSums {
+            xx: self.xx + o.xx,
+            xq: self.xq + o.xq,
+            qq: self.qq + o.qq,
+            xd: self.xd + o.xd,
+            qd: self.qd + o.qd,
+            dd: self.dd + o.dd,
+        }
+    }
+
+    /// The retraction τ nearest 0 that puts x + α d' + (α c_q + τ) q on A = `target`: with
+    /// b = α c_q, A = qq (τ + b)² + 2 p (τ + b) + a0, p = xq + α qd, a0 = xx + 2α xd + α² dd.
+    fn retraction(&self, alpha: f64, c_q: f64, target: f64) -> Option<f64> {
+        let b = alpha * c_q;
+        let p = self.xq + alpha * self.qd;
+        let a0 = self.xx + 2.0 * alpha * self.xd + alpha * alpha * self.dd;
+        nearest_root(
+            self.qq,
+            self.qq * b + p,
+            (self.qq * b + 2.0 * p) * b + a0 - target,
+            0.0,
+        )
+    }
+}
+
+/// The sums of one gradient sweep ([`gradient_sweep`]).
+#[derive(Clone, Copy)]
+struct GradientSums {
+    /// Σ_{k≠0} w |ĝ + σâ|² (the residual's square × |Ω|).
+    res: f64,
+    rr: f64,
+    qr: f64,
+    /// Per pair (the new one last): [`pair_sums`].
+    pairs: [[f64; 6]; MAX_MEMORY + 1],
+}
+
+impl GradientSums {
+    fn zero() -> Self {
+        GradientSums {
+            res: 0.0,
+            rr: 0.0,
+            qr: 0.0,
+            pairs: [[0.0; 6]; MAX_MEMORY + 1],
+        }
+    }
+
+    fn add(mut self, o: Self) -> Self {
+        self.res += o.res;
+        self.rr += o.rr;
+        self.qr += o.qr;
+        for (a, b) in self.pairs.iter_mut().zip(&o.pairs) {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+        }
+        self
+    }
+
+    /// The inner products of the current state with the pairs `from..to` of the sweep.
+    fn inner_products(&self, from: usize, to: usize) -> InnerProducts {
+        let mut ip = InnerProducts {
+            s_r: [0.0; MAX_MEMORY],
+            y_r: [0.0; MAX_MEMORY],
+            q_y: [0.0; MAX_MEMORY],
+            rr: self.rr,
+            qr: self.qr,
+        };
+        for (i, p) in self.pairs[from..to].iter().enumerate() {
+            (ip.s_r[i], ip.y_r[i], ip.q_y[i]) = (p[0], p[1], p[2]);
+        }
+        ip
+    }
+}
+
+/// The L-BFGS relaxation engine.
+pub struct RelaxEngine {
+    ev: Evaluator,
+    cur: State,
+    trial: State,
+    metric: Metric,
+    /// Preconditioned projected gradient r of the current state.
+    grad: Array3<Complex64>,
+    /// r of the trial state.
+    grad_trial: Array3<Complex64>,
+    /// Search direction d' (without its multiple of q).
+    dir: Array3<Complex64>,
+    /// Pairs, oldest first.
+    pairs: VecDeque<Pair>,
+    /// Pairs not in use (kept so that no iteration allocates once the memory has filled).
+    spare_pairs: Vec<Pair>,
+    /// Gram entries ⟨s_i, y_j⟩_M and ⟨y_i, y_j⟩_M, row-major `i · MAX_MEMORY + j`.
+    sy: Vec<f64>,
+    yy: Vec<f64>,
+    /// The current state's inner products with the pairs.
+    ip: InnerProducts,
+    /// This iteration's direction.
+    direction: Direction,
+    memory: usize,
+    sigma: f64,
+    residual: f64,
+    area: AreaConstraint,
+    stalled: bool,
+}
+
+impl RelaxEngine {
+    /// Engine holding `phi`, no area constraint yet.
+    ///
+    /// # Errors
+    /// [`Diverged`] if `phi` is not finite.
+    pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
+        let metric = Metric::new(scene.eps);
+        let explicit = ExplicitTerm::Gradient(metric);
+        let mut ev = Evaluator::new(grid, scene.eps, c0, scene.laplacian, explicit);
+        let cur = ev.state_of(&phi, 0.0)?;
+        let zeros = Array3::zeros(cur.hat.raw_dim());
+        let memory = scene.lbfgs_memory.min(MAX_MEMORY);
+        let mut e = RelaxEngine {
+            trial: ev.blank(),
+            metric,
+            ev,
+            cur,
+            grad: zeros.clone(),
+            grad_trial: zeros.clone(),
+            dir: zeros,
+            pairs: VecDeque::with_capacity(memory),
+            spare_pairs: Vec::with_capacity(memory + 1),
+            sy: vec![0.0; MAX_MEMORY * MAX_MEMORY],
+            yy: vec![0.0; MAX_MEMORY * MAX_MEMORY],
+            ip: GradientSums::zero().inner_products(0, 0),
+            direction: Direction {
+                off: 0,
+                c_r: 0.0,
+                c_y: [0.0; MAX_MEMORY],
+                c_s: [0.0; MAX_MEMORY],
+                c_q: 0.0,
+                slope: 0.0,
+                area: AreaSums::default(),
+            },
+            memory,
+            sigma: 0.0,
+            residual: f64::INFINITY,
+            area: AreaConstraint::none(),
+            stalled: false,
+        };
+        e.refresh_gradient();
+        Ok(e)
+    }
+
+    /// Pairs held in the memory (at most `lbfgs_memory`).
+    pub fn memory_len(&self) -> usize {
+        self.pairs.len()
+    }
+
+    fn reset_memory(&mut self) {
+        self.spare_pairs.extend(self.pairs.drain(..));
+    }
+
+    /// σ, r, the residual and the inner products of the current state (no pair is formed).
+    fn refresh_gradient(&mut self) {
+        let sigma = self.multiplier(self.cur.multiplier_sums);
+        let sums = gradient_sweep(
+            &self.ev.symbols,
+            self.metric,
+            &self.cur,
+            sigma,
+            self.grad.as_slice_mut().expect("standard layout"),
+            &self.pairs,
+            None,
+        );
+        self.sigma = sigma;
+        self.ip = sums.inner_products(0, self.pairs.len());
+        self.residual = (sums.res / self.ev.grid.full_volume()).sqrt();
+    }
+
+    /// σ = −⟨ĝ, q⟩/⟨q, q⟩_M from the state's (⟨q, q⟩_M, ⟨ĝ, q⟩) (0 without an area constraint).
+    fn multiplier(&self, (qq, gq): (f64, f64)) -> f64 {
+        if self.area.method == AreaMethod::None || qq <= 0.0 {
+            0.0
+        } else {
+            -gq / qq
+        }
+    }
+
+    /// The two-loop recursion on coefficients (module documentation) with the newest `n` pairs
+    /// (0 gives the preconditioned steepest descent). Leaves `c_q` 0 and `slope` = ⟨r, d'⟩_M;
+    /// [`RelaxEngine::write_direction`] completes both.
+    fn recursion(&self, n: usize) -> Direction {
+        let ip = &self.ip;
+        let off = self.pairs.len() - n;
+        let sy = |i: usize, j: usize| self.sy[(i + off) * MAX_MEMORY + j + off];
+        let yy = |i: usize, j: usize| self.yy[(i + off) * MAX_MEMORY + j + off];
+        let rho = |i: usize| 1.0 / sy(i, i);
+        // First loop, newest to oldest: α_i = ρ_i ⟨s_i, r − Σ_{j>i} α_j y_j⟩.
+        let mut alpha = [0.0; MAX_MEMORY];
+        for i in (0..n).rev() {
+            let v = ip.s_r[i + off] - (i + 1..n).map(|j| alpha[j] * sy(i, j)).sum::<f64>();
+            alpha[i] = rho(i) * v;
+        }
+        let gamma = if n > 0 {
+            sy(n - 1, n - 1) / yy(n - 1, n - 1)
+        } else {
+            1.0
+        };
+        // Second loop, oldest to newest, on z = γ(r − Σ α_j y_j) + Σ_{j<i} (α_j − β_j) s_j:
+        // β_i = ρ_i ⟨y_i, z⟩; z = γ r + Σ c_y y + Σ c_s s at the end, d' = −z.
+        let mut c_s = [0.0; MAX_MEMORY];
+        for i in 0..n {
+            let v = gamma * (ip.y_r[i + off] - (0..n).map(|j| alpha[j] * yy(i, j)).sum::<f64>())
+                + (0..i).map(|j| c_s[j] * sy(j, i)).sum::<f64>();
+            c_s[i] = alpha[i] - rho(i) * v;
+        }
+        let mut c_y = [0.0; MAX_MEMORY];
+        (0..n).for_each(|j| c_y[j] = -gamma * alpha[j]);
+        let rz = gamma * ip.rr
+            + (0..n)
+                .map(|j| c_y[j] * ip.y_r[j + off] + c_s[j] * ip.s_r[j + off])
+                .sum::<f64>();
+        Direction {
+            off,
+            c_r: gamma,
+            c_y,
+            c_s,
+            c_q: 0.0,
+            slope: -rz,
+            area: AreaSums::default(),
+        }
+    }
+
+    /// Write d' into `dir`, each pair added over a piece's contiguous values, summing the area
+    /// coefficients ([`AreaSums`]) in the same sweep; complete `d`: the tangent projection
+    /// d = d' − (⟨q, d'⟩_M/⟨q, q⟩_M) q, kept as the coefficient c_q (⟨q, d'⟩_M = 2 xd and
+    /// ⟨q, q⟩_M = 2 xq: the area weight is w M q/φ̂ / 2), and the slope ⟨r, d⟩_M.
+    fn write_direction(&mut self, d: &mut Direction) {
+        let (sym, m) = (&self.ev.symbols, self.metric);
+        let pairs = &self.pairs;
+        let (r, x) = (reals(flat(&self.grad)), reals(flat(&self.cur.hat)));
+        let (s2, task) = (sym.row_len(), sym.task_len());
+        let (off, c_r, c_y, c_s) = (d.off, d.c_r, d.c_y, d.c_s);
+        let area = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
+            .par_chunks_mut(2 * task)
+            .enumerate()
+            .map(|(t, out)| {
+                let base = 2 * t * task;
+                let mut acc = AreaSums::default();
+                for_each_piece(
+                    sym,
+                    m,
+                    Need::Area,
+                    (t * task / s2, out.len() / (2 * s2)),
+                    |f, at| {
+                        let (o, g) = (&mut out[at..at + f.len], base + at..base + at + f.len);
+                        for (o, r) in o.iter_mut().zip(&r[g.clone()]) {
+                            *o = -(r * c_r);
+                        }
+                        for (j, p) in pairs.iter().skip(off).enumerate() {
+                            let (cy, cs) = (c_y[j], c_s[j]);
+                            let (y, s) = (&reals(&p.y)[g.clone()], &reals(&p.s)[g.clone()]);
+                            for ((o, y), s) in o.iter_mut().zip(y).zip(s) {
+                                *o -= y * cy + s * cs;
+                            }
+                        }
+                        acc = acc.add(area_sums(f, &x[g], o));
+                    },
+                );
+                acc
+            })
+            .reduce(AreaSums::default, AreaSums::add);
+        let project = self.area.method != AreaMethod::None && area.xq > 0.0;
+        d.c_q = if project { -area.xd / area.xq } else { 0.0 };
+        d.slope += d.c_q * self.ip.qr;
+        d.area = area;
+    }
+
+    /// The trial state φ̂ + α d' + β q into `trial.hat`, with the evaluation's inverse inputs
+    /// (see [`Evaluator::finish`]); returns its area.
+    fn write_trial(&mut self, alpha: f64, beta: f64) -> f64 {
+        let (sym, m) = (&self.ev.symbols, self.metric);
+        let (x, d) = (reals(flat(&self.cur.hat)), reals(flat(&self.dir)));
+        let (s2, task) = (sym.row_len(), sym.task_len());
+        let hat = reals_mut(self.trial.hat.as_slice_mut().expect("standard layout"));
+        let copy = reals_mut(self.trial.nonlinear.as_slice_mut().expect("layout"));
+        let lap = reals_mut(self.ev.spare.as_slice_mut().expect("standard layout"));
+        hat.par_chunks_mut(2 * task)
+            .zip(copy.par_chunks_mut(2 * task))
+            .zip(lap.par_chunks_mut(2 * task))
+            .enumerate()
+            .map(|(t, ((hat, copy), lap))| {
+                let base = 2 * t * task;
+                let mut area = 0.0;
+                for_each_piece(
+                    sym,
+                    m,
+                    Need::Trial,
+                    (t * task / s2, hat.len() / (2 * s2)),
+                    |f, at| {
+                        let (local, g) = (at..at + f.len, base + at..base + at + f.len);
+                        let values = hat[local.clone()]
+                            .iter_mut()
+                            .zip(&mut copy[local.clone()])
+                            .zip(&mut lap[local])
+                            .zip(x[g.clone()].iter().zip(&d[g]))
+                            .zip(f.qf.iter().zip(&f.k));
+                        for ((((h, c), l), (x, d)), (qf, k)) in values {
+                            let v = x + d * alpha + x * qf * beta;
+                            (*h, *c, *l) = (v, v, -(v * k));
+                        }
+                        let v = &hat[at..at + f.len];
+                        area += dot3(&f.aw[..f.len], v, v);
+                    },
+                );
+                area
+            })
+            .sum()
+    }
+
+    /// Trial state φ̂ + α d, retracted onto A = A0 along q, evaluated; returns the step's total
+    /// multiple of q (α c_q + τ). `Err` if the retraction has no real root or the evaluation
+    /// diverged.
+    fn try_step(&mut self, alpha: f64, t: f64) -> Result<(), ()> {
+        let d = &self.direction;
+        let tau = if self.area.method == AreaMethod::None {
+            0.0
+        } else {
+            d.area
+                .retraction(alpha, d.c_q, self.area.target)
+                .ok_or(())?
+        };
+        let area = self.write_trial(alpha, alpha * d.c_q + tau);
+        self.ev
+            .finish(&mut self.trial, area, t, None, None)
+            .map(|_| ())
+            .map_err(|_| ())
+    }
+
+    /// Accept the trial state: its σ, r, residual and inner products, and the pair
+    /// (s, y) = (x_new − x, r_new − r) kept if ⟨y, s⟩_M > 0 (the oldest dropped when the
+    /// memory is full), its Gram row and column from the same sweep.
+    fn accept(&mut self) {
+        let sigma = self.multiplier(self.trial.multiplier_sums);
+        let len = self.cur.hat.len();
+        let mut pair = self.spare_pairs.pop().unwrap_or_else(|| Pair {
+            s: vec![Complex64::default(); len],
+            y: vec![Complex64::default(); len],
+        });
+        let sums = gradient_sweep(
+            &self.ev.symbols,
+            self.metric,
+            &self.trial,
+            sigma,
+            self.grad_trial.as_slice_mut().expect("standard layout"),
+            &self.pairs,
+            Some((flat(&self.cur.hat), flat(&self.grad), &mut pair)),
+        );
+        let n = self.pairs.len();
+        // The new pair's sums: [3] = ⟨y_new, s_new⟩_M, [5] = ⟨y_new, y_new⟩_M.
+        let new = sums.pairs[n];
+        if new[3] > 0.0 {
+            let drop = usize::from(n == self.memory);
+            if drop == 1 {
+                self.spare_pairs.extend(self.pairs.pop_front());
+                shift_gram(&mut self.sy, n);
+                shift_gram(&mut self.yy, n);
+            }
+            let k = n - drop;
+            for (i, p) in sums.pairs[drop..n].iter().enumerate() {
+                self.sy[k * MAX_MEMORY + i] = p[3];
+                self.sy[i * MAX_MEMORY + k] = p[4];
+                self.yy[i * MAX_MEMORY + k] = p[5];
+                self.yy[k * MAX_MEMORY + i] = p[5];
+            }
+            self.sy[k * MAX_MEMORY + k] = new[3];
+            self.yy[k * MAX_MEMORY + k] = new[5];
+            self.pairs.push_back(pair);
+            self.ip = sums.inner_products(drop, n + 1);
+        } else {
+            self.spare_pairs.push(pair);
+            self.ip = sums.inner_products(0, n);
+        }
+        std::mem::swap(&mut self.cur, &mut self.trial);
+        std::mem::swap(&mut self.grad, &mut self.grad_trial);
+        self.sigma = sigma;
+        self.residual = (sums.res / self.ev.grid.full_volume()).sqrt();
+    }
+
+    /// Gram entries of every pair (after a restore from a checkpoint that has none), by direct
+    /// inner products.
+    fn rebuild_gram(&mut self) {
+        let n = self.pairs.len();
+        for i in 0..n {
+            for j in 0..n {
+                let (sy, yy) = pair_dots(
+                    &self.ev.symbols,
+                    self.metric,
+                    &self.pairs[i],
+                    &self.pairs[j],
+                );
+                self.sy[i * MAX_MEMORY + j] = sy;
+                self.yy[i * MAX_MEMORY + j] = yy;
+            }
+        }
+    }
+}
+
+/// A spectrum as a flat slice.
+fn flat(a: &Array3<Complex64>) -> &[Complex64] {
+    a.as_slice().expect("standard layout")
+}
+
+/// A spectrum as interleaved (re, im) reals.
+fn reals(c: &[Complex64]) -> &[f64] {
+    bytemuck::cast_slice(c)
+}
+
+/// A spectrum as interleaved (re, im) reals, writable.
+fn reals_mut(c: &mut [Complex64]) -> &mut [f64] {
+    bytemuck::cast_slice_mut(c)
+}
+
+/// Drop the oldest pair's row and column of a Gram matrix of `n` pairs.
+fn shift_gram(g: &mut [f64], n: usize) {
+    for i in 1..n {
+        for j in 1..n {
+            g[(i - 1) * MAX_MEMORY + j - 1] = g[i * MAX_MEMORY + j];
+        }
+    }
+}
+
+/// Which factors a sweep reads ([`Factors::fill`] forms only those).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Need {
+    /// The direction's area sums: `aw`, `aq`, `aqq`.
+    Area,
+    /// The trial state: `k`, `qf`, `aw`.
+    Trial,
+    /// The gradient: `wm`, `wmm`, `inv_m`, `qf`.
+    Gradient,
+}
+
+/// |k|², w, M, 1/M, q/φ̂ and the area weight of each value of a piece.
+struct PerValue {
+    k: [f64; PIECE],
+    w: [f64; PIECE],
+    m: [f64; PIECE],
+    inv_m: [f64; PIECE],
+    qf: [f64; PIECE],
+    aw: [f64; PIECE],
+}
+
+/// The per-wavenumber factors of one piece of a spectral row, each value's twice (for its real
+/// and imaginary parts), `len` reals in use.
+struct Factors {
+    len: usize,
+    /// Scratch: the factors once per value.
+    per_value: PerValue,
+    /// |k|².
+    k: [f64; 2 * PIECE],
+    /// w M(k).
+    wm: [f64; 2 * PIECE],
+    /// w M(k)².
+    wmm: [f64; 2 * PIECE],
+    /// 1/M(k), 0 at k = 0 (r(0) = 0).
+    inv_m: [f64; 2 * PIECE],
+    /// q/φ̂ = c_σ |k|²/M(k).
+    qf: [f64; 2 * PIECE],
+    /// The area weight a = (3/(2√2)) ε |k|² w, a q/φ̂ and a (q/φ̂)².
+    aw: [f64; 2 * PIECE],
+    aq: [f64; 2 * PIECE],
+    aqq: [f64; 2 * PIECE],
+}
+
+impl Factors {
+    fn new() -> Self {
+        let z = [0.0; 2 * PIECE];
+        let p = [0.0; PIECE];
+        Factors {
+            len: 0,
+            per_value: PerValue {
+                k: p,
+                w: p,
+                m: p,
+                inv_m: p,
+                qf: p,
+                aw: p,
+            },
+            k: z,
+            wm: z,
+            wmm: z,
+            inv_m: z,
+            qf: z,
+            aw: z,
+            aq: z,
+            aqq: z,
+        }
+    }
+
+    /// The factors `need` of values `start..start + len` of spectral row `row`: first one per
+    /// value (loops the compiler vectorises, the division included), then each twice.
+    fn fill(&mut self, sym: &Symbols, metric: Metric, need: Need, at: (usize, usize, usize)) {
+        let (row, start, len) = at;
+        let (kb, wb) = sym.row(row);
+        self.len = 2 * len;
+        let c = &mut self.per_value;
+        let axis = sym.k2[2][start..start + len]
+            .iter()
+            .zip(&sym.weight[2][start..start + len]);
+        let out = c.k.iter_mut().zip(&mut c.w).zip(&mut c.m);
+        for (((k, w), m), (&kl, &wl)) in out.zip(axis) {
+            (*k, *w) = (kb + kl, wb * wl);
+            *m = metric.at(*k);
+        }
+        for (inv_m, m) in c.inv_m[..len].iter_mut().zip(&c.m) {
+            *inv_m = 1.0 / m;
+        }
+        let values = c.k[..len]
+            .iter()
+            .zip(&c.w)
+            .zip(c.inv_m.iter_mut().zip(c.qf.iter_mut().zip(c.aw.iter_mut())));
+        for ((&k, &w), (inv_m, (qf, aw))) in values {
+            *inv_m = if k == 0.0 { 0.0 } else { *inv_m };
+            *qf = metric.c_sigma * k * *inv_m;
+            *aw = sym.area_prefactor * k * w;
+        }
+        let (k, w, m, inv_m, qf, aw) = (&c.k, &c.w, &c.m, &c.inv_m, &c.qf, &c.aw);
+        /// table[2l] = table[2l + 1] = v(l).
+        #[inline(always)]
+        fn twice(table: &mut [f64; 2 * PIECE], len: usize, v: impl Fn(usize) -> f64) {
+            for (l, pair) in table[..2 * len].chunks_exact_mut(2).enumerate() {
+                pair.fill(v(l));
+            }
+        }
+        match need {
+            Need::Area => {
+                twice(&mut self.aw, len, |l| aw[l]);
+                twice(&mut self.aq, len, |l| aw[l] * qf[l]);
+                twice(&mut self.aqq, len, |l| aw[l] * qf[l] * qf[l]);
+            }
+            Need::Trial => {
+                twice(&mut self.k, len, |l| k[l]);
+                twice(&mut self.qf, len, |l| qf[l]);
+                twice(&mut self.aw, len, |l| aw[l]);
+            }
+            Need::Gradient => {
+                twice(&mut self.wm, len, |l| w[l] * m[l]);
+                twice(&mut self.wmm, len, |l| w[l] * m[l] * m[l]);
+                twice(&mut self.inv_m, len, |l| inv_m[l]);
+                twice(&mut self.qf, len, |l| qf[l]);
+            }
+        }
+    }
+}
+
+/// Calls `f(factors, at)` for every piece of the `rows` spectral rows from row `first`, with
+/// the factors `need`, `at` the piece's first real relative to row `first`.
+fn for_each_piece(
+    sym: &Symbols,
+    metric: Metric,
+    need: Need,
+    (first, rows): (usize, usize),
+    mut f: impl FnMut(&Factors, usize),
+) {
+    let s2 = sym.row_len();
+    let mut factors = Factors::new();
+    for r in 0..rows {
+        for start in (0..s2).step_by(PIECE) {
+            let len = PIECE.min(s2 - start);
+            factors.fill(sym, metric, need, (first + r, start, len));
+            f(&factors, 2 * (r * s2 + start));
+        }
+    }
+}
+
+/// The area sums of one piece ([`AreaSums`]), x = φ̂ and d = d' as interleaved reals.
+fn area_sums(f: &Factors, x: &[f64], d: &[f64]) -> AreaSums {
+    let n = f.len;
+    let (aw, aq, aqq) = (&f.aw[..n], &f.aq[..n], &f.aqq[..n]);
+    AreaSums {
+        xx: dot3(aw, x, x),
+        xq: dot3(aq, x, x),
+        qq: dot3(aqq, x, x),
+        xd: dot3(aw, x, d),
+        qd: dot3(aq, x, d),
+        dd: dot3(aw, d, d),
+    }
+}
+
+/// (⟨s_a, y_b⟩_M, ⟨y_a, y_b⟩_M).
+fn pair_dots(sym: &Symbols, m: Metric, a: &Pair, b: &Pair) -> (f64, f64) {
+    let s2 = sym.row_len();
+    let mut acc = (0.0, 0.0);
+    for (i, (sa, ya)) in a.s.iter().zip(&a.y).enumerate() {
+        let (kb, wb) = sym.row(i / s2);
+        let k = kb + sym.k2[2][i % s2];
+        let wm = wb * sym.weight[2][i % s2] * m.at(k);
+        let yb = b.y[i];
+        acc.0 += wm * (sa.re * yb.re + sa.im * yb.im);
+        acc.1 += wm * (ya.re * yb.re + ya.im * yb.im);
+    }
+    acc
+}
+
+/// One task's share of a new pair in [`gradient_sweep`]: x_old, r_old (the whole spectra) and
+/// its part of s and y.
+type NewPairPart<'a> = (&'a [f64], &'a [f64], &'a mut [f64], &'a mut [f64]);
+
+/// r = M⁻¹ĝ + σq of `state` into `grad` (r(0) = 0) with its sums: the residual's
+/// Σ_{k≠0} w |ĝ + σâ|² = Σ w M²|r|², ⟨r, r⟩_M, ⟨q, r⟩_M and every stored pair's
+/// [`pair_sums`]. With `new` = (x_old, r_old, pair) it also writes s = φ̂ − x_old and
+/// y = r − r_old into `pair` and takes its sums (last in `pairs`).
+fn gradient_sweep(
+    sym: &Symbols,
+    m: Metric,
+    state: &State,
+    sigma: f64,
+    grad: &mut [Complex64],
+    pairs: &VecDeque<Pair>,
+    new: Option<(&[Complex64], &[Complex64], &mut Pair)>,
+) -> GradientSums {
+    let (x, g) = (reals(flat(&state.hat)), reals(flat(&state.nonlinear)));
+    let (s2, task) = (sym.row_len(), sym.task_len());
+    let n_pairs = pairs.len();
+    // One task: rows from `t · task / s2`; `new` = (x_old, r_old, s, y) of its values.
+    let run = |t: usize, r: &mut [f64], mut new: Option<NewPairPart>| {
+        let base = 2 * t * task;
+        let mut acc = GradientSums::zero();
+        // The piece's w M r, w M q, w M s_new, w M y_new (the last two 0 without a new pair),
+        // and q.
+        let mut v = [[0.0; 2 * PIECE]; 4];
+        let mut q = [0.0; 2 * PIECE];
+        for_each_piece(
+            sym,
+            m,
+            Need::Gradient,
+            (t * task / s2, r.len() / (2 * s2)),
+            |f, at| {
+                let (n, local, gl) = (f.len, at..at + f.len, base + at..base + at + f.len);
+                let (xs, gs, rs) = (&x[gl.clone()], &g[gl.clone()], &mut r[local.clone()]);
+                let [wr, wq, ws, wy] = &mut v;
+                let outputs = q.iter_mut().zip(rs.iter_mut()).zip(wr.iter_mut().zip(wq));
+                let inputs = xs.iter().zip(gs).zip(f.inv_m.iter().zip(&f.qf).zip(&f.wm));
+                for (((q, r), (wr, wq)), ((x, g), ((inv_m, qf), wm))) in outputs.zip(inputs) {
+                    *q = qf * x;
+                    *r = g * inv_m + x * (sigma * qf);
+                    (*wr, *wq) = (wm * *r, wm * *q);
+                }
+                acc.res += dot3(&f.wmm[..n], rs, rs);
+                acc.rr += dot3(&f.wm[..n], rs, rs);
+                acc.qr += dot3(&f.wm[..n], &q[..n], rs);
+                if let Some((x_old, r_old, s, y)) = new.as_mut() {
+                    let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
+                    let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy));
+                    let inputs = xs
+                        .iter()
+                        .zip(x_old[gl.clone()].iter())
+                        .zip(rs.iter().zip(r_old[gl.clone()].iter()).zip(&f.wm[..n]));
+                    for (((s, y), (ws, wy)), ((x, xo), ((r, ro), wm))) in outputs.zip(inputs) {
+                        (*s, *y) = (x - xo, r - ro);
+                        (*ws, *wy) = (wm * *s, wm * *y);
+                    }
+                }
+                let v = v.each_ref().map(|v| &v[..n]);
+                for (p, sums) in pairs.iter().zip(&mut acc.pairs) {
+                    let add = pair_sums(&reals(&p.s)[gl.clone()], &reals(&p.y)[gl.clone()], v);
+                    sums.iter_mut().zip(add).for_each(|(a, b)| *a += b);
+                }
+                if let Some((_, _, s, y)) = new.as_ref() {
+                    let add = pair_sums(&s[local.clone()], &y[local.clone()], v);
+                    acc.pairs[n_pairs]
+                        .iter_mut()
+                        .zip(add)
+                        .for_each(|(a, b)| *a += b);
+                }
+            },
+        );
+        acc
+    };
+    let grad = reals_mut(grad);
+    match new {
+        None => grad
+            .par_chunks_mut(2 * task)
+            .enumerate()
+            .map(|(t, r)| run(t, r, None))
+            .reduce(GradientSums::zero, GradientSums::add),
+        Some((x_old, r_old, pair)) => grad
+            .par_chunks_mut(2 * task)
+            .zip(reals_mut(&mut pair.s).par_chunks_mut(2 * task))
+            .zip(reals_mut(&mut pair.y).par_chunks_mut(2 * task))
+            .enumerate()
+            .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), reals(r_old), s, y))))
+            .reduce(GradientSums::zero, GradientSums::add),
+    }
+}
+
+impl Engine for RelaxEngine {
+    fn phi(&self) -> &Array3<f64> {
+        &self.cur.phi
+    }
+
+    fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    fn measures(&self) -> Measures {
+        self.cur.measures
+    }
+
+    fn residual(&self) -> f64 {
+        self.residual
+    }
+
+    fn set_area(&mut self, area: AreaConstraint) {
+        self.area = area;
+        self.reset_memory();
+        self.refresh_gradient();
+    }
+
+    /// One L-BFGS iteration (its line search may take several evaluations).
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+        let mut d = self.recursion(self.pairs.len());
+        self.write_direction(&mut d);
+        if d.slope >= 0.0 {
+            self.reset_memory();
+            d = self.recursion(0);
+            self.write_direction(&mut d);
+        }
+        self.direction = d;
+        let f0 = self.cur.measures.energy;
+        let mut alpha = 1.0;
+        let mut rejected = 0;
+        loop {
+            let accepted = self.try_step(alpha, t + dt).is_ok()
+                && self.trial.measures.energy <= f0 + ARMIJO * alpha * self.direction.slope;
+            if accepted {
+                break;
+            }
+            rejected += 1;
+            alpha *= 0.5;
+            if rejected >= MAX_BACKTRACKS {
+                self.stalled = true;
+                self.reset_memory();
+                return Ok(StepReport {
+                    dt,
+                    rate: f64::NAN,
+                    rejected,
+                });
+            }
+        }
+        self.accept();
+        // `t` is nominal here, so max|Δφ|/Δt would mean nothing: the rate column is NaN.
+        Ok(StepReport {
+            dt,
+            rate: f64::NAN,
+            rejected,
+        })
+    }
+
+    fn stalled(&self) -> bool {
+        self.stalled
+    }
+
+    fn name(&self) -> &'static str {
+        "relaxational (L-BFGS)"
+    }
+
+    fn save(&self) -> Saved {
+        let mut saved = Saved::default()
+            .scalar("stalled", if self.stalled { 1.0 } else { 0.0 })
+            .scalar("pairs", self.pairs.len() as f64)
+            .array("phi_hat", SavedArray::Complex(self.cur.hat.clone()));
+        let shape = self.cur.hat.raw_dim();
+        let array = |v: &Vec<Complex64>| {
+            SavedArray::Complex(Array3::from_shape_vec(shape, v.clone()).expect("spectral shape"))
+        };
+        // The Gram entries as they were accumulated, so that a resumed run is bitwise the
+        // uninterrupted one (the inner products of the state are recomputed by the same sweep).
+        let n = self.pairs.len();
+        let gram = Array3::from_shape_fn((2, n, n), |(g, i, j)| {
+            [&self.sy, &self.yy][g][i * MAX_MEMORY + j]
+        });
+        saved = saved.array("gram", SavedArray::Real(gram));
+        for (i, p) in self.pairs.iter().enumerate() {
+            saved = saved
+                .scalar(&format!("rho_{i}"), 1.0 / self.sy[i * MAX_MEMORY + i])
+                .scalar(&format!("yy_{i}"), self.yy[i * MAX_MEMORY + i])
+                .array(&format!("s_{i}"), array(&p.s))
+                .array(&format!("y_{i}"), array(&p.y));
+        }
+        saved
+    }
+
+    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String> {
+        let shape = self.cur.hat.shape().to_vec();
+        self.cur.hat.assign(saved.complex("phi_hat", &shape)?);
+        self.stalled = saved.get("stalled")? != 0.0;
+        let n = saved.get("pairs")?;
+        if !(0.0..=self.memory as f64).contains(&n) || n.fract() != 0.0 {
+            return Err(format!(
+                "the saved L-BFGS memory holds {n} pairs; lbfgs_memory is {}",
+                self.memory
+            ));
+        }
+        self.reset_memory();
+        for i in 0..n as usize {
+            let read = |name: &str| -> Result<Vec<Complex64>, String> {
+                Ok(saved.complex(name, &shape)?.iter().copied().collect())
+            };
+            let pair = Pair {
+                s: read(&format!("s_{i}"))?,
+                y: read(&format!("y_{i}"))?,
+            };
+            self.pairs.push_back(pair);
+        }
+        let n = n as usize;
+        // An older checkpoint may lack the Gram, or hold it with the newest pair's column still
+        // to come ("fresh" = 1): recompute it then.
+        match saved.real("gram", &[2, n, n]) {
+            Ok(gram) if saved.get("fresh").map_or(true, |f| f == 0.0) => {
+                for ((g, i, j), v) in gram.indexed_iter() {
+                    [&mut self.sy, &mut self.yy][g][i * MAX_MEMORY + j] = *v;
+                }
+            }
+            _ => self.rebuild_gram(),
+        }
+        self.ev
+            .evaluate(&mut self.cur, t, None, None)
+            .map_err(|d| d.0)?;
+        self.refresh_gradient();
+        Ok(())
+    }
+}
