@@ -1,5 +1,6 @@
 //! The relaxation's reductions over a piece of a spectrum held as interleaved (re, im) reals:
-//! Σ a b c and a stored pair's six inner products. Both keep [`LANES`] partial sums and fuse
+//! Σ a b c, the six weighted quadratic sums of two vectors, and a stored pair's six inner
+//! products. Both keep [`LANES`] partial sums and fuse
 //! each multiply-add (`mul_add`), so that the AVX2/FMA build, taken when the CPU has those
 //! instructions, gives the portable build's results bit for bit.
 
@@ -19,6 +20,34 @@ pub fn dot3(a: &[f64], b: &[f64], c: &[f64]) -> f64 {
         acc[j % LANES] = (a * b).mul_add(*c, acc[j % LANES]);
     }
     fold(acc)
+}
+
+/// [Σ a x², Σ b x², Σ c x², Σ a x d, Σ b x d, Σ a d²] over equal-length slices.
+pub fn quadratic_sums(a: &[f64], b: &[f64], c: &[f64], x: &[f64], d: &[f64]) -> [f64; 6] {
+    let n = x.len();
+    assert!([a, b, c, d].iter().all(|v| v.len() == n));
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has AVX2 and FMA (checked above); the lengths are equal (asserted).
+        return unsafe { avx2::quadratic_sums(a, b, c, x, d) };
+    }
+    let mut acc = [[0.0; LANES]; 6];
+    for j in 0..n {
+        quadratic_terms(&mut acc, j % LANES, [a[j], b[j], c[j]], x[j], d[j]);
+    }
+    acc.map(fold)
+}
+
+/// One value's terms of [`quadratic_sums`] into lane `l`.
+#[inline(always)]
+fn quadratic_terms(acc: &mut [[f64; LANES]; 6], l: usize, [a, b, c]: [f64; 3], x: f64, d: f64) {
+    let (xx, xd, dd) = (x * x, x * d, d * d);
+    acc[0][l] = a.mul_add(xx, acc[0][l]);
+    acc[1][l] = b.mul_add(xx, acc[1][l]);
+    acc[2][l] = c.mul_add(xx, acc[2][l]);
+    acc[3][l] = a.mul_add(xd, acc[3][l]);
+    acc[4][l] = b.mul_add(xd, acc[4][l]);
+    acc[5][l] = a.mul_add(dd, acc[5][l]);
 }
 
 /// With v = [w M r, w M q, w M s_new, w M y_new] over the piece, a stored pair's
@@ -64,7 +93,7 @@ fn fold(a: [f64; LANES]) -> f64 {
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use super::{fold, pair_terms, LANES};
+    use super::{fold, pair_terms, quadratic_terms, LANES};
     use std::arch::x86_64::*;
 
     /// [`super::dot3`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
@@ -86,6 +115,42 @@ mod avx2 {
             lanes[j % LANES] = (a[j] * b[j]).mul_add(c[j], lanes[j % LANES]);
         }
         fold(lanes)
+    }
+
+    /// [`super::quadratic_sums`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn quadratic_sums(
+        a: &[f64],
+        b: &[f64],
+        c: &[f64],
+        x: &[f64],
+        d: &[f64],
+    ) -> [f64; 6] {
+        let n = x.len();
+        let full = n - n % LANES;
+        let mut acc = [_mm256_setzero_pd(); 6];
+        for j in (0..full).step_by(LANES) {
+            let [av, bv, cv, xv, dv] = [a, b, c, x, d].map(|v| _mm256_loadu_pd(v.as_ptr().add(j)));
+            let (xx, xd, dd) = (
+                _mm256_mul_pd(xv, xv),
+                _mm256_mul_pd(xv, dv),
+                _mm256_mul_pd(dv, dv),
+            );
+            acc[0] = _mm256_fmadd_pd(av, xx, acc[0]);
+            acc[1] = _mm256_fmadd_pd(bv, xx, acc[1]);
+            acc[2] = _mm256_fmadd_pd(cv, xx, acc[2]);
+            acc[3] = _mm256_fmadd_pd(av, xd, acc[3]);
+            acc[4] = _mm256_fmadd_pd(bv, xd, acc[4]);
+            acc[5] = _mm256_fmadd_pd(av, dd, acc[5]);
+        }
+        let mut lanes = [[0.0; LANES]; 6];
+        for (l, a) in lanes.iter_mut().zip(acc) {
+            _mm256_storeu_pd(l.as_mut_ptr(), a);
+        }
+        for j in full..n {
+            quadratic_terms(&mut lanes, j % LANES, [a[j], b[j], c[j]], x[j], d[j]);
+        }
+        lanes.map(fold)
     }
 
     /// [`super::pair_sums`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
@@ -151,6 +216,19 @@ mod tests {
         for (g, w) in got.iter().zip(want) {
             assert!((g - w).abs() < 1e-14 * n as f64, "{g} against {w}");
         }
+        let got = quadratic_sums(&a, &b, &c, &d, &e);
+        let sum = |f: &dyn Fn(usize) -> f64| (0..n).map(f).sum::<f64>();
+        let want = [
+            sum(&|j| a[j] * d[j] * d[j]),
+            sum(&|j| b[j] * d[j] * d[j]),
+            sum(&|j| c[j] * d[j] * d[j]),
+            sum(&|j| a[j] * d[j] * e[j]),
+            sum(&|j| b[j] * d[j] * e[j]),
+            sum(&|j| a[j] * e[j] * e[j]),
+        ];
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-14 * n as f64, "{g} against {w}");
+        }
     }
 
     /// The portable build's lanes give the dispatched build's sums bit for bit.
@@ -166,5 +244,10 @@ mod tests {
         }
         assert_eq!(pair_sums(&a, &b, [&c, &d, &e, &f]), acc.map(fold));
         assert_eq!(dot3(&a, &b, &c), fold(one));
+        let mut quad = [[0.0; LANES]; 6];
+        for j in 0..n {
+            quadratic_terms(&mut quad, j % LANES, [a[j], b[j], c[j]], d[j], e[j]);
+        }
+        assert_eq!(quadratic_sums(&a, &b, &c, &d, &e), quad.map(fold));
     }
 }

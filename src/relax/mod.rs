@@ -42,7 +42,7 @@ use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::numerics::nearest_root;
 use crate::spectral::evaluator::{Evaluator, ExplicitTerm, Metric, State, Symbols};
-use kernels::{dot3, pair_sums};
+use kernels::{dot3, pair_sums, quadratic_sums};
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -674,14 +674,14 @@ fn for_each_piece(
 /// The area sums of one piece ([`AreaSums`]), x = φ̂ and d = d' as interleaved reals.
 fn area_sums(f: &Factors, x: &[f64], d: &[f64]) -> AreaSums {
     let n = f.len;
-    let (aw, aq, aqq) = (&f.aw[..n], &f.aq[..n], &f.aqq[..n]);
+    let [xx, xq, qq, xd, qd, dd] = quadratic_sums(&f.aw[..n], &f.aq[..n], &f.aqq[..n], x, d);
     AreaSums {
-        xx: dot3(aw, x, x),
-        xq: dot3(aq, x, x),
-        qq: dot3(aqq, x, x),
-        xd: dot3(aw, x, d),
-        qd: dot3(aq, x, d),
-        dd: dot3(aw, d, d),
+        xx,
+        xq,
+        qq,
+        xd,
+        qd,
+        dd,
     }
 }
 
@@ -744,9 +744,10 @@ fn gradient_sweep(
                     *r = g * inv_m + x * (sigma * qf);
                     (*wr, *wq) = (wm * *r, wm * *q);
                 }
-                acc.res += dot3(&f.wmm[..n], rs, rs);
-                acc.rr += dot3(&f.wm[..n], rs, rs);
-                acc.qr += dot3(&f.wm[..n], &q[..n], rs);
+                // [Σ wM r², Σ wM² r², –, Σ wM r q, –, –].
+                let sums = quadratic_sums(&f.wm[..n], &f.wmm[..n], &f.wm[..n], rs, &q[..n]);
+                (acc.rr, acc.res) = (acc.rr + sums[0], acc.res + sums[1]);
+                acc.qr += sums[3];
                 if let Some((x_old, r_old, s, y)) = new.as_mut() {
                     let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
                     let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy));
