@@ -17,6 +17,7 @@
 //! state only when the step is accepted. The exact projection, and the refreshes of a state
 //! (start, resume, a new σ), take the multi-pass route through [`stencil`].
 
+mod lanes;
 mod sweep;
 
 use crate::config::AreaMethod;

@@ -21,14 +21,11 @@
 //! ghost φ_{−1} = φ_0 every stage's field is even about the wall, so the extension evaluates the
 //! same stencil as [`crate::stencil`]'s ghosts.
 
+use super::lanes::{in_lanes, largest, total, Kernel, Lane};
 use crate::grid::{AxisKind, Grid};
 use crate::model::{bulk, bulk_derivative};
 use crate::stencil::{above, below};
 use rayon::prelude::*;
-
-/// Partial sums per lane in the reductions (one AVX register of f64; the lanes let the
-/// compiler vectorise sums whose order Rust otherwise keeps serial).
-const LANES: usize = 4;
 
 /// The box as planes × rows × row length along the streamed axis, with the axes' walls.
 #[derive(Clone, Copy, Debug)]
@@ -466,71 +463,30 @@ fn along_row(
     }
 }
 
-/// Partial sums in [`LANES`] lanes over the blocks of `LANES` points of three rows (the tail
-/// point by point into lane 0): `add(acc, lane, x_k, y_k, z_k)` adds point k's terms to the
-/// lane's accumulators. A separate pass over rows in L1: the computing loops stay free of
-/// sums and vectorise, and the lane-wise sums vectorise too.
-#[inline(always)]
-fn lane_sums<const M: usize>(
-    [x, y, z]: [&[f64]; 3],
-    add: impl Fn(&mut [[f64; LANES]; M], usize, f64, f64, f64),
-) -> [[f64; LANES]; M] {
-    let mut acc = [[0.0; LANES]; M];
-    let (xs, ys, zs) = (
-        x.chunks_exact(LANES),
-        y.chunks_exact(LANES),
-        z.chunks_exact(LANES),
-    );
-    let tail = (xs.remainder(), ys.remainder(), zs.remainder());
-    for ((x, y), z) in xs.zip(ys).zip(zs) {
-        for lane in 0..LANES {
-            add(&mut acc, lane, x[lane], y[lane], z[lane]);
-        }
-    }
-    for ((&x, &y), &z) in tail.0.iter().zip(tail.1).zip(tail.2) {
-        add(&mut acc, 0, x, y, z);
-    }
-    acc
-}
-
-/// max(a, b) for the maxima of magnitudes (a plain compare: one vector instruction; a NaN `b`
-/// is skipped as `f64::max` skips it).
-#[inline(always)]
-fn larger(a: f64, b: f64) -> f64 {
-    if b > a {
-        b
-    } else {
-        a
-    }
-}
-
-/// Sum of the lanes.
-fn total(lanes: [f64; LANES]) -> f64 {
-    lanes.iter().sum()
-}
-
-/// Largest of the lanes and `m`.
-fn largest(lanes: [f64; LANES], m: f64) -> f64 {
-    lanes.iter().fold(m, |a, &b| larger(a, b))
-}
-
 /// Stage 1 on a row of the slab: `new = old + Δt lap` (lap = ∇²_h μⁿ), with Σ new, max|new|
 /// and max|lap| into `sums`.
 #[inline(always)]
 fn advance_row(old: &[f64], lap: &[f64], dt: f64, new: &mut [f64], sums: &mut Sums) {
-    let n = new.len();
-    let (old, lap) = (&old[..n], &lap[..n]);
-    for ((v, &o), &l) in new.iter_mut().zip(old).zip(lap) {
-        *v = o + dt * l;
-    }
-    let [sum, max_phi, max_lap] = lane_sums([new, lap, lap], |a, j, v, l, _| {
-        a[0][j] += v;
-        a[1][j] = larger(a[1][j], v.abs());
-        a[2][j] = larger(a[2][j], l.abs());
-    });
+    let [sum, max_phi, max_lap] = in_lanes(&Advance { dt }, [old, lap], [new]);
     sums.phi += total(sum);
     sums.max_phi = largest(max_phi, sums.max_phi);
     sums.max_lap_mu = largest(max_lap, sums.max_lap_mu);
+}
+
+/// Stage 1 at a point: φ' = φⁿ + Δt ∇²_h μⁿ; sums φ', maxima of |φ'| and |∇²_h μⁿ|.
+struct Advance {
+    dt: f64,
+}
+
+impl Kernel<2, 1, 3> for Advance {
+    #[inline(always)]
+    fn point<T: Lane>(&self, acc: &mut [T; 3], [old, lap]: [T; 2], _: [T; 1]) -> [T; 1] {
+        let new = old + T::splat(self.dt) * lap;
+        acc[0] = acc[0] + new;
+        acc[1] = acc[1].larger(new.abs());
+        acc[2] = acc[2].larger(lap.abs());
+        [new]
+    }
 }
 
 /// One row of φ' for stage 2: φ', its ∇²_h, and εC0 = `scale` × `c0` (a row of the unramped
@@ -556,35 +512,62 @@ fn bulk_row(p: &Point, k: &Coefficients, big: &mut [f64]) {
 /// (L = ∇²_h φ), with Σ Φ² and Σ φ L into `sums`.
 #[inline(always)]
 fn potential_row(p: &Point, k: &Coefficients, big: &mut [f64], q: &mut [f64], sums: &mut Sums) {
-    let n = big.len();
-    let (phi, lap, c0, q) = (&p.phi[..n], &p.lap[..n], &p.c0[..n], &mut q[..n]);
-    for ((((b, q), &u), &l), &c) in big.iter_mut().zip(q).zip(phi).zip(lap).zip(c0) {
-        let c = p.scale * c;
-        *b = bulk(u, c) - k.e2 * l;
-        *q = 2.0 * (bulk_derivative(u, c) * *b) - k.tension * l;
-    }
-    let [energy, phi_lap] = lane_sums([big, phi, lap], |a, j, b, u, l| {
-        a[0][j] += b * b;
-        a[1][j] += u * l;
-    });
+    let kernel = Potential { k, scale: p.scale };
+    let [energy, phi_lap] = in_lanes(&kernel, [p.phi, p.lap, p.c0], [big, q]);
     sums.energy += total(energy);
     sums.phi_lap += total(phi_lap);
 }
 
-/// Stage 3 on a row: μ = q − 2ε² ∇²_h Φ (`lap`), with Σ(μ − c) and Σ(μ − c)² into `sums`.
+/// Stage 2 at a point of φ' (inputs φ', L = ∇²_h φ', the unramped εC0 or 1): Φ and q; sums
+/// Φ² and φ' L.
+struct Potential<'a> {
+    k: &'a Coefficients,
+    /// The factor of the εC0 input.
+    scale: f64,
+}
+
+impl Kernel<3, 2, 2> for Potential<'_> {
+    #[inline(always)]
+    fn point<T: Lane>(&self, acc: &mut [T; 2], [phi, lap, c0]: [T; 3], _: [T; 2]) -> [T; 2] {
+        let c = T::splat(self.scale) * c0;
+        let big = phi.zip(c, bulk) - T::splat(self.k.e2) * lap;
+        let q =
+            T::splat(2.0) * (phi.zip(c, bulk_derivative) * big) - T::splat(self.k.tension) * lap;
+        acc[0] = acc[0] + big * big;
+        acc[1] = acc[1] + phi * lap;
+        [big, q]
+    }
+}
+
+/// Stage 3 on a row: μ = q − 2ε² ∇²_h Φ (`lap`, q in `mu`), with Σ(μ − c) and Σ(μ − c)² into
+/// `sums`.
 #[inline(always)]
 fn correct_row(lap: &[f64], k: &Coefficients, mu: &mut [f64], sums: &mut Sums) {
-    let n = mu.len();
-    let lap = &lap[..n];
-    let e2x2 = 2.0 * k.e2;
-    for (m, &l) in mu.iter_mut().zip(lap) {
-        *m -= e2x2 * l;
-    }
-    let [dev, dev_sq] = lane_sums([mu, mu, mu], |a, j, m, _, _| {
-        let d = m - k.shift;
-        a[0][j] += d;
-        a[1][j] += d * d;
-    });
+    let kernel = Correct {
+        e2x2: 2.0 * k.e2,
+        shift: k.shift,
+    };
+    let [dev, dev_sq] = in_lanes(&kernel, [lap], [mu]);
     sums.dev += total(dev);
     sums.dev_sq += total(dev_sq);
+}
+
+/// Stage 3 at a point (input ∇²_h Φ, output q becoming μ): μ = q − 2ε² ∇²_h Φ; sums μ − c and
+/// (μ − c)².
+struct Correct {
+    /// 2ε².
+    e2x2: f64,
+    /// c.
+    shift: f64,
+}
+
+impl Kernel<1, 1, 2> for Correct {
+    #[inline(always)]
+    fn point<T: Lane>(&self, acc: &mut [T; 2], [lap]: [T; 1], [q]: [T; 1]) -> [T; 1] {
+        let mu = q - T::splat(self.e2x2) * lap;
+        let d = mu - T::splat(self.shift);
+        acc[0] = acc[0] + d;
+        acc[1] = acc[1] + d * d;
+        [mu]
+    }
 }
