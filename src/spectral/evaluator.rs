@@ -4,7 +4,8 @@
 //! An evaluation is three sweeps besides the transforms: a spectral one that prepares the two
 //! inverse transforms' inputs (φ̂ and −k²φ̂) and sums A, one over real space (f, f'Φ and the
 //! sums of F, V, max|φ|), and a spectral one that combines the forward transforms into the
-//! explicit term and sums the residual. |k|² and the Parseval weights come from per-axis
+//! explicit term and sums the residual (and, for the relaxational engine's gradient, the area
+//! multiplier's two sums in its metric). |k|² and the Parseval weights come from per-axis
 //! tables ([`Symbols`]), not from full-size arrays. An engine that can write the two inverse
 //! inputs itself, in the sweep that makes φ̂ (as the time step does), skips the first sweep
 //! ([`Evaluator::finish`]).
