@@ -882,8 +882,6 @@ impl Engine for RelaxEngine {
         saved = saved.array("gram", SavedArray::Real(gram));
         for (i, p) in self.pairs.iter().enumerate() {
             saved = saved
-                .scalar(&format!("rho_{i}"), 1.0 / self.sy[i * MAX_MEMORY + i])
-                .scalar(&format!("yy_{i}"), self.yy[i * MAX_MEMORY + i])
                 .array(&format!("s_{i}"), array(&p.s))
                 .array(&format!("y_{i}"), array(&p.y));
         }
