@@ -340,11 +340,13 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             let scene = load(&args)?;
             let problem = crate::setup::build(&scene)?;
             crate::simulation::check_stability(&scene, &problem.grid)?;
-            let resolved = run::resolved_scene(
-                &scene,
-                scene.area.target.unwrap_or(f64::NAN),
-                &problem.mirror,
-            );
+            let resolved = with_threads(&scene, || {
+                run::resolved_scene(
+                    &scene,
+                    scene.area.target.unwrap_or(f64::NAN),
+                    &problem.mirror,
+                )
+            });
             println!(
                 "{}",
                 serde_json::to_string_pretty(&resolved.resolved_value()).expect("serialisable")
