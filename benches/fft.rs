@@ -21,8 +21,8 @@ fn bench_pair(c: &mut Criterion, name: &str, shape: [usize; 3], kinds: [AxisKind
         let mut spectrum = Array3::zeros(t.spectral_shape());
         let mut back = Array3::zeros(shape);
         group.bench_function(BenchmarkId::new(name, format!("t{threads}")), |b| {
-            b.iter(|| {
-                pool.install(|| {
+            pool.install(|| {
+                b.iter(|| {
                     t.forward(&field, &mut spectrum);
                     t.inverse(&mut spectrum, &mut back);
                 })

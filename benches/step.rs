@@ -5,7 +5,8 @@
 //! DESIGN.md §7. Compare with `benches/fft.rs` (the transforms alone) and with the C floors of
 //! `../shared/bench` timed in the same session (README, "Performance").
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::measurement::WallTime;
+use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion};
 use serde_json::json;
 use std::time::{Duration, Instant};
 use vesicle::config;
@@ -33,42 +34,47 @@ fn engine_of(scene: serde_json::Value) -> Box<dyn Engine + Send> {
         .into_engine()
 }
 
+/// Time `steps` of an engine made by `make` in a pool of `threads`. The timing loop runs inside
+/// the pool, as `vesicle run` does (the whole run is one `install`): installing each step from
+/// outside would add two thread wake-ups per step, which the program never pays.
+fn time_steps(
+    group: &mut BenchmarkGroup<WallTime>,
+    id: BenchmarkId,
+    threads: usize,
+    make: impl FnOnce() -> Box<dyn Engine + Send> + Send,
+    dt: f64,
+) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool");
+    let mut e = pool.install(make);
+    let mut t = 0.0;
+    group.bench_function(id, |b| {
+        pool.install(|| {
+            b.iter(|| {
+                e.step(t, dt).expect("step");
+                t += dt;
+            })
+        })
+    });
+}
+
 fn bench_steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("step");
     for (method, dt) in [("spectral", 0.5), ("fd", 4e-4)] {
         for n in [64usize, 128] {
-            if n == 128 {
-                group.sample_size(10);
-            }
+            group.sample_size(if n == 128 { 10 } else { 100 });
             for threads in [1, 2] {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .expect("thread pool");
-                let mut e = pool.install(|| engine(method, n, json!([])));
-                let mut t = 0.0;
                 let id = BenchmarkId::new(format!("{method}/full"), format!("{n}^3/t{threads}"));
-                group.bench_function(id, |b| {
-                    b.iter(|| {
-                        pool.install(|| {
-                            e.step(t, dt).expect("step");
-                            t += dt;
-                        })
-                    })
-                });
+                let make = || engine(method, n, json!([]));
+                time_steps(&mut group, id, threads, make, dt);
             }
         }
-        let mut e = engine(method, 64, json!(["x", "y", "z"]));
-        let mut t = 0.0;
-        group.bench_function(
-            BenchmarkId::new(format!("{method}/eighth"), "64^3/t2"),
-            |b| {
-                b.iter(|| {
-                    e.step(t, dt).expect("step");
-                    t += dt;
-                })
-            },
-        );
+        group.sample_size(100);
+        let id = BenchmarkId::new(format!("{method}/eighth"), "64^3/t2");
+        let make = || engine(method, 64, json!(["x", "y", "z"]));
+        time_steps(&mut group, id, 2, make, dt);
     }
     group.finish();
 }
@@ -108,31 +114,24 @@ fn bench_relaxation(c: &mut Criterion) {
         let id = BenchmarkId::new("lbfgs_iteration", format!("48^3/t{threads}"));
         group.bench_function(id, |b| {
             b.iter_custom(|iters| {
-                let mut total = Duration::ZERO;
-                for _ in 0..iters {
-                    if taken == 30 {
-                        e = pool.install(fresh);
-                        taken = 0;
-                    }
-                    let start = Instant::now();
-                    pool.install(|| e.step(0.0, 1.0).expect("iteration"));
-                    total += start.elapsed();
-                    taken += 1;
-                }
-                total
-            })
-        });
-        let mut e = pool.install(|| prolate48("conserved"));
-        let mut t = 0.0;
-        let id = BenchmarkId::new("conserved_step", format!("48^3/t{threads}"));
-        group.bench_function(id, |b| {
-            b.iter(|| {
                 pool.install(|| {
-                    e.step(t, 0.5).expect("step");
-                    t += 0.5;
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        if taken == 30 {
+                            e = fresh();
+                            taken = 0;
+                        }
+                        let start = Instant::now();
+                        e.step(0.0, 1.0).expect("iteration");
+                        total += start.elapsed();
+                        taken += 1;
+                    }
+                    total
                 })
             })
         });
+        let id = BenchmarkId::new("conserved_step", format!("48^3/t{threads}"));
+        time_steps(&mut group, id, threads, || prolate48("conserved"), 0.5);
     }
     group.finish();
 }
