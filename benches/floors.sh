@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# The step benches against the C floors of ../shared/bench, interleaved: for every configuration,
+# ROUNDS times in turn, the C program, our criterion bench (filtered to that one bench), the C
+# program again. Prints our median, the two C medians around it and their ratio; then per
+# configuration the median ratio and its range. On a shared machine a C median can move by half
+# between two runs a minute apart, so a ratio is only worth the C runs taken beside it.
+#
+# Needs the C programs built first (README, "Performance"):
+#   make -C ../shared/bench O="$PWD/target/cbench"
+# Usage, from the project root: bash benches/floors.sh [ROUNDS]   (default 3; about 4 min a round)
+set -euo pipefail
+rounds=${1:-3}
+cbench=target/cbench
+[[ -x $cbench/fft_limit && -x $cbench/fd_limit ]] || {
+    echo "build the C floors first: make -C ../shared/bench O=\"\$PWD/$cbench\"" >&2
+    exit 2
+}
+
+# The C median (ms) of one configuration: METHOD N THREADS.
+c_median() {
+    local line
+    if [[ $1 == fd ]]; then
+        line=$($cbench/fd_limit -t "$3" -n "$2" -v fused -s 1 | head -1)
+        sed -E 's/.*"ms_median": ([0-9.e+-]+).*/\1/' <<<"$line"
+    else
+        line=$($cbench/fft_limit -t "$3" -n "$2" -s 1 | head -1)
+        sed -E 's/.*"step_ms_median": ([0-9.e+-]+).*/\1/' <<<"$line"
+    fi
+}
+
+# Our criterion median (ms) of one configuration.
+our_median() {
+    local out
+    out=$(cargo bench -q --bench step -- --warm-up-time 1 --measurement-time 3 \
+        "step/$1/full/$2\\^3/t$3\$" 2>/dev/null | grep -m1 -A1 "^step/" | grep -o 'time: *\[[^]]*\]')
+    awk '{ v = $4; if ($5 == "µs") v /= 1000; if ($5 == "s") v *= 1000; print v }' <<<"$out"
+}
+
+configs=("spectral 64 1" "spectral 64 2" "spectral 128 1" "spectral 128 2"
+    "fd 64 1" "fd 64 2" "fd 128 1" "fd 128 2")
+cargo bench --bench step --no-run -q
+results=$(mktemp)
+trap 'rm -f "$results"' EXIT
+for ((r = 1; r <= rounds; r++)); do
+    for c in "${configs[@]}"; do
+        read -r method n threads <<<"$c"
+        before=$(c_median "$method" "$n" "$threads")
+        ours=$(our_median "$method" "$n" "$threads")
+        after=$(c_median "$method" "$n" "$threads")
+        ratio=$(awk -v o="$ours" -v a="$before" -v b="$after" 'BEGIN { printf "%.2f", 2 * o / (a + b) }')
+        printf '%-8s %4s³ t%s  ours %8.3f ms  C %8.3f %8.3f ms  ratio %s\n' \
+            "$method" "$n" "$threads" "$ours" "$before" "$after" "$ratio" | tee -a "$results"
+    done
+done
+echo
+echo "median ratio (range) over $rounds rounds"
+for c in "${configs[@]}"; do
+    read -r method n threads <<<"$c"
+    grep -E "^$method +$n³ t$threads " "$results" | awk '{ print $NF }' | sort -n |
+        awk -v c="$method $n³ t$threads" '{ v[NR] = $1 }
+            END { m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
+                  printf "%-18s %.2f× (%.2f–%.2f)\n", c, m, v[1], v[NR] }'
+done
