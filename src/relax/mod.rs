@@ -551,8 +551,8 @@ struct PerValue {
     aw: [f64; PIECE],
 }
 
-/// The per-wavenumber factors of one piece of a spectral row, each value's twice (for its real
-/// and imaginary parts), `len` reals in use.
+/// The per-wavenumber factors of one piece (whole rows, or a part of one), each value's twice
+/// (for its real and imaginary parts), `len` reals in use.
 struct Factors {
     len: usize,
     /// Scratch: the factors once per value.
@@ -634,32 +634,30 @@ impl Factors {
             *aw = sym.area_prefactor * k * w;
         }
         let (k, w, m, inv_m, qf, aw) = (&c.k, &c.w, &c.m, &c.inv_m, &c.qf, &c.aw);
-        let len = (offset, len);
-        /// table[2(offset + l)] = table[2(offset + l) + 1] = v(l).
+        let slots = 2 * offset..2 * (offset + len);
+        /// table[slots] = v(0), v(0), v(1), v(1), …
         #[inline(always)]
-        fn twice(table: &mut [f64; 2 * PIECE], at: (usize, usize), v: impl Fn(usize) -> f64) {
-            let (offset, len) = at;
-            let pairs = table[2 * offset..2 * (offset + len)].chunks_exact_mut(2);
-            for (l, pair) in pairs.enumerate() {
+        fn twice(table: &mut [f64], v: impl Fn(usize) -> f64) {
+            for (l, pair) in table.chunks_exact_mut(2).enumerate() {
                 pair.fill(v(l));
             }
         }
         match need {
             Need::Area => {
-                twice(&mut self.aw, len, |l| aw[l]);
-                twice(&mut self.aq, len, |l| aw[l] * qf[l]);
-                twice(&mut self.aqq, len, |l| aw[l] * qf[l] * qf[l]);
+                twice(&mut self.aw[slots.clone()], |l| aw[l]);
+                twice(&mut self.aq[slots.clone()], |l| aw[l] * qf[l]);
+                twice(&mut self.aqq[slots], |l| aw[l] * qf[l] * qf[l]);
             }
             Need::Trial => {
-                twice(&mut self.k, len, |l| k[l]);
-                twice(&mut self.qf, len, |l| qf[l]);
-                twice(&mut self.aw, len, |l| aw[l]);
+                twice(&mut self.k[slots.clone()], |l| k[l]);
+                twice(&mut self.qf[slots.clone()], |l| qf[l]);
+                twice(&mut self.aw[slots], |l| aw[l]);
             }
             Need::Gradient => {
-                twice(&mut self.wm, len, |l| w[l] * m[l]);
-                twice(&mut self.wmm, len, |l| w[l] * m[l] * m[l]);
-                twice(&mut self.inv_m, len, |l| inv_m[l]);
-                twice(&mut self.qf, len, |l| qf[l]);
+                twice(&mut self.wm[slots.clone()], |l| w[l] * m[l]);
+                twice(&mut self.wmm[slots.clone()], |l| w[l] * m[l] * m[l]);
+                twice(&mut self.inv_m[slots.clone()], |l| inv_m[l]);
+                twice(&mut self.qf[slots], |l| qf[l]);
             }
         }
     }
@@ -710,19 +708,21 @@ fn area_sums(f: &Factors, x: &[f64], d: &[f64]) -> AreaSums {
     }
 }
 
-/// (⟨s_a, y_b⟩_M, ⟨y_a, y_b⟩_M).
-fn pair_dots(sym: &Symbols, m: Metric, a: &Pair, b: &Pair) -> (f64, f64) {
+/// ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*) by a plain sum over the spectrum (no pieces, no kernels:
+/// the reference the sweeps' sums are checked against, and the Gram of a restored memory).
+fn dot_m(sym: &Symbols, m: Metric, u: &[Complex64], v: &[Complex64]) -> f64 {
     let s2 = sym.row_len();
-    let mut acc = (0.0, 0.0);
-    for (i, (sa, ya)) in a.s.iter().zip(&a.y).enumerate() {
+    let values = u.iter().zip(v).enumerate();
+    values.fold(0.0, |acc, (i, (a, b))| {
         let (kb, wb) = sym.row(i / s2);
         let k = kb + sym.k2[2][i % s2];
-        let wm = wb * sym.weight[2][i % s2] * m.at(k);
-        let yb = b.y[i];
-        acc.0 += wm * (sa.re * yb.re + sa.im * yb.im);
-        acc.1 += wm * (ya.re * yb.re + ya.im * yb.im);
-    }
-    acc
+        acc + wb * sym.weight[2][i % s2] * m.at(k) * (a.re * b.re + a.im * b.im)
+    })
+}
+
+/// (⟨s_a, y_b⟩_M, ⟨y_a, y_b⟩_M).
+fn pair_dots(sym: &Symbols, m: Metric, a: &Pair, b: &Pair) -> (f64, f64) {
+    (dot_m(sym, m, &a.s, &b.y), dot_m(sym, m, &a.y, &b.y))
 }
 
 /// One task's share of a new pair in [`gradient_sweep`]: x_old, r_old (the whole spectra) and
@@ -958,17 +958,6 @@ impl Engine for RelaxEngine {
 mod tests {
     use super::*;
     use serde_json::json;
-
-    /// ⟨u, v⟩_M by a direct sum over the spectrum (no pieces).
-    fn dot_m(sym: &Symbols, m: Metric, u: &[Complex64], v: &[Complex64]) -> f64 {
-        let s2 = sym.row_len();
-        let values = u.iter().zip(v).enumerate();
-        values.fold(0.0, |acc, (i, (a, b))| {
-            let (kb, wb) = sym.row(i / s2);
-            let k = kb + sym.k2[2][i % s2];
-            acc + wb * sym.weight[2][i % s2] * m.at(k) * (a.re * b.re + a.im * b.im)
-        })
-    }
 
     /// The Gram matrix and the inner products ⟨s_i, r⟩_M, ⟨y_i, r⟩_M that the sweeps sum piece
     /// by piece equal direct sums over the spectrum to round-off (1e-11 of the largest entry),
