@@ -30,11 +30,9 @@
 //!   products of r, q and the new pair with every stored pair: the next iteration's recursion
 //!   and the Gram matrix's new row and column.
 //!
-//! Rows are walked in pieces of [`PIECE`] values whose per-wavenumber factors are formed once,
-//! and the loops run over the spectra as interleaved (re, im) reals; the reductions are the
-//! vectorised kernels of [`kernels`].
-
-mod kernels;
+//! The sweeps walk the spectrum in pieces ([`crate::spectral::pieces`]) whose per-wavenumber
+//! factors are formed once, and the loops run over the spectra as interleaved (re, im) reals;
+//! the reductions are the vectorised kernels of [`crate::spectral::kernels`].
 
 use crate::config::{AreaMethod, Scene};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
@@ -42,7 +40,8 @@ use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::numerics::nearest_root;
 use crate::spectral::evaluator::{Evaluator, ExplicitTerm, Metric, State, Symbols};
-use kernels::{dot3, pair_sums, quadratic_sums};
+use crate::spectral::kernels::{dot3, pair_sums, quadratic_sums};
+use crate::spectral::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -52,11 +51,6 @@ use std::collections::VecDeque;
 const ARMIJO: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up.
 const MAX_BACKTRACKS: usize = 40;
-/// Values per piece: as many whole rows as fit, or a part of a longer row. A sweep visits each
-/// stored pair a piece at a time, so a piece is one 4 KiB page of a pair's reals: with one short
-/// row per piece (25 values at 48³) most reads of the pairs waited on memory, and an iteration
-/// took about 18% longer (48³, 1 thread, medians of 6 interleaved runs of 100 iterations).
-const PIECE: usize = 256;
 /// Largest L-BFGS memory (the coefficient recursion keeps its sums in fixed arrays).
 pub const MAX_MEMORY: usize = 32;
 
@@ -339,7 +333,7 @@ impl RelaxEngine {
         let (sym, m) = (&self.ev.symbols, self.metric);
         let pairs = &self.pairs;
         let (r, x) = (reals(flat(&self.grad)), reals(flat(&self.cur.hat)));
-        let (s2, task) = (sym.row_len(), sym.task_len());
+        let task = sym.task_len();
         let (off, c_r, c_y, c_s) = (d.off, d.c_r, d.c_y, d.c_s);
         let area = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
             .par_chunks_mut(2 * task)
@@ -347,26 +341,20 @@ impl RelaxEngine {
             .map(|(t, out)| {
                 let base = 2 * t * task;
                 let mut acc = AreaSums::default();
-                for_each_piece(
-                    sym,
-                    m,
-                    Need::Area,
-                    (t * task / s2, out.len() / (2 * s2)),
-                    |f, at| {
-                        let (o, g) = (&mut out[at..at + f.len], base + at..base + at + f.len);
-                        for (o, r) in o.iter_mut().zip(&r[g.clone()]) {
-                            *o = -(r * c_r);
+                for_each_factored(sym, m, Need::Area, t, out.len(), |f, at| {
+                    let (o, g) = (&mut out[at..at + f.len], base + at..base + at + f.len);
+                    for (o, r) in o.iter_mut().zip(&r[g.clone()]) {
+                        *o = -(r * c_r);
+                    }
+                    for (j, p) in pairs.iter().skip(off).enumerate() {
+                        let (cy, cs) = (c_y[j], c_s[j]);
+                        let (y, s) = (&reals(&p.y)[g.clone()], &reals(&p.s)[g.clone()]);
+                        for ((o, y), s) in o.iter_mut().zip(y).zip(s) {
+                            *o -= y * cy + s * cs;
                         }
-                        for (j, p) in pairs.iter().skip(off).enumerate() {
-                            let (cy, cs) = (c_y[j], c_s[j]);
-                            let (y, s) = (&reals(&p.y)[g.clone()], &reals(&p.s)[g.clone()]);
-                            for ((o, y), s) in o.iter_mut().zip(y).zip(s) {
-                                *o -= y * cy + s * cs;
-                            }
-                        }
-                        acc = acc.add(area_sums(f, &x[g], o));
-                    },
-                );
+                    }
+                    acc = acc.add(area_sums(f, &x[g], o));
+                });
                 acc
             })
             .reduce(AreaSums::default, AreaSums::add);
@@ -381,7 +369,7 @@ impl RelaxEngine {
     fn write_trial(&mut self, alpha: f64, beta: f64) -> f64 {
         let (sym, m) = (&self.ev.symbols, self.metric);
         let (x, d) = (reals(flat(&self.cur.hat)), reals(flat(&self.dir)));
-        let (s2, task) = (sym.row_len(), sym.task_len());
+        let task = sym.task_len();
         let hat = reals_mut(self.trial.hat.as_slice_mut().expect("standard layout"));
         let copy = reals_mut(self.trial.nonlinear.as_slice_mut().expect("layout"));
         let lap = reals_mut(self.ev.spare.as_slice_mut().expect("standard layout"));
@@ -392,27 +380,21 @@ impl RelaxEngine {
             .map(|(t, ((hat, copy), lap))| {
                 let base = 2 * t * task;
                 let mut area = 0.0;
-                for_each_piece(
-                    sym,
-                    m,
-                    Need::Trial,
-                    (t * task / s2, hat.len() / (2 * s2)),
-                    |f, at| {
-                        let (local, g) = (at..at + f.len, base + at..base + at + f.len);
-                        let values = hat[local.clone()]
-                            .iter_mut()
-                            .zip(&mut copy[local.clone()])
-                            .zip(&mut lap[local])
-                            .zip(x[g.clone()].iter().zip(&d[g]))
-                            .zip(f.qf.iter().zip(&f.k));
-                        for ((((h, c), l), (x, d)), (qf, k)) in values {
-                            let v = x + d * alpha + x * qf * beta;
-                            (*h, *c, *l) = (v, v, -(v * k));
-                        }
-                        let v = &hat[at..at + f.len];
-                        area += dot3(&f.aw[..f.len], v, v);
-                    },
-                );
+                for_each_factored(sym, m, Need::Trial, t, hat.len(), |f, at| {
+                    let (local, g) = (at..at + f.len, base + at..base + at + f.len);
+                    let values = hat[local.clone()]
+                        .iter_mut()
+                        .zip(&mut copy[local.clone()])
+                        .zip(&mut lap[local])
+                        .zip(x[g.clone()].iter().zip(&d[g]))
+                        .zip(f.qf.iter().zip(&f.k));
+                    for ((((h, c), l), (x, d)), (qf, k)) in values {
+                        let v = x + d * alpha + x * qf * beta;
+                        (*h, *c, *l) = (v, v, -(v * k));
+                    }
+                    let v = &hat[at..at + f.len];
+                    area += dot3(&f.aw[..f.len], v, v);
+                });
                 area
             })
             .sum()
@@ -511,16 +493,6 @@ fn flat(a: &Array3<Complex64>) -> &[Complex64] {
     a.as_slice().expect("standard layout")
 }
 
-/// A spectrum as interleaved (re, im) reals.
-fn reals(c: &[Complex64]) -> &[f64] {
-    bytemuck::cast_slice(c)
-}
-
-/// A spectrum as interleaved (re, im) reals, writable.
-fn reals_mut(c: &mut [Complex64]) -> &mut [f64] {
-    bytemuck::cast_slice_mut(c)
-}
-
 /// Drop the oldest pair's row and column of a Gram matrix of `n` pairs.
 fn shift_gram(g: &mut [f64], n: usize) {
     for i in 1..n {
@@ -541,36 +513,35 @@ enum Need {
     Gradient,
 }
 
-/// |k|², w, M, 1/M, q/φ̂ and the area weight of each value of a piece.
+/// M, 1/M, q/φ̂ and the area weight of each value of a piece.
 struct PerValue {
-    k: [f64; PIECE],
-    w: [f64; PIECE],
     m: [f64; PIECE],
     inv_m: [f64; PIECE],
     qf: [f64; PIECE],
     aw: [f64; PIECE],
 }
 
-/// The per-wavenumber factors of one piece (whole rows, or a part of one), each value's twice
-/// (for its real and imaginary parts), `len` reals in use.
+/// The per-wavenumber factors of one piece, each value's twice (for its real and imaginary
+/// parts).
 struct Factors {
+    /// Reals in use.
     len: usize,
     /// Scratch: the factors once per value.
     per_value: PerValue,
     /// |k|².
-    k: [f64; 2 * PIECE],
+    k: Twice,
     /// w M(k).
-    wm: [f64; 2 * PIECE],
+    wm: Twice,
     /// w M(k)².
-    wmm: [f64; 2 * PIECE],
+    wmm: Twice,
     /// 1/M(k), 0 at k = 0 (r(0) = 0).
-    inv_m: [f64; 2 * PIECE],
+    inv_m: Twice,
     /// q/φ̂ = c_σ |k|²/M(k).
-    qf: [f64; 2 * PIECE],
+    qf: Twice,
     /// The area weight a = (3/(2√2)) ε |k|² w, a q/φ̂ and a (q/φ̂)².
-    aw: [f64; 2 * PIECE],
-    aq: [f64; 2 * PIECE],
-    aqq: [f64; 2 * PIECE],
+    aw: Twice,
+    aq: Twice,
+    aqq: Twice,
 }
 
 impl Factors {
@@ -580,8 +551,6 @@ impl Factors {
         Factors {
             len: 0,
             per_value: PerValue {
-                k: p,
-                w: p,
                 m: p,
                 inv_m: p,
                 qf: p,
@@ -598,100 +567,65 @@ impl Factors {
         }
     }
 
-    /// The factors `need` of values `start..start + len` of spectral row `row`, placed after
-    /// the piece's first `offset` values (a piece may hold several short rows): first one per
-    /// value (loops the compiler vectorises, the division included), then each twice.
-    fn fill(
-        &mut self,
-        sym: &Symbols,
-        metric: Metric,
-        need: Need,
-        at: (usize, usize, usize),
-        offset: usize,
-    ) {
-        let (row, start, len) = at;
-        let (kb, wb) = sym.row(row);
-        self.len = 2 * (offset + len);
+    /// The factors `need` of piece `p`: first one per value (loops the compiler vectorises, the
+    /// division included), then each twice.
+    fn fill(&mut self, p: &Piece, sym: &Symbols, metric: Metric, need: Need) {
+        let len = p.len;
+        self.len = p.reals();
         let c = &mut self.per_value;
-        let axis = sym.k2[2][start..start + len]
-            .iter()
-            .zip(&sym.weight[2][start..start + len]);
-        let out = c.k.iter_mut().zip(&mut c.w).zip(&mut c.m);
-        for (((k, w), m), (&kl, &wl)) in out.zip(axis) {
-            (*k, *w) = (kb + kl, wb * wl);
-            *m = metric.at(*k);
+        for (m, &k) in c.m[..len].iter_mut().zip(&p.k) {
+            *m = metric.at(k);
         }
         for (inv_m, m) in c.inv_m[..len].iter_mut().zip(&c.m) {
             *inv_m = 1.0 / m;
         }
-        let values = c.k[..len]
+        let values = p.k[..len]
             .iter()
-            .zip(&c.w)
+            .zip(&p.w)
             .zip(c.inv_m.iter_mut().zip(c.qf.iter_mut().zip(c.aw.iter_mut())));
         for ((&k, &w), (inv_m, (qf, aw))) in values {
             *inv_m = if k == 0.0 { 0.0 } else { *inv_m };
             *qf = metric.c_sigma * k * *inv_m;
             *aw = sym.area_prefactor * k * w;
         }
-        let (k, w, m, inv_m, qf, aw) = (&c.k, &c.w, &c.m, &c.inv_m, &c.qf, &c.aw);
-        let slots = 2 * offset..2 * (offset + len);
-        /// table[slots] = v(0), v(0), v(1), v(1), …
-        #[inline(always)]
-        fn twice(table: &mut [f64], v: impl Fn(usize) -> f64) {
-            for (l, pair) in table.chunks_exact_mut(2).enumerate() {
-                pair.fill(v(l));
-            }
-        }
+        let (k, w, m, inv_m, qf, aw) = (&p.k, &p.w, &c.m, &c.inv_m, &c.qf, &c.aw);
         match need {
             Need::Area => {
-                twice(&mut self.aw[slots.clone()], |l| aw[l]);
-                twice(&mut self.aq[slots.clone()], |l| aw[l] * qf[l]);
-                twice(&mut self.aqq[slots], |l| aw[l] * qf[l] * qf[l]);
+                p.twice(&mut self.aw, |l| aw[l]);
+                p.twice(&mut self.aq, |l| aw[l] * qf[l]);
+                p.twice(&mut self.aqq, |l| aw[l] * qf[l] * qf[l]);
             }
             Need::Trial => {
-                twice(&mut self.k[slots.clone()], |l| k[l]);
-                twice(&mut self.qf[slots.clone()], |l| qf[l]);
-                twice(&mut self.aw[slots], |l| aw[l]);
+                p.twice(&mut self.k, |l| k[l]);
+                p.twice(&mut self.qf, |l| qf[l]);
+                p.twice(&mut self.aw, |l| aw[l]);
             }
             Need::Gradient => {
-                twice(&mut self.wm[slots.clone()], |l| w[l] * m[l]);
-                twice(&mut self.wmm[slots.clone()], |l| w[l] * m[l] * m[l]);
-                twice(&mut self.inv_m[slots.clone()], |l| inv_m[l]);
-                twice(&mut self.qf[slots], |l| qf[l]);
+                p.twice(&mut self.wm, |l| w[l] * m[l]);
+                p.twice(&mut self.wmm, |l| w[l] * m[l] * m[l]);
+                p.twice(&mut self.inv_m, |l| inv_m[l]);
+                p.twice(&mut self.qf, |l| qf[l]);
             }
         }
     }
 }
 
-/// Calls `f(factors, at)` for every piece of the `rows` spectral rows from row `first`, with
-/// the factors `need`, `at` the piece's first real relative to row `first`. A piece is as many
-/// whole rows as fit in [`PIECE`] values, or a part of one longer row.
-fn for_each_piece(
+/// Calls `f(factors, at)` for every piece of parallel task `t` ([`for_each_piece`]) with the
+/// factors `need`.
+#[inline(always)]
+fn for_each_factored(
     sym: &Symbols,
     metric: Metric,
     need: Need,
-    (first, rows): (usize, usize),
+    t: usize,
+    reals: usize,
     mut f: impl FnMut(&Factors, usize),
 ) {
-    let s2 = sym.row_len();
     let mut factors = Factors::new();
-    if s2 <= PIECE {
-        let per_piece = PIECE / s2;
-        for r0 in (0..rows).step_by(per_piece) {
-            for i in 0..per_piece.min(rows - r0) {
-                factors.fill(sym, metric, need, (first + r0 + i, 0, s2), i * s2);
-            }
-            f(&factors, 2 * r0 * s2);
-        }
-        return;
-    }
-    for r in 0..rows {
-        for start in (0..s2).step_by(PIECE) {
-            let len = PIECE.min(s2 - start);
-            factors.fill(sym, metric, need, (first + r, start, len), 0);
-            f(&factors, 2 * (r * s2 + start));
-        }
-    }
+    for_each_piece(sym, t, reals, |p, at| {
+        factors.fill(p, sym, metric, need);
+        f(&factors, at);
+    });
 }
 
 /// The area sums of one piece ([`AreaSums`]), x = φ̂ and d = d' as interleaved reals.
@@ -743,7 +677,7 @@ fn gradient_sweep(
     new: Option<(&[Complex64], &[Complex64], &mut Pair)>,
 ) -> GradientSums {
     let (x, g) = (reals(flat(&state.hat)), reals(flat(&state.nonlinear)));
-    let (s2, task) = (sym.row_len(), sym.task_len());
+    let task = sym.task_len();
     let n_pairs = pairs.len();
     // One task: rows from `t · task / s2`; `new` = (x_old, r_old, s, y) of its values.
     let run = |t: usize, r: &mut [f64], mut new: Option<NewPairPart>| {
@@ -753,52 +687,46 @@ fn gradient_sweep(
         // and q.
         let mut v = [[0.0; 2 * PIECE]; 4];
         let mut q = [0.0; 2 * PIECE];
-        for_each_piece(
-            sym,
-            m,
-            Need::Gradient,
-            (t * task / s2, r.len() / (2 * s2)),
-            |f, at| {
-                let (n, local, gl) = (f.len, at..at + f.len, base + at..base + at + f.len);
-                let (xs, gs, rs) = (&x[gl.clone()], &g[gl.clone()], &mut r[local.clone()]);
-                let [wr, wq, ws, wy] = &mut v;
-                let outputs = q.iter_mut().zip(rs.iter_mut()).zip(wr.iter_mut().zip(wq));
-                let inputs = xs.iter().zip(gs).zip(f.inv_m.iter().zip(&f.qf).zip(&f.wm));
-                for (((q, r), (wr, wq)), ((x, g), ((inv_m, qf), wm))) in outputs.zip(inputs) {
-                    *q = qf * x;
-                    *r = g * inv_m + x * (sigma * qf);
-                    (*wr, *wq) = (wm * *r, wm * *q);
+        for_each_factored(sym, m, Need::Gradient, t, r.len(), |f, at| {
+            let (n, local, gl) = (f.len, at..at + f.len, base + at..base + at + f.len);
+            let (xs, gs, rs) = (&x[gl.clone()], &g[gl.clone()], &mut r[local.clone()]);
+            let [wr, wq, ws, wy] = &mut v;
+            let outputs = q.iter_mut().zip(rs.iter_mut()).zip(wr.iter_mut().zip(wq));
+            let inputs = xs.iter().zip(gs).zip(f.inv_m.iter().zip(&f.qf).zip(&f.wm));
+            for (((q, r), (wr, wq)), ((x, g), ((inv_m, qf), wm))) in outputs.zip(inputs) {
+                *q = qf * x;
+                *r = g * inv_m + x * (sigma * qf);
+                (*wr, *wq) = (wm * *r, wm * *q);
+            }
+            // [Σ wM r², Σ wM² r², –, Σ wM r q, –, –].
+            let sums = quadratic_sums(&f.wm[..n], &f.wmm[..n], &f.wm[..n], rs, &q[..n]);
+            (acc.rr, acc.res) = (acc.rr + sums[0], acc.res + sums[1]);
+            acc.qr += sums[3];
+            if let Some((x_old, r_old, s, y)) = new.as_mut() {
+                let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
+                let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy));
+                let inputs = xs
+                    .iter()
+                    .zip(x_old[gl.clone()].iter())
+                    .zip(rs.iter().zip(r_old[gl.clone()].iter()).zip(&f.wm[..n]));
+                for (((s, y), (ws, wy)), ((x, xo), ((r, ro), wm))) in outputs.zip(inputs) {
+                    (*s, *y) = (x - xo, r - ro);
+                    (*ws, *wy) = (wm * *s, wm * *y);
                 }
-                // [Σ wM r², Σ wM² r², –, Σ wM r q, –, –].
-                let sums = quadratic_sums(&f.wm[..n], &f.wmm[..n], &f.wm[..n], rs, &q[..n]);
-                (acc.rr, acc.res) = (acc.rr + sums[0], acc.res + sums[1]);
-                acc.qr += sums[3];
-                if let Some((x_old, r_old, s, y)) = new.as_mut() {
-                    let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
-                    let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy));
-                    let inputs = xs
-                        .iter()
-                        .zip(x_old[gl.clone()].iter())
-                        .zip(rs.iter().zip(r_old[gl.clone()].iter()).zip(&f.wm[..n]));
-                    for (((s, y), (ws, wy)), ((x, xo), ((r, ro), wm))) in outputs.zip(inputs) {
-                        (*s, *y) = (x - xo, r - ro);
-                        (*ws, *wy) = (wm * *s, wm * *y);
-                    }
-                }
-                let v = v.each_ref().map(|v| &v[..n]);
-                for (p, sums) in pairs.iter().zip(&mut acc.pairs) {
-                    let add = pair_sums(&reals(&p.s)[gl.clone()], &reals(&p.y)[gl.clone()], v);
-                    sums.iter_mut().zip(add).for_each(|(a, b)| *a += b);
-                }
-                if let Some((_, _, s, y)) = new.as_ref() {
-                    let add = pair_sums(&s[local.clone()], &y[local.clone()], v);
-                    acc.pairs[n_pairs]
-                        .iter_mut()
-                        .zip(add)
-                        .for_each(|(a, b)| *a += b);
-                }
-            },
-        );
+            }
+            let v = v.each_ref().map(|v| &v[..n]);
+            for (p, sums) in pairs.iter().zip(&mut acc.pairs) {
+                let add = pair_sums(&reals(&p.s)[gl.clone()], &reals(&p.y)[gl.clone()], v);
+                sums.iter_mut().zip(add).for_each(|(a, b)| *a += b);
+            }
+            if let Some((_, _, s, y)) = new.as_ref() {
+                let add = pair_sums(&s[local.clone()], &y[local.clone()], v);
+                acc.pairs[n_pairs]
+                    .iter_mut()
+                    .zip(add)
+                    .for_each(|(a, b)| *a += b);
+            }
+        });
         acc
     };
     let grad = reals_mut(grad);

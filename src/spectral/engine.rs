@@ -19,6 +19,8 @@
 //! nearest the last σ and rejects a step with no real root.
 
 use super::evaluator::{axis_symbol, Evaluator, ExplicitTerm, State};
+use super::kernels::{dot3, quadratic_sums, wide_fn};
+use super::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
@@ -45,40 +47,163 @@ struct Update {
 }
 
 impl Update {
-    /// P̂ and Q̂ at |k|² = `k` from φ̂ⁿ, N̂ⁿ (`h1`, `n1`) and φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (`h0`, `n0`):
-    /// P̂ = [−a1 φ̂ⁿ − a2 φ̂ⁿ⁻¹ + Δt(b1(N̂ⁿ + Sφ̂ⁿ) + b2(N̂ⁿ⁻¹ + Sφ̂ⁿ⁻¹))]/D,
-    /// Q̂ = −Δt c_σ k⁴ (b1 φ̂ⁿ + b2 φ̂ⁿ⁻¹)/D, D = a0 + Δt(2ε⁴k⁶ + S).
-    /// `PREV` false drops the φ̂ⁿ⁻¹, N̂ⁿ⁻¹ terms at compile time (SBDF1); else they are
-    /// `h0[l]`, `n0[l]`.
+    /// The factors of the update at the values of piece `p`, each twice:
+    ///
+    /// ```text
+    /// P̂ = h1 φ̂ⁿ + n1 N̂ⁿ + h0 φ̂ⁿ⁻¹ + n0 N̂ⁿ⁻¹,   Q̂ = q1 φ̂ⁿ + q0 φ̂ⁿ⁻¹,
+    /// h1 = (−a1 + Δt b1 S)/D, n1 = Δt b1/D, h0 = (−a2 + Δt b2 S)/D, n0 = Δt b2/D,
+    /// q1 = −Δt c_σ k⁴ b1/D, q0 = −Δt c_σ k⁴ b2/D,   D = a0 + Δt(2ε⁴k⁶ + S),
+    /// ```
+    ///
+    /// (k standing for |k|²), with σ's multiple of Q̂ folded into h1 and h0 when `sigma` is
+    /// given (φ̂^{n+1} itself; q1, q0 are then not formed). `PREV` false leaves h0, n0 and q0
+    /// unset (SBDF1). Also the area weight `aw`.
     #[inline(always)]
-    fn at<const PREV: bool>(
+    fn factors<const PREV: bool>(
         &self,
-        k: f64,
-        h1: Complex64,
-        n1: Complex64,
-        h0: &[Complex64],
-        n0: &[Complex64],
-        l: usize,
-    ) -> (Complex64, Complex64) {
+        p: &Piece,
+        area_prefactor: f64,
+        sigma: Option<f64>,
+        f: &mut UpdateFactors,
+    ) {
         let [a0, a1, a2, b1, b2] = self.a;
-        let s = self.s2 * k + self.s4e2 * k * k;
-        let inv = 1.0 / (a0 + self.dt * (self.e4x2 * k * k * k + s));
-        let qc = -self.dt * self.c_sigma * k * k * inv;
-        if !PREV {
-            let rhs = h1 * (-a1) + (n1 + h1 * s) * (b1 * self.dt);
-            return (rhs * inv, h1 * (b1 * qc));
+        let dt = self.dt;
+        let s = |k: f64| self.s2 * k + self.s4e2 * k * k;
+        for (inv, &k) in f.inv[..p.len].iter_mut().zip(&p.k) {
+            *inv = 1.0 / (a0 + dt * (self.e4x2 * k * k * k + s(k)));
         }
-        let (h0, n0) = (h0[l], n0[l]);
-        let rhs = h1 * (-a1) - h0 * a2 + ((n1 + h1 * s) * b1 + (n0 + h0 * s) * b2) * self.dt;
-        (rhs * inv, (h1 * b1 + h0 * b2) * qc)
+        let (k, inv) = (&p.k, &f.inv);
+        let qc = |l: usize| -dt * self.c_sigma * k[l] * k[l] * inv[l];
+        let sig = sigma.unwrap_or(0.0);
+        p.twice(&mut f.h1, |l| {
+            (-a1 + dt * b1 * s(k[l])) * inv[l] + sig * b1 * qc(l)
+        });
+        p.twice(&mut f.n1, |l| dt * b1 * inv[l]);
+        if sigma.is_none() {
+            p.twice(&mut f.q1, |l| b1 * qc(l));
+        }
+        if PREV {
+            p.twice(&mut f.h0, |l| {
+                (-a2 + dt * b2 * s(k[l])) * inv[l] + sig * b2 * qc(l)
+            });
+            p.twice(&mut f.n0, |l| dt * b2 * inv[l]);
+            if sigma.is_none() {
+                p.twice(&mut f.q0, |l| b2 * qc(l));
+            }
+        }
+        p.twice(&mut f.aw, |l| area_prefactor * k[l] * p.w[l]);
     }
 }
 
-/// φ̂ⁿ, N̂ⁿ and (SBDF2) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, flattened.
+wide_fn! {
+/// One piece of [`SpectralEngine::area_quadratic`]: its (A_PP, A_PQ, A_QQ) from the
+/// inputs' reals [φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹] of the piece (`f` its scratch).
+fn quadratic_piece<const PREV: bool>(
+    u: &Update,
+    p: &Piece,
+    area_prefactor: f64,
+    inputs: [&[f64]; 4],
+    f: &mut UpdateFactors,
+) -> [f64; 3] {
+    let [h1, n1, h0, n0] = inputs;
+    let n = p.reals();
+    u.factors::<PREV>(p, area_prefactor, None, f);
+    let (pv, qv) = (&mut f.p[..n], &mut f.q[..n]);
+    let current = h1.iter().zip(n1).zip(f.h1.iter().zip(&f.n1).zip(&f.q1));
+    for ((p, q), ((h, nl), ((fh, fnl), fq))) in pv.iter_mut().zip(qv.iter_mut()).zip(current) {
+        (*p, *q) = (h * fh + nl * fnl, h * fq);
+    }
+    if PREV {
+        let older = h0.iter().zip(n0).zip(f.h0.iter().zip(&f.n0).zip(&f.q0));
+        for ((p, q), ((h, nl), ((fh, fnl), fq))) in pv.iter_mut().zip(qv.iter_mut()).zip(older)
+        {
+            (*p, *q) = (*p + (h * fh + nl * fnl), *q + h * fq);
+        }
+    }
+    // [Σ a P², –, –, Σ a P Q, –, Σ a Q²].
+    let aw = &f.aw[..n];
+    let sums = quadratic_sums(aw, aw, aw, pv, qv);
+    [sums[0], sums[3], sums[5]]
+}
+}
+
+wide_fn! {
+/// One piece of [`SpectralEngine::write_update`]: φ̂^{n+1} = P̂ + σQ̂ into `hat`, a copy into
+/// `copy` and −|k|²φ̂^{n+1} into `lap`; returns the piece's area (`f` its scratch).
+fn write_piece<const PREV: bool>(
+    u: &Update,
+    p: &Piece,
+    area_prefactor: f64,
+    sigma: f64,
+    inputs: [&[f64]; 4],
+    out: [&mut [f64]; 3],
+    f: &mut UpdateFactors,
+) -> f64 {
+    let ([h1, n1, h0, n0], [hat, copy, lap]) = (inputs, out);
+    u.factors::<PREV>(p, area_prefactor, Some(sigma), f);
+    p.twice(&mut f.minus_k, |l| -p.k[l]);
+    let current = h1.iter().zip(n1).zip(f.h1.iter().zip(&f.n1));
+    for (v, ((h, nl), (fh, fnl))) in hat.iter_mut().zip(current) {
+        *v = h * fh + nl * fnl;
+    }
+    if PREV {
+        let older = h0.iter().zip(n0).zip(f.h0.iter().zip(&f.n0));
+        for (v, ((h, nl), (fh, fnl))) in hat.iter_mut().zip(older) {
+            *v += h * fh + nl * fnl;
+        }
+    }
+    let out = copy.iter_mut().zip(lap.iter_mut());
+    for ((c, l), (&v, &mk)) in out.zip(hat.iter().zip(&f.minus_k)) {
+        (*c, *l) = (v, v * mk);
+    }
+    dot3(&f.aw[..hat.len()], hat, hat)
+}
+}
+
+/// The update's factors of one piece ([`Update::factors`]), each value's twice, and the
+/// sweeps' other per-piece tables.
+struct UpdateFactors {
+    h1: Twice,
+    n1: Twice,
+    h0: Twice,
+    n0: Twice,
+    q1: Twice,
+    q0: Twice,
+    /// 1/D once per value.
+    inv: [f64; PIECE],
+    /// The area weight (3/(2√2)) ε |k|² w.
+    aw: Twice,
+    /// −|k|².
+    minus_k: Twice,
+    /// P̂ and Q̂ of the piece's values.
+    p: Twice,
+    q: Twice,
+}
+
+impl UpdateFactors {
+    fn new() -> Self {
+        let z = [0.0; 2 * PIECE];
+        UpdateFactors {
+            h1: z,
+            n1: z,
+            h0: z,
+            n0: z,
+            q1: z,
+            q0: z,
+            inv: [0.0; PIECE],
+            aw: z,
+            minus_k: z,
+            p: z,
+            q: z,
+        }
+    }
+}
+
+/// φ̂ⁿ, N̂ⁿ and (SBDF2) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, as interleaved reals.
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
-    cur: (&'a [Complex64], &'a [Complex64]),
-    prev: Option<(&'a [Complex64], &'a [Complex64])>,
+    cur: (&'a [f64], &'a [f64]),
+    prev: Option<(&'a [f64], &'a [f64])>,
 }
 
 impl<'a> Inputs<'a> {
@@ -88,18 +213,17 @@ impl<'a> Inputs<'a> {
         prev: Option<&'a (Array3<Complex64>, Array3<Complex64>)>,
         a2: f64,
     ) -> Self {
-        let flat = |a: &'a Array3<Complex64>| a.as_slice().expect("standard layout");
+        let flat = |a: &'a Array3<Complex64>| reals(a.as_slice().expect("standard layout"));
         Inputs {
             cur: (flat(&cur.hat), flat(&cur.nonlinear)),
             prev: prev.filter(|_| a2 != 0.0).map(|(h, n)| (flat(h), flat(n))),
         }
     }
 
-    /// Row `r` (of length `s2`) of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (the last two empty without a previous
-    /// step: the SBDF1 form of [`Update::at`] does not read them).
+    /// The reals `range` of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (the last two empty without a previous step:
+    /// the SBDF1 sweeps do not read them).
     #[inline]
-    fn row(&self, r: usize, s2: usize) -> [&'a [Complex64]; 4] {
-        let range = r * s2..(r + 1) * s2;
+    fn reals(&self, range: std::ops::Range<usize>) -> [&'a [f64]; 4] {
         let (h0, n0) = match self.prev {
             Some((h, n)) => (&h[range.clone()], &n[range.clone()]),
             None => (&[][..], &[][..]),
@@ -277,25 +401,18 @@ impl SpectralEngine {
         let u = self.update(dt);
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
-        let s2 = sym.row_len();
-        let (rows, per_task) = (self.cur.hat.len() / s2, sym.task_len() / s2);
-        let [kl, wl] = [&sym.k2[2], &sym.weight[2]];
-        let [pp, pq, qq] = (0..rows.div_ceil(per_task))
+        let (task, total) = (2 * sym.task_len(), 2 * self.cur.hat.len());
+        let [pp, pq, qq] = (0..total.div_ceil(task))
             .into_par_iter()
             .map(|t| {
+                let mut f = UpdateFactors::new();
                 let mut acc = [0.0; 3];
-                for r in t * per_task..((t + 1) * per_task).min(rows) {
-                    let (kb, wb) = sym.row(r);
-                    let [h1, n1, h0, n0] = inputs.row(r, s2);
-                    for l in 0..s2 {
-                        let k = kb + kl[l];
-                        let (p, q) = u.at::<PREV>(k, h1[l], n1[l], h0, n0, l);
-                        let a = sym.area_prefactor * k * (wb * wl[l]);
-                        acc[0] += a * p.norm_sqr();
-                        acc[1] += a * (p.re * q.re + p.im * q.im);
-                        acc[2] += a * q.norm_sqr();
-                    }
-                }
+                for_each_piece(sym, t, task.min(total - t * task), |p, at| {
+                    let x = inputs.reals(t * task + at..t * task + at + p.reals());
+                    let a = sym.area_prefactor;
+                    let sums = quadratic_piece::<PREV>(&u, p, a, x, &mut f);
+                    acc = [acc[0] + sums[0], acc[1] + sums[1], acc[2] + sums[2]];
+                });
                 acc
             })
             .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
@@ -318,35 +435,24 @@ impl SpectralEngine {
         let u = self.update(dt);
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
-        let (s2, task) = (sym.row_len(), sym.task_len());
-        let [kl, wl] = [&sym.k2[2], &sym.weight[2]];
-        let hat = self.next.hat.as_slice_mut().expect("standard layout");
-        let copy = self.next.nonlinear.as_slice_mut().expect("standard layout");
-        let lap = self.ev.spare.as_slice_mut().expect("standard layout");
+        let task = 2 * sym.task_len();
+        let hat = reals_mut(self.next.hat.as_slice_mut().expect("standard layout"));
+        let copy = reals_mut(self.next.nonlinear.as_slice_mut().expect("standard layout"));
+        let lap = reals_mut(self.ev.spare.as_slice_mut().expect("standard layout"));
         hat.par_chunks_mut(task)
             .zip(copy.par_chunks_mut(task))
             .zip(lap.par_chunks_mut(task))
             .enumerate()
             .map(|(t, ((hat, copy), lap))| {
-                let rows = hat
-                    .chunks_exact_mut(s2)
-                    .zip(copy.chunks_exact_mut(s2))
-                    .zip(lap.chunks_exact_mut(s2));
+                let mut f = UpdateFactors::new();
                 let mut area = 0.0;
-                for (j, ((hat, copy), lap)) in rows.enumerate() {
-                    let r = t * task / s2 + j;
-                    let (kb, wb) = sym.row(r);
-                    let [h1, n1, h0, n0] = inputs.row(r, s2);
-                    for l in 0..s2 {
-                        let k = kb + kl[l];
-                        let (p, q) = u.at::<PREV>(k, h1[l], n1[l], h0, n0, l);
-                        let h = p + q * sigma;
-                        hat[l] = h;
-                        copy[l] = h;
-                        lap[l] = h * (-k);
-                        area += sym.area_prefactor * k * (wb * wl[l]) * h.norm_sqr();
-                    }
-                }
+                for_each_piece(sym, t, hat.len(), |p, at| {
+                    let r = at..at + p.reals();
+                    let x = inputs.reals(t * task + r.start..t * task + r.end);
+                    let out = [&mut hat[r.clone()], &mut copy[r.clone()], &mut lap[r]];
+                    let a = sym.area_prefactor;
+                    area += write_piece::<PREV>(&u, p, a, sigma, x, out, &mut f);
+                });
                 area
             })
             .sum()

@@ -10,6 +10,8 @@
 //! inputs itself, in the sweep that makes φ̂ (as the time step does), skips the first sweep
 //! ([`Evaluator::finish`]).
 
+use super::kernels::{dot3, pointwise_sums, wide_fn};
+use super::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use super::transform::Transform;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
@@ -283,30 +285,47 @@ fn inverse_inputs(
     copy: &mut [Complex64],
     lap: &mut [Complex64],
 ) -> f64 {
-    let (s2, task) = (sym.row_len(), sym.task_len());
+    let task = 2 * sym.task_len();
+    let (hat, copy, lap) = (reals(hat), reals_mut(copy), reals_mut(lap));
     copy.par_chunks_mut(task)
         .zip(lap.par_chunks_mut(task))
-        .zip(hat.par_chunks(task))
         .enumerate()
-        .map(|(t, ((copy, lap), hat))| {
-            let rows = copy
-                .chunks_exact_mut(s2)
-                .zip(lap.chunks_exact_mut(s2))
-                .zip(hat.chunks_exact(s2));
+        .map(|(t, (copy, lap))| {
+            let (mut minus_k, mut aw) = ([0.0; 2 * PIECE], [0.0; 2 * PIECE]);
             let mut area = 0.0;
-            for (r, ((copy, lap), hat)) in rows.enumerate() {
-                let (kb, wb) = sym.row(t * task / s2 + r);
-                let cols = copy.iter_mut().zip(lap.iter_mut()).zip(hat);
-                for (((c, l), &h), (&kl, &wl)) in cols.zip(sym.k2[2].iter().zip(&sym.weight[2])) {
-                    let k = kb + kl;
-                    *c = h;
-                    *l = h * (-k);
-                    area += sym.area_prefactor * k * (wb * wl) * h.norm_sqr();
-                }
-            }
+            for_each_piece(sym, t, copy.len(), |p, at| {
+                let r = at..at + p.reals();
+                let (h, copy, lap) = (
+                    &hat[t * task..][r.clone()],
+                    &mut copy[r.clone()],
+                    &mut lap[r],
+                );
+                area += inverse_inputs_piece(sym, p, h, copy, lap, &mut minus_k, &mut aw);
+            });
             area
         })
         .sum()
+}
+
+wide_fn! {
+/// One piece of [`inverse_inputs`] (`minus_k`, `aw` its scratch): returns its area.
+fn inverse_inputs_piece(
+    sym: &Symbols,
+    p: &Piece,
+    h: &[f64],
+    copy: &mut [f64],
+    lap: &mut [f64],
+    minus_k: &mut Twice,
+    aw: &mut Twice,
+) -> f64 {
+    p.twice(minus_k, |l| -p.k[l]);
+    p.twice(aw, |l| sym.area_prefactor * p.k[l] * p.w[l]);
+    let out = copy.iter_mut().zip(lap.iter_mut());
+    for ((c, l), (&h, &mk)) in out.zip(h.iter().zip(minus_k.iter())) {
+        (*c, *l) = (h, h * mk);
+    }
+    dot3(&aw[..h.len()], h, h)
+}
 }
 
 /// Sums of the pointwise pass.
@@ -321,9 +340,32 @@ struct PointSums {
     change: f64,
 }
 
+impl PointSums {
+    fn zero() -> Self {
+        PointSums {
+            phi_sq: 0.0,
+            phi: 0.0,
+            max_abs: 0.0,
+            change: 0.0,
+        }
+    }
+
+    fn add(self, o: Self) -> Self {
+        PointSums {
+            phi_sq: self.phi_sq + o.phi_sq,
+            phi: self.phi + o.phi,
+            max_abs: self.max_abs.max(o.max_abs),
+            change: self.change.max(o.change),
+        }
+    }
+}
+
+/// Real-space values per run of [`pointwise`]: its Φ are kept for the sums (4 KiB).
+const RUN: usize = 512;
+
 /// The real-space sweep: with `lap` = ∇²φ on entry, Φ = f(φ) − ε²∇²φ, `lap ← f(φ)` and
 /// `fphi ← f'(φ) Φ`, with εC0 = `uniform` or r × the field; returns Σ Φ², Σ φ, max|φ| and
-/// max|φ − φ_old|.
+/// max|φ − φ_old|. A run of values at a time: the element-wise loop, then the sums of the run.
 fn pointwise(
     eps: f64,
     phi: &[f64],
@@ -332,61 +374,67 @@ fn pointwise(
     lap: &mut [f64],
     fphi: &mut [f64],
 ) -> PointSums {
-    let e2 = eps * eps;
-    let body = |p: f64, ec0: f64, o: f64, lap: &mut f64, fphi: &mut f64, acc: &mut PointSums| {
-        let f = bulk(p, ec0);
-        let big = f - e2 * *lap;
-        *lap = f;
-        *fphi = bulk_derivative(p, ec0) * big;
-        acc.phi_sq += big * big;
-        acc.phi += p;
-        acc.max_abs = acc.max_abs.max(p.abs());
-        acc.change = acc.change.max((p - o).abs());
-    };
     let c = PAR_CHUNK;
     lap.par_chunks_mut(c)
         .zip(fphi.par_chunks_mut(c))
         .enumerate()
         .map(|(j, (lap, fphi))| {
-            let range = j * c..j * c + lap.len();
-            let mut acc = PointSums {
-                phi_sq: 0.0,
-                phi: 0.0,
-                max_abs: 0.0,
-                change: 0.0,
-            };
-            let points = phi[range.clone()]
-                .iter()
-                .zip(&old[range.clone()])
-                .zip(lap.iter_mut().zip(fphi.iter_mut()));
-            match field {
-                Some((r, ec0)) => {
-                    for (((&p, &o), (l, f)), &e) in points.zip(&ec0[range]) {
-                        body(p, r * e, o, l, f, &mut acc);
-                    }
-                }
-                None => {
-                    for ((&p, &o), (l, f)) in points {
-                        body(p, uniform, o, l, f, &mut acc);
-                    }
-                }
+            let mut acc = PointSums::zero();
+            let mut big = [0.0; RUN];
+            let runs = lap.chunks_mut(RUN).zip(fphi.chunks_mut(RUN));
+            for (i, (lap, fphi)) in runs.enumerate() {
+                let range = j * c + i * RUN..j * c + i * RUN + lap.len();
+                let (p, o, big) = (
+                    &phi[range.clone()],
+                    &old[range.clone()],
+                    &mut big[..lap.len()],
+                );
+                let ec0 = field.map(|(r, f)| (r, &f[range]));
+                pointwise_run(eps, p, (uniform, ec0), lap, fphi, big);
+                let [phi_sq, sum, max_abs, change] = pointwise_sums(p, o, big);
+                acc = acc.add(PointSums {
+                    phi_sq,
+                    phi: sum,
+                    max_abs,
+                    change,
+                });
             }
             acc
         })
-        .reduce(
-            || PointSums {
-                phi_sq: 0.0,
-                phi: 0.0,
-                max_abs: 0.0,
-                change: 0.0,
-            },
-            |a, b| PointSums {
-                phi_sq: a.phi_sq + b.phi_sq,
-                phi: a.phi + b.phi,
-                max_abs: a.max_abs.max(b.max_abs),
-                change: a.change.max(b.change),
-            },
-        )
+        .reduce(PointSums::zero, PointSums::add)
+}
+
+wide_fn! {
+/// One run of [`pointwise`]'s element-wise loop: `lap ← f(φ)`, `fphi ← f'(φ) Φ` and `big ← Φ`.
+fn pointwise_run(
+    eps: f64,
+    phi: &[f64],
+    c0: (f64, Option<(f64, &[f64])>),
+    lap: &mut [f64],
+    fphi: &mut [f64],
+    big: &mut [f64],
+) {
+    let ((uniform, field), e2) = (c0, eps * eps);
+    let body = |p: f64, ec0: f64, lap: &mut f64, fphi: &mut f64, big: &mut f64| {
+        let f = bulk(p, ec0);
+        *big = f - e2 * *lap;
+        *lap = f;
+        *fphi = bulk_derivative(p, ec0) * *big;
+    };
+    let out = lap.iter_mut().zip(fphi.iter_mut()).zip(big.iter_mut());
+    match field {
+        Some((r, ec0)) => {
+            for (((l, f), b), (&p, &e)) in out.zip(phi.iter().zip(ec0)) {
+                body(p, r * e, l, f, b);
+            }
+        }
+        None => {
+            for (((l, f), b), &p) in out.zip(phi) {
+                body(p, uniform, l, f, b);
+            }
+        }
+    }
+}
 }
 
 /// The sums of [`combine`].
@@ -410,10 +458,31 @@ impl CombineSums {
     }
 }
 
+/// Per-value factors of [`combine`], each twice.
+struct CombineFactors {
+    /// The explicit term's factors of FT[f'Φ] and FT[f]: (−2k², −2ε²k⁴) conserved, (2, 2ε²k²)
+    /// gradient.
+    n: Twice,
+    g: Twice,
+    /// 2ε²k² and 2ε⁴k⁴ (the gradient ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂), the latter with
+    /// the tension's (3/√2) ε σ k² added where only μ̂ needs it (conserved).
+    gk: Twice,
+    hk: Twice,
+    /// (3/√2) ε σ k² (gradient: μ̂ = ĝ + this × φ̂).
+    tk: Twice,
+    /// w, 0 at k = 0 (the residual's weight).
+    w: Twice,
+    /// w c_σ k² q̂/φ̂ and w q̂/φ̂ (the multiplier's sums).
+    wqq: Twice,
+    wq: Twice,
+    /// μ̂ of the piece's values.
+    mu: Twice,
+}
+
 /// The last spectral sweep: from FT[f'Φ] (in `n`), FT[f] (`g`) and φ̂ (`h`) write the explicit
 /// term into `n`: N̂ = −2k² FT[f'Φ] − 2ε²k⁴ FT[f] (conserved) or ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] +
 /// 2ε⁴k⁴ φ̂ (gradient, with the multiplier's sums ⟨q, q⟩_M and ⟨ĝ, q⟩ in its metric). With
-/// `sigma` it also sums Σ_{k≠0} w |μ̂|², μ̂ = ĝ + (3/√2) ε σ k² φ̂.
+/// `sigma` it also sums Σ_{k≠0} w |μ̂|², μ̂ = ĝ + (3/√2) ε σ k² φ̂. (k stands for |k|².)
 fn combine(
     sym: &Symbols,
     eps: f64,
@@ -423,45 +492,104 @@ fn combine(
     g: &[Complex64],
     n: &mut [Complex64],
 ) -> CombineSums {
-    let e2 = eps * eps;
-    let with_residual = sigma.is_some();
-    let tension = 2.0 * sym.area_prefactor * sigma.unwrap_or(0.0);
-    let (s2, task) = (sym.row_len(), sym.task_len());
+    let task = 2 * sym.task_len();
+    let (h, g, n) = (reals(h), reals(g), reals_mut(n));
+    let how = Combine {
+        e2: eps * eps,
+        explicit,
+        with_residual: sigma.is_some(),
+        tension: 2.0 * sym.area_prefactor * sigma.unwrap_or(0.0),
+    };
     n.par_chunks_mut(task)
-        .zip(g.par_chunks(task))
-        .zip(h.par_chunks(task))
         .enumerate()
-        .map(|(t, ((n, g), h))| {
-            let rows = n
-                .chunks_exact_mut(s2)
-                .zip(g.chunks_exact(s2))
-                .zip(h.chunks_exact(s2));
+        .map(|(t, n)| {
+            let z = [0.0; 2 * PIECE];
+            let mut f = CombineFactors {
+                n: z,
+                g: z,
+                gk: z,
+                hk: z,
+                tk: z,
+                w: z,
+                wqq: z,
+                wq: z,
+                mu: z,
+            };
             let mut sums = CombineSums::default();
-            for (r, ((n, g), h)) in rows.enumerate() {
-                let (kb, wb) = sym.row(t * task / s2 + r);
-                let cols = n.iter_mut().zip(g).zip(h);
-                for (((n, &g), &h), (&kl, &wl)) in cols.zip(sym.k2[2].iter().zip(&sym.weight[2])) {
-                    let k = kb + kl;
-                    let w = wb * wl;
-                    let gradient = *n * 2.0 + g * (2.0 * e2 * k) + h * (2.0 * e2 * e2 * k * k);
-                    *n = match explicit {
-                        ExplicitTerm::ConservedRhs => *n * (-2.0 * k) + g * (-2.0 * e2 * k * k),
-                        ExplicitTerm::Gradient(m) => {
-                            // w M |q̂|² = w c_σ k (c_σ k/M) |φ̂|².
-                            let q_over_h = m.c_sigma * k / m.at(k);
-                            sums.qq += w * m.c_sigma * k * q_over_h * h.norm_sqr();
-                            sums.gq += w * q_over_h * (gradient.re * h.re + gradient.im * h.im);
-                            gradient
-                        }
-                    };
-                    if with_residual && k > 0.0 {
-                        sums.residual_sq += w * (gradient + h * (tension * k)).norm_sqr();
-                    }
-                }
-            }
+            for_each_piece(sym, t, n.len(), |p, at| {
+                let r = at..at + p.reals();
+                let (g, h) = (&g[t * task..][r.clone()], &h[t * task..][r.clone()]);
+                let n = &mut n[r];
+                sums = sums.add(combine_piece(&how, p, g, h, n, &mut f));
+            });
             sums
         })
         .reduce(CombineSums::default, CombineSums::add)
+}
+
+/// What [`combine`] forms.
+struct Combine {
+    e2: f64,
+    explicit: ExplicitTerm,
+    with_residual: bool,
+    /// (3/√2) ε σ.
+    tension: f64,
+}
+
+wide_fn! {
+/// One piece of [`combine`] (`f` its scratch).
+fn combine_piece(
+    how: &Combine,
+    p: &Piece,
+    g: &[f64],
+    h: &[f64],
+    n: &mut [f64],
+    f: &mut CombineFactors,
+) -> CombineSums {
+    let (e2, tension, k, len) = (how.e2, how.tension, &p.k, p.reals());
+    let mut sums = CombineSums::default();
+    let mu = &mut f.mu[..len];
+    p.twice(&mut f.gk, |l| 2.0 * e2 * k[l]);
+    match how.explicit {
+        ExplicitTerm::ConservedRhs => {
+            p.twice(&mut f.n, |l| -2.0 * k[l]);
+            p.twice(&mut f.g, |l| -2.0 * e2 * k[l] * k[l]);
+            p.twice(&mut f.hk, |l| 2.0 * e2 * e2 * k[l] * k[l] + tension * k[l]);
+            let values = n.iter_mut().zip(mu.iter_mut());
+            let factors = f.n.iter().zip(&f.g).zip(f.gk.iter().zip(&f.hk));
+            for (((o, mu), (&g, &h)), ((fnl, fg), (gk, hk))) in
+                values.zip(g.iter().zip(h)).zip(factors)
+            {
+                let nl = *o;
+                *mu = nl * 2.0 + g * gk + h * hk;
+                *o = nl * fnl + g * fg;
+            }
+        }
+        ExplicitTerm::Gradient(m) => {
+            p.twice(&mut f.hk, |l| 2.0 * e2 * e2 * k[l] * k[l]);
+            p.twice(&mut f.tk, |l| tension * k[l]);
+            let qh = |l: usize| m.c_sigma * k[l] / m.at(k[l]);
+            p.twice(&mut f.wqq, |l| p.w[l] * m.c_sigma * k[l] * qh(l));
+            p.twice(&mut f.wq, |l| p.w[l] * qh(l));
+            let values = n.iter_mut().zip(mu.iter_mut());
+            let factors = f.gk.iter().zip(&f.hk).zip(&f.tk);
+            for (((o, mu), (&g, &h)), ((gk, hk), tk)) in
+                values.zip(g.iter().zip(h)).zip(factors)
+            {
+                let gradient = *o * 2.0 + g * gk + h * hk;
+                *o = gradient;
+                *mu = gradient + h * tk;
+            }
+            sums.qq = dot3(&f.wqq[..len], h, h);
+            sums.gq = dot3(&f.wq[..len], n, h);
+        }
+    }
+    if how.with_residual {
+        p.twice(&mut f.w, |l| if k[l] > 0.0 { p.w[l] } else { 0.0 });
+        sums.residual_sq = dot3(&f.w[..len], mu, mu);
+    }
+    sums
+}
 }
 
 /// One axis's share of the Laplacian's symbol: k² (spectral) or (4/h²) sin²(kh/2) (the

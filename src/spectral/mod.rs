@@ -2,6 +2,8 @@
 
 pub mod engine;
 pub mod evaluator;
+pub(crate) mod kernels;
+pub(crate) mod pieces;
 pub mod transform;
 
 pub use engine::{stability_bound, SpectralEngine};
