@@ -701,9 +701,15 @@ fn strided_piece(
         for c0 in (0..width).step_by(columns) {
             let mut block = slab.slice_mut(s![.., c0..(c0 + columns).min(width)]);
             let lanes = &mut work.lanes[..block.ncols().div_ceil(per_lane) * kernel.len];
-            gather(block.view(), lanes, from, packing);
-            kernel.apply(dir, lanes, &mut work.scratch);
-            scatter(lanes, block.view_mut(), to, packing);
+            if packing == Packing::Complex && kernel.twiddle.is_empty() {
+                gather_in_order(block.view(), lanes);
+                kernel.apply(dir, lanes, &mut work.scratch);
+                scatter_in_order(lanes, block.view_mut());
+            } else {
+                gather(block.view(), lanes, from, packing);
+                kernel.apply(dir, lanes, &mut work.scratch);
+                scatter(lanes, block.view_mut(), to, packing);
+            }
         }
     }
 }
@@ -753,6 +759,141 @@ fn scatter(
                         *v = Complex64::new(z.im, 0.0);
                     }
                 }
+            }
+        }
+    }
+}
+
+/// [`gather`] of complex columns in their own order (an FFT lane, positions `0..len`): lane `l`,
+/// position `i` ← row `i` of column `l`. With AVX, two rows and two columns at a time: each
+/// pair of 32-byte loads is a 2×2 transpose of complex values into two 32-byte stores.
+fn gather_in_order(block: ArrayView2<Complex64>, lanes: &mut [Complex64]) {
+    let (rows, cols) = block.dim();
+    assert!(lanes.len() >= rows * cols && (cols == 1 || block.strides()[1] == 1));
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
+        unsafe {
+            avx::transpose_pairs(
+                block.as_ptr(),
+                block.strides()[0] as usize,
+                lanes.as_mut_ptr(),
+                rows,
+                (rows, cols),
+            )
+        };
+        return;
+    }
+    for (i, row) in block.rows().into_iter().enumerate() {
+        for (lane, &v) in lanes.chunks_exact_mut(rows).zip(row) {
+            lane[i] = v;
+        }
+    }
+}
+
+/// Inverse of [`gather_in_order`].
+fn scatter_in_order(lanes: &[Complex64], mut block: ArrayViewMut2<Complex64>) {
+    let (rows, cols) = block.dim();
+    assert!(lanes.len() >= rows * cols && (cols == 1 || block.strides()[1] == 1));
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx") {
+        let stride = block.strides()[0] as usize;
+        // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
+        unsafe {
+            avx::transpose_pairs(
+                lanes.as_ptr(),
+                rows,
+                block.as_mut_ptr(),
+                stride,
+                (cols, rows),
+            )
+        };
+        return;
+    }
+    for (i, mut row) in block.rows_mut().into_iter().enumerate() {
+        for (lane, v) in lanes.chunks_exact(rows).zip(row.iter_mut()) {
+            *v = lane[i];
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use rustfft::num_complex::Complex64;
+    use std::arch::x86_64::*;
+
+    /// `dst[j · dst_stride + i] = src[i · src_stride + j]` for `i < n`, `j < m` (`(n, m)` =
+    /// `shape`): complex values transposed two rows and two columns at a time.
+    ///
+    /// # Safety
+    /// The CPU has AVX; `src` holds `n` rows of `m` values `src_stride` apart and `dst` `m` rows
+    /// of `n` values `dst_stride` apart; the two do not overlap.
+    #[target_feature(enable = "avx")]
+    pub unsafe fn transpose_pairs(
+        src: *const Complex64,
+        src_stride: usize,
+        dst: *mut Complex64,
+        dst_stride: usize,
+        (n, m): (usize, usize),
+    ) {
+        let (src, dst) = (src as *const f64, dst as *mut f64);
+        let at = |i: usize, j: usize, stride: usize| 2 * (i * stride + j);
+        let (n2, m2) = (n - n % 2, m - m % 2);
+        for i in (0..n2).step_by(2) {
+            for j in (0..m2).step_by(2) {
+                let a = _mm256_loadu_pd(src.add(at(i, j, src_stride)));
+                let b = _mm256_loadu_pd(src.add(at(i + 1, j, src_stride)));
+                let (lo, hi) = (
+                    _mm256_permute2f128_pd(a, b, 0x20),
+                    _mm256_permute2f128_pd(a, b, 0x31),
+                );
+                _mm256_storeu_pd(dst.add(at(j, i, dst_stride)), lo);
+                _mm256_storeu_pd(dst.add(at(j + 1, i, dst_stride)), hi);
+            }
+            if m2 < m {
+                for r in [i, i + 1] {
+                    _mm_storeu_pd(
+                        dst.add(at(m2, r, dst_stride)),
+                        _mm_loadu_pd(src.add(at(r, m2, src_stride))),
+                    );
+                }
+            }
+        }
+        if n2 < n {
+            for j in 0..m {
+                _mm_storeu_pd(
+                    dst.add(at(j, n2, dst_stride)),
+                    _mm_loadu_pd(src.add(at(n2, j, src_stride))),
+                );
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    /// The in-order gather and scatter move each value to its place (odd and even row and column
+    /// counts, a block that is a column range of wider rows), and scatter undoes gather.
+    #[test]
+    fn in_order_gather_and_scatter_transpose() {
+        for (rows, cols, width) in [(8, 6, 6), (7, 5, 9), (6, 3, 4), (1, 1, 1), (5, 8, 11)] {
+            let value = |i: usize, j: usize| Complex64::new(i as f64, 100.0 * j as f64 + 0.5);
+            let mut full = Array2::from_shape_fn((rows, width), |(i, j)| value(i, j));
+            let mut lanes = vec![Complex64::default(); rows * cols];
+            gather_in_order(full.slice(s![.., ..cols]), &mut lanes);
+            for l in 0..cols {
+                for i in 0..rows {
+                    assert_eq!(lanes[l * rows + i], value(i, l), "lane {l}, position {i}");
+                }
+            }
+            lanes.iter_mut().for_each(|v| *v *= 2.0);
+            scatter_in_order(&lanes, full.slice_mut(s![.., ..cols]));
+            for ((i, j), v) in full.indexed_iter() {
+                let factor = if j < cols { 2.0 } else { 1.0 };
+                assert_eq!(*v, value(i, j) * factor, "row {i}, column {j}");
             }
         }
     }
