@@ -37,6 +37,10 @@ const LANE_BUFFER: usize = 2048;
 const MIN_BATCH: usize = 4;
 /// Column split between threads is rounded to this many columns (whole cache lines).
 const COLUMN_ALIGN: usize = 8;
+/// Padding between the gathered lanes of a strided stage (one cache line): lanes of a power of
+/// two values would start a multiple of 1 KiB apart, so a gather's stores to 32 lanes would all
+/// fall in four of the 64 sets of the L1 cache.
+const LANE_PAD: usize = 4;
 
 /// Direction of a transform stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,6 +72,8 @@ impl Packing {
 /// a complex FFT of the same length (mirror). Both act on lanes of `len` contiguous values.
 struct LaneKernel {
     len: usize,
+    /// Values from one lane's start to the next (`len`, or `len + LANE_PAD` in a strided stage).
+    stride: usize,
     /// Lanes per batch.
     batch: usize,
     forward: Arc<dyn Fft<f64>>,
@@ -83,7 +89,9 @@ struct LaneKernel {
 }
 
 impl LaneKernel {
-    fn new(planner: &mut FftPlanner<f64>, len: usize, kind: AxisKind) -> Self {
+    /// The kernel of an axis of `len` points; `padded` lanes are [`LANE_PAD`] values apart.
+    fn new(planner: &mut FftPlanner<f64>, len: usize, kind: AxisKind, padded: bool) -> Self {
+        let stride = if padded { len + LANE_PAD } else { len };
         let forward = planner.plan_fft_forward(len);
         let inverse = planner.plan_fft_inverse(len);
         let scratch_len = forward
@@ -100,7 +108,8 @@ impl LaneKernel {
         };
         LaneKernel {
             len,
-            batch: (LANE_BUFFER / len).max(MIN_BATCH),
+            stride,
+            batch: (LANE_BUFFER / stride).max(MIN_BATCH),
             forward,
             inverse,
             scratch_len,
@@ -119,26 +128,32 @@ impl LaneKernel {
         }
     }
 
-    /// Transform every lane of `lanes` (a whole number of lanes) in place.
+    /// Transform every lane of `lanes` (a whole number of lanes, `stride` apart) in place.
     fn apply(&self, dir: Direction, lanes: &mut [Complex64], scratch: &mut [Complex64]) {
         let scratch = &mut scratch[..self.scratch_len];
-        match dir {
-            Direction::Forward => {
-                self.forward.process_with_scratch(lanes, scratch);
-                if !self.twiddle.is_empty() {
-                    lanes
-                        .chunks_exact_mut(self.len)
-                        .for_each(|lane| dct_post_twiddle(lane, &self.twiddle));
+        let fft = match dir {
+            Direction::Forward => &self.forward,
+            Direction::Inverse => &self.inverse,
+        };
+        let twiddle = |lanes: &mut [Complex64], post: fn(&mut [Complex64], &[Complex64])| {
+            if !self.twiddle.is_empty() {
+                for lane in lanes.chunks_exact_mut(self.stride) {
+                    post(&mut lane[..self.len], &self.twiddle);
                 }
             }
-            Direction::Inverse => {
-                if !self.twiddle.is_empty() {
-                    lanes
-                        .chunks_exact_mut(self.len)
-                        .for_each(|lane| dct_pre_twiddle(lane, &self.twiddle));
-                }
-                self.inverse.process_with_scratch(lanes, scratch);
+        };
+        if dir == Direction::Inverse {
+            twiddle(lanes, dct_pre_twiddle);
+        }
+        if self.stride == self.len {
+            fft.process_with_scratch(lanes, scratch);
+        } else {
+            for lane in lanes.chunks_exact_mut(self.stride) {
+                fft.process_with_scratch(&mut lane[..self.len], scratch);
             }
+        }
+        if dir == Direction::Forward {
+            twiddle(lanes, dct_post_twiddle);
         }
     }
 }
@@ -239,12 +254,16 @@ impl Transform {
                     c2r: real.plan_fft_inverse(shape[2]),
                 }
             }
-            AxisKind::Mirror => {
-                LastAxis::Mirror(LaneKernel::new(&mut planner, shape[2], AxisKind::Mirror))
-            }
+            AxisKind::Mirror => LastAxis::Mirror(LaneKernel::new(
+                &mut planner,
+                shape[2],
+                AxisKind::Mirror,
+                false,
+            )),
         };
-        let strided = [0, 1]
-            .map(|a| (shape[a] > 1).then(|| LaneKernel::new(&mut planner, shape[a], kinds[a])));
+        let strided = [0, 1].map(|a| {
+            (shape[a] > 1).then(|| LaneKernel::new(&mut planner, shape[a], kinds[a], true))
+        });
         let real_only = kinds[2] == AxisKind::Mirror
             && (0..2).all(|a| shape[a] == 1 || kinds[a] == AxisKind::Mirror);
         let mut spectral = shape;
@@ -483,7 +502,11 @@ impl Plan {
     /// Scratch for one parallel chunk, sized for every stage.
     fn new_work(&self) -> Work {
         let kernels = self.strided.iter().flatten();
-        let mut lanes = kernels.clone().map(|k| k.batch * k.len).max().unwrap_or(0);
+        let mut lanes = kernels
+            .clone()
+            .map(|k| k.batch * k.stride)
+            .max()
+            .unwrap_or(0);
         let mut scratch = kernels.map(|k| k.scratch_len).max().unwrap_or(0);
         match &self.last {
             LastAxis::Real { r2c, c2r } => {
@@ -700,34 +723,39 @@ fn strided_piece(
         let width = slab.ncols();
         for c0 in (0..width).step_by(columns) {
             let mut block = slab.slice_mut(s![.., c0..(c0 + columns).min(width)]);
-            let lanes = &mut work.lanes[..block.ncols().div_ceil(per_lane) * kernel.len];
+            let lanes = &mut work.lanes[..block.ncols().div_ceil(per_lane) * kernel.stride];
             if packing == Packing::Complex && kernel.twiddle.is_empty() {
-                gather_in_order(block.view(), lanes);
+                gather_in_order(block.view(), lanes, kernel.stride);
                 kernel.apply(dir, lanes, &mut work.scratch);
-                scatter_in_order(lanes, block.view_mut());
+                scatter_in_order(lanes, kernel.stride, block.view_mut());
             } else {
-                gather(block.view(), lanes, from, packing);
+                gather(block.view(), lanes, kernel.stride, from, packing);
                 kernel.apply(dir, lanes, &mut work.scratch);
-                scatter(lanes, block.view_mut(), to, packing);
+                scatter(lanes, kernel.stride, block.view_mut(), to, packing);
             }
         }
     }
 }
 
-/// Copy the columns of `block` into lanes: lane `l`, position `pos[i]` ← row `i` of column `l`
-/// (or of the real parts of columns `2l`, `2l+1` packed as `re + i·re'`).
-fn gather(block: ArrayView2<Complex64>, lanes: &mut [Complex64], pos: &[usize], packing: Packing) {
-    let len = pos.len();
+/// Copy the columns of `block` into lanes `stride` apart: lane `l`, position `pos[i]` ← row `i`
+/// of column `l` (or of the real parts of columns `2l`, `2l+1` packed as `re + i·re'`).
+fn gather(
+    block: ArrayView2<Complex64>,
+    lanes: &mut [Complex64],
+    stride: usize,
+    pos: &[usize],
+    packing: Packing,
+) {
     for (row, &p) in block.rows().into_iter().zip(pos) {
         let row = row.to_slice().expect("rows are contiguous");
         match packing {
             Packing::Complex => {
-                for (lane, &v) in lanes.chunks_exact_mut(len).zip(row) {
+                for (lane, &v) in lanes.chunks_exact_mut(stride).zip(row) {
                     lane[p] = v;
                 }
             }
             Packing::RealPairs => {
-                for (lane, pair) in lanes.chunks_exact_mut(len).zip(row.chunks(2)) {
+                for (lane, pair) in lanes.chunks_exact_mut(stride).zip(row.chunks(2)) {
                     lane[p] = Complex64::new(pair[0].re, pair.get(1).map_or(0.0, |v| v.re));
                 }
             }
@@ -738,21 +766,21 @@ fn gather(block: ArrayView2<Complex64>, lanes: &mut [Complex64], pos: &[usize], 
 /// Inverse of [`gather`]: write the lanes back into the columns of `block`.
 fn scatter(
     lanes: &[Complex64],
+    stride: usize,
     mut block: ArrayViewMut2<Complex64>,
     pos: &[usize],
     packing: Packing,
 ) {
-    let len = pos.len();
     for (row, &p) in block.rows_mut().into_iter().zip(pos) {
         let row = row.into_slice().expect("rows are contiguous");
         match packing {
             Packing::Complex => {
-                for (lane, v) in lanes.chunks_exact(len).zip(row) {
+                for (lane, v) in lanes.chunks_exact(stride).zip(row) {
                     *v = lane[p];
                 }
             }
             Packing::RealPairs => {
-                for (lane, pair) in lanes.chunks_exact(len).zip(row.chunks_mut(2)) {
+                for (lane, pair) in lanes.chunks_exact(stride).zip(row.chunks_mut(2)) {
                     let z = lane[p];
                     pair[0] = Complex64::new(z.re, 0.0);
                     if let Some(v) = pair.get_mut(1) {
@@ -767,9 +795,10 @@ fn scatter(
 /// [`gather`] of complex columns in their own order (an FFT lane, positions `0..len`): lane `l`,
 /// position `i` ← row `i` of column `l`. With AVX, two rows and two columns at a time: each
 /// pair of 32-byte loads is a 2×2 transpose of complex values into two 32-byte stores.
-fn gather_in_order(block: ArrayView2<Complex64>, lanes: &mut [Complex64]) {
+fn gather_in_order(block: ArrayView2<Complex64>, lanes: &mut [Complex64], stride: usize) {
     let (rows, cols) = block.dim();
-    assert!(lanes.len() >= rows * cols && (cols == 1 || block.strides()[1] == 1));
+    assert!(stride >= rows && lanes.len() >= stride * cols);
+    assert!(cols == 1 || block.strides()[1] == 1);
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx") {
         // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
@@ -778,40 +807,41 @@ fn gather_in_order(block: ArrayView2<Complex64>, lanes: &mut [Complex64]) {
                 block.as_ptr(),
                 block.strides()[0] as usize,
                 lanes.as_mut_ptr(),
-                rows,
+                stride,
                 (rows, cols),
             )
         };
         return;
     }
     for (i, row) in block.rows().into_iter().enumerate() {
-        for (lane, &v) in lanes.chunks_exact_mut(rows).zip(row) {
+        for (lane, &v) in lanes.chunks_exact_mut(stride).zip(row) {
             lane[i] = v;
         }
     }
 }
 
 /// Inverse of [`gather_in_order`].
-fn scatter_in_order(lanes: &[Complex64], mut block: ArrayViewMut2<Complex64>) {
+fn scatter_in_order(lanes: &[Complex64], stride: usize, mut block: ArrayViewMut2<Complex64>) {
     let (rows, cols) = block.dim();
-    assert!(lanes.len() >= rows * cols && (cols == 1 || block.strides()[1] == 1));
+    assert!(stride >= rows && lanes.len() >= stride * cols);
+    assert!(cols == 1 || block.strides()[1] == 1);
     #[cfg(target_arch = "x86_64")]
     if is_x86_feature_detected!("avx") {
-        let stride = block.strides()[0] as usize;
+        let row_stride = block.strides()[0] as usize;
         // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
         unsafe {
             avx::transpose_pairs(
                 lanes.as_ptr(),
-                rows,
-                block.as_mut_ptr(),
                 stride,
+                block.as_mut_ptr(),
+                row_stride,
                 (cols, rows),
             )
         };
         return;
     }
     for (i, mut row) in block.rows_mut().into_iter().enumerate() {
-        for (lane, v) in lanes.chunks_exact(rows).zip(row.iter_mut()) {
+        for (lane, v) in lanes.chunks_exact(stride).zip(row.iter_mut()) {
             *v = lane[i];
         }
     }
@@ -882,15 +912,16 @@ mod tests {
         for (rows, cols, width) in [(8, 6, 6), (7, 5, 9), (6, 3, 4), (1, 1, 1), (5, 8, 11)] {
             let value = |i: usize, j: usize| Complex64::new(i as f64, 100.0 * j as f64 + 0.5);
             let mut full = Array2::from_shape_fn((rows, width), |(i, j)| value(i, j));
-            let mut lanes = vec![Complex64::default(); rows * cols];
-            gather_in_order(full.slice(s![.., ..cols]), &mut lanes);
+            let stride = rows + LANE_PAD;
+            let mut lanes = vec![Complex64::default(); stride * cols];
+            gather_in_order(full.slice(s![.., ..cols]), &mut lanes, stride);
             for l in 0..cols {
                 for i in 0..rows {
-                    assert_eq!(lanes[l * rows + i], value(i, l), "lane {l}, position {i}");
+                    assert_eq!(lanes[l * stride + i], value(i, l), "lane {l}, position {i}");
                 }
             }
             lanes.iter_mut().for_each(|v| *v *= 2.0);
-            scatter_in_order(&lanes, full.slice_mut(s![.., ..cols]));
+            scatter_in_order(&lanes, stride, full.slice_mut(s![.., ..cols]));
             for ((i, j), v) in full.indexed_iter() {
                 let factor = if j < cols { 2.0 } else { 1.0 };
                 assert_eq!(*v, value(i, j) * factor, "row {i}, column {j}");
