@@ -40,7 +40,7 @@ use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::numerics::nearest_root;
 use crate::spectral::evaluator::{Evaluator, ExplicitTerm, Metric, State, Symbols};
-use crate::spectral::kernels::{dot3, pair_sums, quadratic_sums};
+use crate::spectral::kernels::{dot3, pair_sums, quadratic_sums, wide_fn};
 use crate::spectral::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use ndarray::Array3;
 use rayon::prelude::*;
@@ -334,7 +334,7 @@ impl RelaxEngine {
         let pairs = &self.pairs;
         let (r, x) = (reals(flat(&self.grad)), reals(flat(&self.cur.hat)));
         let task = sym.task_len();
-        let (off, c_r, c_y, c_s) = (d.off, d.c_r, d.c_y, d.c_s);
+        let coefficients = *d;
         let area = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
             .par_chunks_mut(2 * task)
             .enumerate()
@@ -343,17 +343,8 @@ impl RelaxEngine {
                 let mut acc = AreaSums::default();
                 for_each_factored(sym, m, Need::Area, t, out.len(), |f, at| {
                     let (o, g) = (&mut out[at..at + f.len], base + at..base + at + f.len);
-                    for (o, r) in o.iter_mut().zip(&r[g.clone()]) {
-                        *o = -(r * c_r);
-                    }
-                    for (j, p) in pairs.iter().skip(off).enumerate() {
-                        let (cy, cs) = (c_y[j], c_s[j]);
-                        let (y, s) = (&reals(&p.y)[g.clone()], &reals(&p.s)[g.clone()]);
-                        for ((o, y), s) in o.iter_mut().zip(y).zip(s) {
-                            *o -= y * cy + s * cs;
-                        }
-                    }
-                    acc = acc.add(area_sums(f, &x[g], o));
+                    let sums = direction_piece(f, o, (r, x), pairs, &coefficients, g);
+                    acc = acc.add(sums);
                 });
                 acc
             })
@@ -382,18 +373,12 @@ impl RelaxEngine {
                 let mut area = 0.0;
                 for_each_factored(sym, m, Need::Trial, t, hat.len(), |f, at| {
                     let (local, g) = (at..at + f.len, base + at..base + at + f.len);
-                    let values = hat[local.clone()]
-                        .iter_mut()
-                        .zip(&mut copy[local.clone()])
-                        .zip(&mut lap[local])
-                        .zip(x[g.clone()].iter().zip(&d[g]))
-                        .zip(f.qf.iter().zip(&f.k));
-                    for ((((h, c), l), (x, d)), (qf, k)) in values {
-                        let v = x + d * alpha + x * qf * beta;
-                        (*h, *c, *l) = (v, v, -(v * k));
-                    }
-                    let v = &hat[at..at + f.len];
-                    area += dot3(&f.aw[..f.len], v, v);
+                    let out = [
+                        &mut hat[local.clone()],
+                        &mut copy[local.clone()],
+                        &mut lap[local],
+                    ];
+                    area += trial_piece(f, out, (&x[g.clone()], &d[g]), (alpha, beta));
                 });
                 area
             })
@@ -566,48 +551,50 @@ impl Factors {
             aqq: z,
         }
     }
+}
 
-    /// The factors `need` of piece `p`: first one per value (loops the compiler vectorises, the
-    /// division included), then each twice.
-    fn fill(&mut self, p: &Piece, sym: &Symbols, metric: Metric, need: Need) {
-        let len = p.len;
-        self.len = p.reals();
-        let c = &mut self.per_value;
-        for (m, &k) in c.m[..len].iter_mut().zip(&p.k) {
-            *m = metric.at(k);
+wide_fn! {
+/// The factors `need` of piece `p` into `f`: first one per value (loops the compiler vectorises, the
+/// division included), then each twice.
+fn fill_factors(f: &mut Factors, p: &Piece, sym: &Symbols, metric: Metric, need: Need) {
+    let len = p.len;
+    f.len = p.reals();
+    let c = &mut f.per_value;
+    for (m, &k) in c.m[..len].iter_mut().zip(&p.k) {
+        *m = metric.at(k);
+    }
+    for (inv_m, m) in c.inv_m[..len].iter_mut().zip(&c.m) {
+        *inv_m = 1.0 / m;
+    }
+    let values = p.k[..len]
+        .iter()
+        .zip(&p.w)
+        .zip(c.inv_m.iter_mut().zip(c.qf.iter_mut().zip(c.aw.iter_mut())));
+    for ((&k, &w), (inv_m, (qf, aw))) in values {
+        *inv_m = if k == 0.0 { 0.0 } else { *inv_m };
+        *qf = metric.c_sigma * k * *inv_m;
+        *aw = sym.area_prefactor * k * w;
+    }
+    let (k, w, m, inv_m, qf, aw) = (&p.k, &p.w, &c.m, &c.inv_m, &c.qf, &c.aw);
+    match need {
+        Need::Area => {
+            p.twice(&mut f.aw, |l| aw[l]);
+            p.twice(&mut f.aq, |l| aw[l] * qf[l]);
+            p.twice(&mut f.aqq, |l| aw[l] * qf[l] * qf[l]);
         }
-        for (inv_m, m) in c.inv_m[..len].iter_mut().zip(&c.m) {
-            *inv_m = 1.0 / m;
+        Need::Trial => {
+            p.twice(&mut f.k, |l| k[l]);
+            p.twice(&mut f.qf, |l| qf[l]);
+            p.twice(&mut f.aw, |l| aw[l]);
         }
-        let values = p.k[..len]
-            .iter()
-            .zip(&p.w)
-            .zip(c.inv_m.iter_mut().zip(c.qf.iter_mut().zip(c.aw.iter_mut())));
-        for ((&k, &w), (inv_m, (qf, aw))) in values {
-            *inv_m = if k == 0.0 { 0.0 } else { *inv_m };
-            *qf = metric.c_sigma * k * *inv_m;
-            *aw = sym.area_prefactor * k * w;
-        }
-        let (k, w, m, inv_m, qf, aw) = (&p.k, &p.w, &c.m, &c.inv_m, &c.qf, &c.aw);
-        match need {
-            Need::Area => {
-                p.twice(&mut self.aw, |l| aw[l]);
-                p.twice(&mut self.aq, |l| aw[l] * qf[l]);
-                p.twice(&mut self.aqq, |l| aw[l] * qf[l] * qf[l]);
-            }
-            Need::Trial => {
-                p.twice(&mut self.k, |l| k[l]);
-                p.twice(&mut self.qf, |l| qf[l]);
-                p.twice(&mut self.aw, |l| aw[l]);
-            }
-            Need::Gradient => {
-                p.twice(&mut self.wm, |l| w[l] * m[l]);
-                p.twice(&mut self.wmm, |l| w[l] * m[l] * m[l]);
-                p.twice(&mut self.inv_m, |l| inv_m[l]);
-                p.twice(&mut self.qf, |l| qf[l]);
-            }
+        Need::Gradient => {
+            p.twice(&mut f.wm, |l| w[l] * m[l]);
+            p.twice(&mut f.wmm, |l| w[l] * m[l] * m[l]);
+            p.twice(&mut f.inv_m, |l| inv_m[l]);
+            p.twice(&mut f.qf, |l| qf[l]);
         }
     }
+}
 }
 
 /// Calls `f(factors, at)` for every piece of parallel task `t` ([`for_each_piece`]) with the
@@ -623,9 +610,84 @@ fn for_each_factored(
 ) {
     let mut factors = Factors::new();
     for_each_piece(sym, t, reals, |p, at| {
-        factors.fill(p, sym, metric, need);
+        fill_factors(&mut factors, p, sym, metric, need);
         f(&factors, at);
     });
+}
+
+wide_fn! {
+/// One piece of [`RelaxEngine::write_direction`]: d' = −c_r r − Σ_j (c_y,j y_j + c_s,j s_j)
+/// into `out` over the pairs from `d.off`, from the reals `g` of r, φ̂ (`(r, x)`) and the pairs;
+/// returns the piece's area sums.
+fn direction_piece(
+    f: &Factors,
+    out: &mut [f64],
+    spectra: (&[f64], &[f64]),
+    pairs: &VecDeque<Pair>,
+    d: &Direction,
+    g: std::ops::Range<usize>,
+) -> AreaSums {
+    let (r, x) = spectra;
+    for (o, r) in out.iter_mut().zip(&r[g.clone()]) {
+        *o = -(r * d.c_r);
+    }
+    for (j, p) in pairs.iter().skip(d.off).enumerate() {
+        let (cy, cs) = (d.c_y[j], d.c_s[j]);
+        let (y, s) = (&reals(&p.y)[g.clone()], &reals(&p.s)[g.clone()]);
+        for ((o, y), s) in out.iter_mut().zip(y).zip(s) {
+            *o -= y * cy + s * cs;
+        }
+    }
+    area_sums(f, &x[g], out)
+}
+}
+
+wide_fn! {
+/// One piece of [`RelaxEngine::write_trial`]: φ̂ + α d' + β q into `hat` and `copy`, and its
+/// −|k|² multiple into `lap`, from the piece's reals of φ̂ and d' (`(x, d)`); returns its area.
+fn trial_piece(f: &Factors, out: [&mut [f64]; 3], spectra: (&[f64], &[f64]), step: (f64, f64)) -> f64 {
+    let ([hat, copy, lap], (x, d), (alpha, beta)) = (out, spectra, step);
+    let values = hat
+        .iter_mut()
+        .zip(copy.iter_mut())
+        .zip(lap.iter_mut())
+        .zip(x.iter().zip(d))
+        .zip(f.qf.iter().zip(&f.k));
+    for ((((h, c), l), (x, d)), (qf, k)) in values {
+        let v = x + d * alpha + x * qf * beta;
+        (*h, *c, *l) = (v, v, -(v * k));
+    }
+    dot3(&f.aw[..f.len], hat, hat)
+}
+}
+
+wide_fn! {
+/// A piece of [`gradient_sweep`]: q = (q/φ̂) φ̂ and r = M⁻¹ĝ + σq from the piece's reals of φ̂
+/// and ĝ (`(x, g)`), and their weighted copies w M r, w M q (`out` = [q, r, wr, wq]).
+fn gradient_values(f: &Factors, spectra: (&[f64], &[f64]), sigma: f64, out: [&mut [f64]; 4]) {
+    let ((xs, gs), [q, r, wr, wq]) = (spectra, out);
+    let outputs = q.iter_mut().zip(r.iter_mut()).zip(wr.iter_mut().zip(wq.iter_mut()));
+    let inputs = xs.iter().zip(gs).zip(f.inv_m.iter().zip(&f.qf).zip(&f.wm));
+    for (((q, r), (wr, wq)), ((x, g), ((inv_m, qf), wm))) in outputs.zip(inputs) {
+        *q = qf * x;
+        *r = g * inv_m + x * (sigma * qf);
+        (*wr, *wq) = (wm * *r, wm * *q);
+    }
+}
+}
+
+wide_fn! {
+/// A piece of the new pair in [`gradient_sweep`]: s = φ̂ − x_old, y = r − r_old from the
+/// piece's reals of (φ̂, r) and (x_old, r_old), and w M s, w M y (`out` = [s, y, ws, wy]).
+fn pair_values(f: &Factors, new: (&[f64], &[f64]), old: (&[f64], &[f64]), out: [&mut [f64]; 4]) {
+    let ((xs, rs), (x_old, r_old), [s, y, ws, wy]) = (new, old, out);
+    let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy.iter_mut()));
+    let inputs = xs.iter().zip(x_old).zip(rs.iter().zip(r_old).zip(&f.wm));
+    for (((s, y), (ws, wy)), ((x, xo), ((r, ro), wm))) in outputs.zip(inputs) {
+        (*s, *y) = (x - xo, r - ro);
+        (*ws, *wy) = (wm * *s, wm * *y);
+    }
+}
 }
 
 /// The area sums of one piece ([`AreaSums`]), x = φ̂ and d = d' as interleaved reals.
@@ -691,28 +753,20 @@ fn gradient_sweep(
             let (n, local, gl) = (f.len, at..at + f.len, base + at..base + at + f.len);
             let (xs, gs, rs) = (&x[gl.clone()], &g[gl.clone()], &mut r[local.clone()]);
             let [wr, wq, ws, wy] = &mut v;
-            let outputs = q.iter_mut().zip(rs.iter_mut()).zip(wr.iter_mut().zip(wq));
-            let inputs = xs.iter().zip(gs).zip(f.inv_m.iter().zip(&f.qf).zip(&f.wm));
-            for (((q, r), (wr, wq)), ((x, g), ((inv_m, qf), wm))) in outputs.zip(inputs) {
-                *q = qf * x;
-                *r = g * inv_m + x * (sigma * qf);
-                (*wr, *wq) = (wm * *r, wm * *q);
-            }
+            gradient_values(
+                f,
+                (xs, gs),
+                sigma,
+                [&mut q[..n], rs, &mut wr[..n], &mut wq[..n]],
+            );
             // [Σ wM r², Σ wM² r², –, Σ wM r q, –, –].
             let sums = quadratic_sums(&f.wm[..n], &f.wmm[..n], &f.wm[..n], rs, &q[..n]);
             (acc.rr, acc.res) = (acc.rr + sums[0], acc.res + sums[1]);
             acc.qr += sums[3];
             if let Some((x_old, r_old, s, y)) = new.as_mut() {
                 let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
-                let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy));
-                let inputs = xs
-                    .iter()
-                    .zip(x_old[gl.clone()].iter())
-                    .zip(rs.iter().zip(r_old[gl.clone()].iter()).zip(&f.wm[..n]));
-                for (((s, y), (ws, wy)), ((x, xo), ((r, ro), wm))) in outputs.zip(inputs) {
-                    (*s, *y) = (x - xo, r - ro);
-                    (*ws, *wy) = (wm * *s, wm * *y);
-                }
+                let old = (&x_old[gl.clone()], &r_old[gl.clone()]);
+                pair_values(f, (xs, rs), old, [s, y, &mut ws[..n], &mut wy[..n]]);
             }
             let v = v.each_ref().map(|v| &v[..n]);
             for (p, sums) in pairs.iter().zip(&mut acc.pairs) {

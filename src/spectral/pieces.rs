@@ -8,6 +8,7 @@
 //! reads many arrays (the L-BFGS pairs) reads a 4 KiB page of each per visit.
 
 use super::evaluator::Symbols;
+use super::kernels::wide_fn;
 use rustfft::num_complex::Complex64;
 
 /// Values per piece.
@@ -35,22 +36,6 @@ impl Piece {
         }
     }
 
-    /// The values `start..start + len` of spectral row `row`, placed after the piece's first
-    /// `offset` values.
-    fn fill(&mut self, sym: &Symbols, (row, start, len): (usize, usize, usize), offset: usize) {
-        let (kb, wb) = sym.row(row);
-        let axis = sym.k2[2][start..start + len]
-            .iter()
-            .zip(&sym.weight[2][start..start + len]);
-        let out = self.k[offset..offset + len]
-            .iter_mut()
-            .zip(&mut self.w[offset..offset + len]);
-        for ((k, w), (&kl, &wl)) in out.zip(axis) {
-            (*k, *w) = (kb + kl, wb * wl);
-        }
-        self.len = offset + len;
-    }
-
     /// The piece's reals.
     pub fn reals(&self) -> usize {
         2 * self.len
@@ -63,6 +48,25 @@ impl Piece {
             pair.fill(v(l));
         }
     }
+}
+
+wide_fn! {
+/// The values `start..start + len` of spectral row `row` (`at`) into `piece`, placed after its
+/// first `offset` values.
+fn fill_piece(piece: &mut Piece, sym: &Symbols, at: (usize, usize, usize), offset: usize) {
+    let (row, start, len) = at;
+    let (kb, wb) = sym.row(row);
+    let axis = sym.k2[2][start..start + len]
+        .iter()
+        .zip(&sym.weight[2][start..start + len]);
+    let out = piece.k[offset..offset + len]
+        .iter_mut()
+        .zip(&mut piece.w[offset..offset + len]);
+    for ((k, w), (&kl, &wl)) in out.zip(axis) {
+        (*k, *w) = (kb + kl, wb * wl);
+    }
+    piece.len = offset + len;
+}
 }
 
 /// Calls `f(piece, at)` for every piece of parallel task `t` (whole rows, [`Symbols::task_len`]
@@ -83,7 +87,7 @@ pub fn for_each_piece(sym: &Symbols, t: usize, reals: usize, mut f: impl FnMut(&
         for part in 0..parts {
             let (start, len) = (part * PIECE, PIECE.min(s2 - part * PIECE));
             for i in 0..rows_per_piece.min(rows - r0) {
-                piece.fill(sym, (first + r0 + i, start, len), i * len);
+                fill_piece(&mut piece, sym, (first + r0 + i, start, len), i * len);
             }
             f(&piece, 2 * (r0 * s2 + start));
         }
