@@ -39,8 +39,10 @@ use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepRep
 use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::numerics::nearest_root;
-use crate::spectral::evaluator::{Evaluator, ExplicitTerm, Metric, State, Symbols};
-use crate::spectral::kernels::{dot3, pair_sums, quadratic_sums, wide_fn};
+use crate::spectral::evaluator::{
+    write_inverse_inputs, Evaluator, ExplicitTerm, Metric, State, Symbols,
+};
+use crate::spectral::kernels::{pair_sums, quadratic_sums, wide_fn};
 use crate::spectral::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use ndarray::Array3;
 use rayon::prelude::*;
@@ -647,17 +649,10 @@ wide_fn! {
 /// −|k|² multiple into `lap`, from the piece's reals of φ̂ and d' (`(x, d)`); returns its area.
 fn trial_piece(f: &Factors, out: [&mut [f64]; 3], spectra: (&[f64], &[f64]), step: (f64, f64)) -> f64 {
     let ([hat, copy, lap], (x, d), (alpha, beta)) = (out, spectra, step);
-    let values = hat
-        .iter_mut()
-        .zip(copy.iter_mut())
-        .zip(lap.iter_mut())
-        .zip(x.iter().zip(d))
-        .zip(f.qf.iter().zip(&f.k));
-    for ((((h, c), l), (x, d)), (qf, k)) in values {
-        let v = x + d * alpha + x * qf * beta;
-        (*h, *c, *l) = (v, v, -(v * k));
+    for (h, ((x, d), qf)) in hat.iter_mut().zip(x.iter().zip(d).zip(&f.qf)) {
+        *h = x + d * alpha + x * qf * beta;
     }
-    dot3(&f.aw[..f.len], hat, hat)
+    write_inverse_inputs(hat, (&f.k, &f.aw), copy, lap)
 }
 }
 

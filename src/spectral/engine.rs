@@ -18,8 +18,8 @@
 //! quadratic computed by Parseval with no extra transform; the exact projection takes the root
 //! nearest the last σ and rejects a step with no real root.
 
-use super::evaluator::{axis_symbol, Evaluator, ExplicitTerm, State};
-use super::kernels::{dot3, quadratic_sums, wide_fn};
+use super::evaluator::{axis_symbol, write_inverse_inputs, Evaluator, ExplicitTerm, State};
+use super::kernels::{quadratic_sums, wide_fn};
 use super::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
@@ -141,7 +141,7 @@ fn write_piece<const PREV: bool>(
 ) -> f64 {
     let ([h1, n1, h0, n0], [hat, copy, lap]) = (inputs, out);
     u.factors::<PREV>(p, area_prefactor, Some(sigma), f);
-    p.twice(&mut f.minus_k, |l| -p.k[l]);
+    p.twice(&mut f.k, |l| p.k[l]);
     let current = h1.iter().zip(n1).zip(f.h1.iter().zip(&f.n1));
     for (v, ((h, nl), (fh, fnl))) in hat.iter_mut().zip(current) {
         *v = h * fh + nl * fnl;
@@ -152,11 +152,7 @@ fn write_piece<const PREV: bool>(
             *v += h * fh + nl * fnl;
         }
     }
-    let out = copy.iter_mut().zip(lap.iter_mut());
-    for ((c, l), (&v, &mk)) in out.zip(hat.iter().zip(&f.minus_k)) {
-        (*c, *l) = (v, v * mk);
-    }
-    dot3(&f.aw[..hat.len()], hat, hat)
+    write_inverse_inputs(hat, (&f.k, &f.aw), copy, lap)
 }
 }
 
@@ -173,8 +169,8 @@ struct UpdateFactors {
     inv: [f64; PIECE],
     /// The area weight (3/(2√2)) ε |k|² w.
     aw: Twice,
-    /// −|k|².
-    minus_k: Twice,
+    /// |k|².
+    k: Twice,
     /// P̂ and Q̂ of the piece's values.
     p: Twice,
     q: Twice,
@@ -192,7 +188,7 @@ impl UpdateFactors {
             q0: z,
             inv: [0.0; PIECE],
             aw: z,
-            minus_k: z,
+            k: z,
             p: z,
             q: z,
         }

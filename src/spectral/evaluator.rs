@@ -291,7 +291,7 @@ fn inverse_inputs(
         .zip(lap.par_chunks_mut(task))
         .enumerate()
         .map(|(t, (copy, lap))| {
-            let (mut minus_k, mut aw) = ([0.0; 2 * PIECE], [0.0; 2 * PIECE]);
+            let (mut k, mut aw) = ([0.0; 2 * PIECE], [0.0; 2 * PIECE]);
             let mut area = 0.0;
             for_each_piece(sym, t, copy.len(), |p, at| {
                 let r = at..at + p.reals();
@@ -300,7 +300,7 @@ fn inverse_inputs(
                     &mut copy[r.clone()],
                     &mut lap[r],
                 );
-                area += inverse_inputs_piece(sym, p, h, copy, lap, &mut minus_k, &mut aw);
+                area += inverse_inputs_piece(sym, p, h, copy, lap, &mut k, &mut aw);
             });
             area
         })
@@ -308,24 +308,37 @@ fn inverse_inputs(
 }
 
 wide_fn! {
-/// One piece of [`inverse_inputs`] (`minus_k`, `aw` its scratch): returns its area.
+/// One piece of [`inverse_inputs`] (`k`, `aw` its scratch): returns its area.
 fn inverse_inputs_piece(
     sym: &Symbols,
     p: &Piece,
     h: &[f64],
     copy: &mut [f64],
     lap: &mut [f64],
-    minus_k: &mut Twice,
+    k: &mut Twice,
     aw: &mut Twice,
 ) -> f64 {
-    p.twice(minus_k, |l| -p.k[l]);
+    p.twice(k, |l| p.k[l]);
     p.twice(aw, |l| sym.area_prefactor * p.k[l] * p.w[l]);
-    let out = copy.iter_mut().zip(lap.iter_mut());
-    for ((c, l), (&h, &mk)) in out.zip(h.iter().zip(minus_k.iter())) {
-        (*c, *l) = (h, h * mk);
+    write_inverse_inputs(h, (k, aw), copy, lap)
+}
+}
+
+/// The inputs of an evaluation's inverse transforms over a piece's reals, from φ̂ (`h`):
+/// `copy = φ̂` and `lap = −|k|²φ̂`, with the piece's |k|² and area weight a = (3/(2√2)) ε |k|² w
+/// (each twice, `(k, aw)`); returns the piece's area Σ a φ̂². Every sweep that makes a new φ̂
+/// (the evaluation's first, the time step's update, the L-BFGS trial) ends with it.
+#[inline(always)]
+pub(crate) fn write_inverse_inputs(
+    h: &[f64],
+    (k, aw): (&[f64], &[f64]),
+    copy: &mut [f64],
+    lap: &mut [f64],
+) -> f64 {
+    for ((c, l), (&h, &k)) in copy.iter_mut().zip(lap.iter_mut()).zip(h.iter().zip(k)) {
+        (*c, *l) = (h, -(h * k));
     }
     dot3(&aw[..h.len()], h, h)
-}
 }
 
 /// Sums of the pointwise pass.
