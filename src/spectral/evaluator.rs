@@ -172,7 +172,8 @@ impl Evaluator {
     /// [`Diverged`] if `phi` is not finite.
     pub fn state_of(&mut self, phi: &Array3<f64>, t: f64) -> Result<State, Diverged> {
         let mut s = self.blank();
-        self.transform.forward(phi, &mut s.hat);
+        self.work.assign(phi);
+        self.transform.forward(&mut self.work, &mut s.hat);
         self.evaluate(&mut s, t, None, Some(0.0))?;
         Ok(s)
     }
@@ -256,8 +257,9 @@ impl Evaluator {
                 sums.max_abs, state.measures.energy
             )));
         }
-        self.transform.forward(&self.work2, &mut state.nonlinear);
-        self.transform.forward(&self.work, &mut self.spare);
+        self.transform
+            .forward(&mut self.work2, &mut state.nonlinear);
+        self.transform.forward(&mut self.work, &mut self.spare);
         let combined = combine(
             &self.symbols,
             self.eps,

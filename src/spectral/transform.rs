@@ -205,7 +205,6 @@ enum LastAxis {
 struct Work {
     lanes: Vec<Complex64>,
     scratch: Vec<Complex64>,
-    real: Vec<f64>,
 }
 
 /// Everything fixed at planning time (shared read-only by the parallel chunks).
@@ -298,16 +297,19 @@ impl Transform {
     }
 
     /// Forward transform `X_j = Σ_i x_i Π_a K_a(j_a, i_a)` with `K = e^{−2πi j i/n}` on periodic
-    /// axes and `K = cos(π j (2i+1)/(2m))` on mirror axes. `input` is left untouched.
+    /// axes and `K = cos(π j (2i+1)/(2m))` on mirror axes.
     /// When every axis longer than 1 is a mirror axis the spectrum is real (imaginary parts 0).
+    ///
+    /// `input` is used as scratch, as in [`Transform::inverse`]: its contents are garbage
+    /// afterwards (the real-to-complex stage transforms each row in place instead of a copy).
     ///
     /// # Panics
     /// If the shapes differ from the plan or an array is not in standard layout.
-    pub fn forward(&mut self, input: &Array3<f64>, out: &mut Array3<Complex64>) {
+    pub fn forward(&mut self, input: &mut Array3<f64>, out: &mut Array3<Complex64>) {
         let Transform { plan, works } = self;
         assert_eq!(input.shape(), plan.shape, "input shape");
         assert_eq!(out.shape(), plan.spectral, "spectrum shape");
-        let x = input.as_slice().expect("input in standard layout");
+        let x = input.as_slice_mut().expect("input in standard layout");
         let y = out.as_slice_mut().expect("spectrum in standard layout");
         let [n0, n1, n2] = plan.shape;
         let s2 = plan.spectral[2];
@@ -316,13 +318,13 @@ impl Transform {
             plan.forward_slabs(x, y, &mut works[0]);
         } else if n0 >= threads {
             let slabs = n0.div_ceil(threads);
-            x.par_chunks(slabs * n1 * n2)
+            x.par_chunks_mut(slabs * n1 * n2)
                 .zip(y.par_chunks_mut(slabs * n1 * s2))
                 .zip(works.par_iter_mut())
                 .for_each(|((x, y), work)| plan.forward_slabs(x, y, work));
         } else {
             let rows = (n0 * n1).div_ceil(threads);
-            x.par_chunks(rows * n2)
+            x.par_chunks_mut(rows * n2)
                 .zip(y.par_chunks_mut(rows * s2))
                 .zip(works.par_iter_mut())
                 .for_each(|((x, y), work)| plan.last.forward_rows(x, y, n2, work));
@@ -522,16 +524,15 @@ impl Plan {
         Work {
             lanes: vec![Complex64::default(); lanes],
             scratch: vec![Complex64::default(); scratch],
-            real: vec![0.0; self.shape[2]],
         }
     }
 
     /// Forward transform along axes 2 then 1 of whole slabs (`x`, `y` hold whole `i0` slabs),
     /// one slab at a time so that it stays in cache between the two stages.
-    fn forward_slabs(&self, x: &[f64], y: &mut [Complex64], work: &mut Work) {
+    fn forward_slabs(&self, x: &mut [f64], y: &mut [Complex64], work: &mut Work) {
         let [_, n1, n2] = self.shape;
         let s2 = self.spectral[2];
-        for (xs, ys) in x.chunks_exact(n1 * n2).zip(y.chunks_exact_mut(n1 * s2)) {
+        for (xs, ys) in x.chunks_exact_mut(n1 * n2).zip(y.chunks_exact_mut(n1 * s2)) {
             self.last.forward_rows(xs, ys, n2, work);
             if let Some(kernel) = &self.strided[1] {
                 let slab = ArrayViewMut3::from_shape([1, n1, s2], ys).expect("slab shape");
@@ -585,15 +586,14 @@ impl Plan {
 }
 
 impl LastAxis {
-    /// Forward transform of the contiguous rows of length `n` in `x` into rows of `y`.
-    fn forward_rows(&self, x: &[f64], y: &mut [Complex64], n: usize, work: &mut Work) {
+    /// Forward transform of the contiguous rows of length `n` in `x` into rows of `y` (`x` used
+    /// as scratch).
+    fn forward_rows(&self, x: &mut [f64], y: &mut [Complex64], n: usize, work: &mut Work) {
         match self {
             LastAxis::Real { r2c, .. } => {
                 let scratch = &mut work.scratch[..r2c.get_scratch_len()];
-                let buf = &mut work.real[..n];
-                for (xr, yr) in x.chunks_exact(n).zip(y.chunks_exact_mut(n / 2 + 1)) {
-                    buf.copy_from_slice(xr);
-                    r2c.process_with_scratch(buf, yr, scratch)
+                for (xr, yr) in x.chunks_exact_mut(n).zip(y.chunks_exact_mut(n / 2 + 1)) {
+                    r2c.process_with_scratch(xr, yr, scratch)
                         .expect("lengths fixed by the plan");
                 }
             }
