@@ -87,6 +87,19 @@ fn clock_values(c: &Clock) -> [f64; 7] {
 impl Checkpoint {
     /// The checkpoint's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        self.write_to(&mut bytes, || ())
+            .expect("writing to memory does not fail");
+        bytes
+    }
+
+    /// Write the checkpoint to `out` (layout in the module documentation), the body staged and
+    /// hashed in chunks of [`CHUNK`] bytes, `after_chunk` called after each: no copy of the
+    /// engine's arrays is held beside them.
+    ///
+    /// # Errors
+    /// What `out` returns.
+    fn write_to(&self, out: &mut impl Write, after_chunk: fn()) -> std::io::Result<()> {
         let mut names: Vec<String> = CLOCK.iter().map(|s| s.to_string()).collect();
         let mut values: Vec<f64> = clock_values(&self.clock).to_vec();
         for (n, v) in &self.engine.scalars {
@@ -99,13 +112,14 @@ impl Checkpoint {
             .iter()
             .map(|(name, a)| {
                 let (kind, shape) = match a {
-                    SavedArray::Real(a) => ("real", a.dim()),
-                    SavedArray::Complex(a) => ("complex", a.dim()),
+                    SavedArray::Real(a) => ("real", a.dim().into()),
+                    SavedArray::Complex(a) => ("complex", a.dim().into()),
+                    SavedArray::Single(shape, _) => ("complex", *shape),
                 };
                 ArrayHeader {
                     name: name.clone(),
                     kind: kind.to_string(),
-                    shape: [shape.0, shape.1, shape.2],
+                    shape,
                 }
             })
             .collect();
@@ -116,27 +130,31 @@ impl Checkpoint {
             arrays,
         })
         .expect("serialisable header");
-        let mut body = header.clone();
+        out.write_all(MAGIC)?;
+        out.write_all(&(header.len() as u64).to_le_bytes())?;
+        let mut body = Body {
+            out,
+            staged: Vec::with_capacity(CHUNK + 16),
+            crc: crc32fast::Hasher::new(),
+            after_chunk,
+        };
+        body.put(&header)?;
         for v in values {
-            body.extend_from_slice(&v.to_le_bytes());
+            body.put(&v.to_le_bytes())?;
         }
         for (_, a) in &self.engine.arrays {
             match a {
-                SavedArray::Real(a) => a
+                SavedArray::Real(a) => a.iter().try_for_each(|v| body.put(&v.to_le_bytes()))?,
+                SavedArray::Complex(a) => a.iter().try_for_each(|v| {
+                    body.put(&v.re.to_le_bytes())?;
+                    body.put(&v.im.to_le_bytes())
+                })?,
+                SavedArray::Single(_, reals) => reals
                     .iter()
-                    .for_each(|v| body.extend_from_slice(&v.to_le_bytes())),
-                SavedArray::Complex(a) => a.iter().for_each(|v| {
-                    body.extend_from_slice(&v.re.to_le_bytes());
-                    body.extend_from_slice(&v.im.to_le_bytes());
-                }),
+                    .try_for_each(|&v| body.put(&f64::from(v).to_le_bytes()))?,
             }
         }
-        let mut out = Vec::with_capacity(MAGIC.len() + 12 + body.len());
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&(header.len() as u64).to_le_bytes());
-        out.extend_from_slice(&body);
-        out.extend_from_slice(&crc32fast::hash(&body).to_le_bytes());
-        out
+        body.finish()
     }
 
     /// Parse a checkpoint from `bytes` (from `source`, named in messages).
@@ -270,10 +288,8 @@ impl Checkpoint {
             move |source| Error::Io { path: p, source }
         };
         let mut file = File::create(&tmp).map_err(io(&tmp))?;
-        for chunk in self.to_bytes().chunks(1 << 20) {
-            file.write_all(chunk).map_err(io(&tmp))?;
-            pause_for_tests();
-        }
+        self.write_to(&mut file, pause_for_tests)
+            .map_err(io(&tmp))?;
         file.sync_all().map_err(io(&tmp))?;
         drop(file);
         std::fs::rename(&tmp, &path).map_err(io(&path))?;
@@ -294,6 +310,45 @@ impl Checkpoint {
             Error::config("checkpoint", format!("cannot read {}: {e}", path.display()))
         })?;
         Self::from_bytes(&bytes, &path)
+    }
+}
+
+/// Bytes of a checkpoint's body staged before they are written.
+const CHUNK: usize = 1 << 20;
+
+/// A checkpoint's body on its way to `out`: staged in chunks of [`CHUNK`] bytes and hashed
+/// (CRC-32) chunk by chunk.
+struct Body<'a, W: Write> {
+    out: &'a mut W,
+    staged: Vec<u8>,
+    crc: crc32fast::Hasher,
+    after_chunk: fn(),
+}
+
+impl<W: Write> Body<'_, W> {
+    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.staged.extend_from_slice(bytes);
+        if self.staged.len() >= CHUNK {
+            self.pass_on()?;
+        }
+        Ok(())
+    }
+
+    /// Hash and write the staged bytes.
+    fn pass_on(&mut self) -> std::io::Result<()> {
+        self.crc.update(&self.staged);
+        self.out.write_all(&self.staged)?;
+        self.staged.clear();
+        (self.after_chunk)();
+        Ok(())
+    }
+
+    /// The last staged bytes, then the checksum of the whole body.
+    fn finish(mut self) -> std::io::Result<()> {
+        if !self.staged.is_empty() {
+            self.pass_on()?;
+        }
+        self.out.write_all(&self.crc.finalize().to_le_bytes())
     }
 }
 

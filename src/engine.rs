@@ -112,6 +112,10 @@ pub enum SavedArray {
     Real(Array3<f64>),
     /// A spectrum.
     Complex(Array3<Complex64>),
+    /// A spectrum of this shape kept in single precision, as interleaved (re, im) reals (the
+    /// L-BFGS pairs): a checkpoint holds it widened exactly to a complex array, so it comes
+    /// back from a file as [`SavedArray::Complex`]; [`Saved::single`] reads either.
+    Single([usize; 3], Vec<f32>),
 }
 
 /// An engine's state for a checkpoint: named scalars and arrays.
@@ -156,7 +160,9 @@ impl Saved {
         match self.find(name)? {
             SavedArray::Real(a) if a.shape() == shape => Ok(a),
             SavedArray::Real(a) => Err(wrong_shape(name, a.shape(), shape)),
-            SavedArray::Complex(_) => Err(format!("saved `{name}` is complex, not real")),
+            SavedArray::Complex(_) | SavedArray::Single(..) => {
+                Err(format!("saved `{name}` is complex, not real"))
+            }
         }
     }
 
@@ -168,6 +174,25 @@ impl Saved {
         match self.find(name)? {
             SavedArray::Complex(a) if a.shape() == shape => Ok(a),
             SavedArray::Complex(a) => Err(wrong_shape(name, a.shape(), shape)),
+            SavedArray::Single(..) => Err(format!("saved `{name}` is in single precision")),
+            SavedArray::Real(_) => Err(format!("saved `{name}` is real, not complex")),
+        }
+    }
+
+    /// The spectrum `name` of `shape` in single precision as interleaved (re, im) reals: a
+    /// [`SavedArray::Single`], or a complex array (from a checkpoint) rounded to f32, which
+    /// gives back exactly the values that were widened.
+    ///
+    /// # Errors
+    /// If it is missing, real or of another shape.
+    pub fn single(&self, name: &str, shape: &[usize]) -> Result<Vec<f32>, String> {
+        match self.find(name)? {
+            SavedArray::Single(s, v) if s[..] == *shape => Ok(v.clone()),
+            SavedArray::Single(s, _) => Err(wrong_shape(name, s, shape)),
+            SavedArray::Complex(_) => {
+                let values = self.complex(name, shape)?.iter();
+                Ok(values.flat_map(|c| [c.re as f32, c.im as f32]).collect())
+            }
             SavedArray::Real(_) => Err(format!("saved `{name}` is real, not complex")),
         }
     }

@@ -8,16 +8,22 @@
 //!
 //! | engine | periodic last axis | mirrored last axis |
 //! |---|---|---|
-//! | FD explicit Euler | 6.2 | 8.2 |
-//! | spectral SBDF1 | 13.2 | 23.5 |
-//! | spectral SBDF2 | 15.2 | 27.7 |
-//! | relaxational (L-BFGS, m pairs) | 19.2 + 2.05 m | 35.6 + 4.0 m |
+//! | FD explicit Euler | 6.5 | 10.2 |
+//! | spectral SBDF1 | 10.8 | 20.1 |
+//! | spectral SBDF2 | 14.4 | 24.1 |
+//! | relaxational (L-BFGS, m pairs) | 13.9 + 2.04 m | 28.5 + 2.0 m |
 //!
 //! A mirrored last axis makes every spectrum a full complex array (2 f64 per point) instead of
 //! the real-to-complex half spectrum (about 1). A reduced box also pays [`FULL_BOX_F64`] f64 per
 //! point of the full box: writing the final field unfolds it (three full-box copies and the
 //! `.npy` buffer) while the engine is still alive. On the full box that cost is inside the
 //! figure.
+//!
+//! Measured 2026-12-02 (14 steps or iterations of a 96³ ellipsoid, then the final outputs and
+//! checkpoint; the mirrored figures on the eighth box less its 4 × 8 full-box f64). The run's
+//! last checkpoint is inside them: it holds one copy of the engine's saved arrays (φ̂, SBDF2's
+//! previous step, the L-BFGS pairs, stored in single precision) and writes them through a 1 MiB
+//! buffer.
 
 use crate::config::{Dynamics, Method, Scene, Scheme, Symmetry};
 use crate::error::{Error, Result};
@@ -44,13 +50,13 @@ pub struct Estimate {
 pub fn engine_f64_per_point(scene: &Scene, mirror_last: bool) -> f64 {
     let pick = |periodic: f64, mirrored: f64| if mirror_last { mirrored } else { periodic };
     match (scene.method, scene.dynamics, scene.scheme) {
-        (Method::Fd, _, _) => pick(6.2, 8.2),
+        (Method::Fd, _, _) => pick(6.5, 10.2),
         (Method::Spectral, Dynamics::Relaxational, _) => {
             let m = scene.lbfgs_memory as f64;
-            pick(19.2 + 2.05 * m, 35.6 + 4.0 * m)
+            pick(13.9 + 2.04 * m, 28.5 + 2.0 * m)
         }
-        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf1) => pick(13.2, 23.5),
-        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf2) => pick(15.2, 27.7),
+        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf1) => pick(10.8, 20.1),
+        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf2) => pick(14.4, 24.1),
     }
 }
 
@@ -221,14 +227,14 @@ mod tests {
         let n = 96f64.powi(3);
         let e = estimate(&scene(json!({})));
         assert_eq!(e.points, n);
-        assert!((e.f64_per_point - 13.2).abs() < 1e-12);
+        assert!((e.f64_per_point - 10.8).abs() < 1e-12);
         let e = estimate(&scene(json!({"symmetry": ["x", "y", "z"]})));
         assert_eq!(e.points, n / 8.0);
-        assert!((e.f64_per_point - (23.5 + 32.0)).abs() < 1e-12);
+        assert!((e.f64_per_point - (20.1 + 32.0)).abs() < 1e-12);
         let e = estimate(&scene(
             json!({"dynamics": "relaxational", "lbfgs_memory": 10}),
         ));
-        assert!((e.f64_per_point - 39.7).abs() < 1e-12);
+        assert!((e.f64_per_point - 34.3).abs() < 1e-12);
         // auto: the larger of the two layouts
         let auto = estimate(&scene(json!({"symmetry": "auto"})));
         let all = estimate(&scene(json!({"symmetry": ["x", "y", "z"]})));
@@ -241,8 +247,8 @@ mod tests {
         match check_against(&s, 16e9) {
             Err(Error::Config { field, reason }) => {
                 assert_eq!(field, "n");
-                assert!(reason.contains("7.3 TB"), "{reason}");
-                assert!(reason.contains("13.2 f64 per"), "{reason}");
+                assert!(reason.contains("5.9 TB"), "{reason}");
+                assert!(reason.contains("10.8 f64 per"), "{reason}");
                 assert!(reason.contains("16.0 GB"), "{reason}");
             }
             other => panic!("{other:?}"),

@@ -33,6 +33,16 @@
 //! The sweeps walk the spectrum in pieces ([`crate::spectral::pieces`]) whose per-wavenumber
 //! factors are formed once, and the loops run over the spectra as interleaved (re, im) reals;
 //! the reductions are the vectorised kernels of [`crate::spectral::kernels`].
+//!
+//! **The pairs in single precision.** The two sweeps that read every stored pair (the
+//! direction's and the gradient's) are bound by memory, so the pairs are stored as f32: s and y
+//! are formed in f64 and rounded once, and every inner product and the direction use the
+//! rounded values widened exactly, so the recursion is the exact L-BFGS recursion of the stored
+//! pairs (a relative change of ~6e-8 in each pair, none in the state, the gradient, the
+//! multiplier or the line search, which stay f64). What the memory approximates is the inverse
+//! Hessian, which it does to far less than 6e-8 anyway; the stationary state is fixed by the
+//! f64 gradient alone. Measured on the 48³ prolate: 237 iterations to the residual 1e-6
+//! against 236 with f64 pairs, and an iteration 13–25% faster.
 
 use crate::config::{AreaMethod, Scene};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
@@ -56,10 +66,21 @@ const MAX_BACKTRACKS: usize = 40;
 /// Largest L-BFGS memory (the coefficient recursion keeps its sums in fixed arrays).
 pub const MAX_MEMORY: usize = 32;
 
-/// One stored L-BFGS pair (s, y), flattened like the spectrum.
+/// One stored L-BFGS pair (s, y), flattened like the spectrum as interleaved (re, im) reals, in
+/// single precision (see the module documentation).
 struct Pair {
-    s: Vec<Complex64>,
-    y: Vec<Complex64>,
+    s: Vec<f32>,
+    y: Vec<f32>,
+}
+
+impl Pair {
+    /// A pair of `reals` zeros.
+    fn zeros(reals: usize) -> Self {
+        Pair {
+            s: vec![0.0; reals],
+            y: vec![0.0; reals],
+        }
+    }
 }
 
 /// ⟨s_i, r⟩_M, ⟨y_i, r⟩_M and ⟨q, y_i⟩_M of the current state per pair (oldest first), and
@@ -411,11 +432,8 @@ impl RelaxEngine {
     /// memory is full), its Gram row and column from the same sweep.
     fn accept(&mut self) {
         let sigma = self.multiplier(self.trial.multiplier_sums);
-        let len = self.cur.hat.len();
-        let mut pair = self.spare_pairs.pop().unwrap_or_else(|| Pair {
-            s: vec![Complex64::default(); len],
-            y: vec![Complex64::default(); len],
-        });
+        let reals = 2 * self.cur.hat.len();
+        let mut pair = self.spare_pairs.pop().unwrap_or_else(|| Pair::zeros(reals));
         let sums = gradient_sweep(
             &self.ev.symbols,
             self.metric,
@@ -635,9 +653,9 @@ fn direction_piece(
     }
     for (j, p) in pairs.iter().skip(d.off).enumerate() {
         let (cy, cs) = (d.c_y[j], d.c_s[j]);
-        let (y, s) = (&reals(&p.y)[g.clone()], &reals(&p.s)[g.clone()]);
-        for ((o, y), s) in out.iter_mut().zip(y).zip(s) {
-            *o -= y * cy + s * cs;
+        let (y, s) = (&p.y[g.clone()], &p.s[g.clone()]);
+        for ((o, &y), &s) in out.iter_mut().zip(y).zip(s) {
+            *o -= f64::from(y) * cy + f64::from(s) * cs;
         }
     }
     area_sums(f, &x[g], out)
@@ -672,15 +690,22 @@ fn gradient_values(f: &Factors, spectra: (&[f64], &[f64]), sigma: f64, out: [&mu
 }
 
 wide_fn! {
-/// A piece of the new pair in [`gradient_sweep`]: s = φ̂ − x_old, y = r − r_old from the
-/// piece's reals of (φ̂, r) and (x_old, r_old), and w M s, w M y (`out` = [s, y, ws, wy]).
-fn pair_values(f: &Factors, new: (&[f64], &[f64]), old: (&[f64], &[f64]), out: [&mut [f64]; 4]) {
-    let ((xs, rs), (x_old, r_old), [s, y, ws, wy]) = (new, old, out);
+/// A piece of the new pair in [`gradient_sweep`]: s = φ̂ − x_old, y = r − r_old rounded to
+/// single precision from the piece's reals of (φ̂, r) and (x_old, r_old), and w M s, w M y of
+/// the rounded values, so that the pair's sums are those of the pair as stored.
+fn pair_values(
+    f: &Factors,
+    new: (&[f64], &[f64]),
+    old: (&[f64], &[f64]),
+    pair: [&mut [f32]; 2],
+    weighted: [&mut [f64]; 2],
+) {
+    let ((xs, rs), (x_old, r_old), [s, y], [ws, wy]) = (new, old, pair, weighted);
     let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy.iter_mut()));
     let inputs = xs.iter().zip(x_old).zip(rs.iter().zip(r_old).zip(&f.wm));
     for (((s, y), (ws, wy)), ((x, xo), ((r, ro), wm))) in outputs.zip(inputs) {
-        (*s, *y) = (x - xo, r - ro);
-        (*ws, *wy) = (wm * *s, wm * *y);
+        (*s, *y) = ((x - xo) as f32, (r - ro) as f32);
+        (*ws, *wy) = (wm * f64::from(*s), wm * f64::from(*y));
     }
 }
 }
@@ -699,15 +724,22 @@ fn area_sums(f: &Factors, x: &[f64], d: &[f64]) -> AreaSums {
     }
 }
 
-/// ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*) by a plain sum over the spectrum (no pieces, no kernels:
-/// the reference the sweeps' sums are checked against, and the Gram of a restored memory).
-fn dot_m(sym: &Symbols, m: Metric, u: &[Complex64], v: &[Complex64]) -> f64 {
+/// ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*) by a plain sum over spectra held as interleaved reals (no
+/// pieces, no kernels: the reference the sweeps' sums are checked against, and the Gram of a
+/// restored memory).
+fn dot_m<A: Copy + Into<f64>, B: Copy + Into<f64>>(
+    sym: &Symbols,
+    m: Metric,
+    u: &[A],
+    v: &[B],
+) -> f64 {
     let s2 = sym.row_len();
-    let values = u.iter().zip(v).enumerate();
+    let values = u.chunks_exact(2).zip(v.chunks_exact(2)).enumerate();
     values.fold(0.0, |acc, (i, (a, b))| {
         let (kb, wb) = sym.row(i / s2);
         let k = kb + sym.k2[2][i % s2];
-        acc + wb * sym.weight[2][i % s2] * m.at(k) * (a.re * b.re + a.im * b.im)
+        let re = a[0].into() * b[0].into() + a[1].into() * b[1].into();
+        acc + wb * sym.weight[2][i % s2] * m.at(k) * re
     })
 }
 
@@ -718,7 +750,7 @@ fn pair_dots(sym: &Symbols, m: Metric, a: &Pair, b: &Pair) -> (f64, f64) {
 
 /// One task's share of a new pair in [`gradient_sweep`]: x_old, r_old (the whole spectra) and
 /// its part of s and y.
-type NewPairPart<'a> = (&'a [f64], &'a [f64], &'a mut [f64], &'a mut [f64]);
+type NewPairPart<'a> = (&'a [f64], &'a [f64], &'a mut [f32], &'a mut [f32]);
 
 /// r = M⁻¹ĝ + σq of `state` into `grad` (r(0) = 0) with its sums: the residual's
 /// Σ_{k≠0} w |ĝ + σâ|² = Σ w M²|r|², ⟨r, r⟩_M, ⟨q, r⟩_M and every stored pair's
@@ -761,11 +793,11 @@ fn gradient_sweep(
             if let Some((x_old, r_old, s, y)) = new.as_mut() {
                 let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
                 let old = (&x_old[gl.clone()], &r_old[gl.clone()]);
-                pair_values(f, (xs, rs), old, [s, y, &mut ws[..n], &mut wy[..n]]);
+                pair_values(f, (xs, rs), old, [s, y], [&mut ws[..n], &mut wy[..n]]);
             }
             let v = v.each_ref().map(|v| &v[..n]);
             for (p, sums) in pairs.iter().zip(&mut acc.pairs) {
-                let add = pair_sums(&reals(&p.s)[gl.clone()], &reals(&p.y)[gl.clone()], v);
+                let add = pair_sums(&p.s[gl.clone()], &p.y[gl.clone()], v);
                 sums.iter_mut().zip(add).for_each(|(a, b)| *a += b);
             }
             if let Some((_, _, s, y)) = new.as_ref() {
@@ -787,8 +819,8 @@ fn gradient_sweep(
             .reduce(GradientSums::zero, GradientSums::add),
         Some((x_old, r_old, pair)) => grad
             .par_chunks_mut(2 * task)
-            .zip(reals_mut(&mut pair.s).par_chunks_mut(2 * task))
-            .zip(reals_mut(&mut pair.y).par_chunks_mut(2 * task))
+            .zip(pair.s.par_chunks_mut(2 * task))
+            .zip(pair.y.par_chunks_mut(2 * task))
             .enumerate()
             .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), reals(r_old), s, y))))
             .reduce(GradientSums::zero, GradientSums::add),
@@ -871,10 +903,9 @@ impl Engine for RelaxEngine {
             .scalar("stalled", if self.stalled { 1.0 } else { 0.0 })
             .scalar("pairs", self.pairs.len() as f64)
             .array("phi_hat", SavedArray::Complex(self.cur.hat.clone()));
-        let shape = self.cur.hat.raw_dim();
-        let array = |v: &Vec<Complex64>| {
-            SavedArray::Complex(Array3::from_shape_vec(shape, v.clone()).expect("spectral shape"))
-        };
+        let (n0, n1, n2) = self.cur.hat.dim();
+        let shape = [n0, n1, n2];
+        let array = |v: &Vec<f32>| SavedArray::Single(shape, v.clone());
         // The Gram entries as they were accumulated, so that a resumed run is bitwise the
         // uninterrupted one (the inner products of the state are recomputed by the same sweep).
         let n = self.pairs.len();
@@ -903,12 +934,9 @@ impl Engine for RelaxEngine {
         }
         self.reset_memory();
         for i in 0..n as usize {
-            let read = |name: &str| -> Result<Vec<Complex64>, String> {
-                Ok(saved.complex(name, &shape)?.iter().copied().collect())
-            };
             let pair = Pair {
-                s: read(&format!("s_{i}"))?,
-                y: read(&format!("y_{i}"))?,
+                s: saved.single(&format!("s_{i}"), &shape)?,
+                y: saved.single(&format!("y_{i}"), &shape)?,
             };
             self.pairs.push_back(pair);
         }
@@ -972,7 +1000,7 @@ mod tests {
             assert!(n >= 3, "{case}: {n} pairs");
             let (sy, yy) = (e.sy.clone(), e.yy.clone());
             let (sym, m) = (&e.ev.symbols, e.metric);
-            let r = flat(&e.grad);
+            let r = reals(flat(&e.grad));
             let direct: Vec<(f64, f64)> = e
                 .pairs
                 .iter()

@@ -94,8 +94,9 @@ fn quadratic_terms(acc: &mut [[f64; LANES]; 6], l: usize, [a, b, c]: [f64; 3], x
 
 /// With v = [w M r, w M q, w M s_new, w M y_new] over the piece, a stored pair's
 /// [Σ s v₀, Σ y v₀, Σ y v₁, Σ y v₂, Σ s v₃, Σ y v₃]: its ⟨s, r⟩, ⟨y, r⟩, ⟨y, q⟩,
-/// ⟨y, s_new⟩, ⟨s, y_new⟩, ⟨y, y_new⟩ in the M metric.
-pub fn pair_sums(s: &[f64], y: &[f64], v: [&[f64]; 4]) -> [f64; 6] {
+/// ⟨y, s_new⟩, ⟨s, y_new⟩, ⟨y, y_new⟩ in the M metric. The pair is stored in single
+/// precision; each value is widened exactly to f64 before it is used.
+pub fn pair_sums(s: &[f32], y: &[f32], v: [&[f64]; 4]) -> [f64; 6] {
     let n = s.len();
     assert!(y.len() == n && v.iter().all(|v| v.len() == n));
     #[cfg(target_arch = "x86_64")]
@@ -108,8 +109,8 @@ pub fn pair_sums(s: &[f64], y: &[f64], v: [&[f64]; 4]) -> [f64; 6] {
         pair_terms(
             &mut acc,
             j % LANES,
-            s[j],
-            y[j],
+            f64::from(s[j]),
+            f64::from(y[j]),
             [v[0][j], v[1][j], v[2][j], v[3][j]],
         );
     }
@@ -267,13 +268,13 @@ mod avx2 {
 
     /// [`super::pair_sums`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
     #[target_feature(enable = "avx2,fma")]
-    pub unsafe fn pair_sums(s: &[f64], y: &[f64], v: [&[f64]; 4]) -> [f64; 6] {
+    pub unsafe fn pair_sums(s: &[f32], y: &[f32], v: [&[f64]; 4]) -> [f64; 6] {
         let n = s.len();
         let full = n - n % LANES;
         let mut acc = [_mm256_setzero_pd(); 6];
         for j in (0..full).step_by(LANES) {
-            let sv = _mm256_loadu_pd(s.as_ptr().add(j));
-            let yv = _mm256_loadu_pd(y.as_ptr().add(j));
+            let sv = _mm256_cvtps_pd(_mm_loadu_ps(s.as_ptr().add(j)));
+            let yv = _mm256_cvtps_pd(_mm_loadu_ps(y.as_ptr().add(j)));
             let w = v.map(|v| _mm256_loadu_pd(v.as_ptr().add(j)));
             acc[0] = _mm256_fmadd_pd(sv, w[0], acc[0]);
             acc[1] = _mm256_fmadd_pd(yv, w[0], acc[1]);
@@ -290,8 +291,8 @@ mod avx2 {
             pair_terms(
                 &mut lanes,
                 j % LANES,
-                s[j],
-                y[j],
+                f64::from(s[j]),
+                f64::from(y[j]),
                 [v[0][j], v[1][j], v[2][j], v[3][j]],
             );
         }
@@ -308,6 +309,13 @@ mod tests {
         (0..n).map(|j| ((j as f64 + seed) * 0.713).sin()).collect()
     }
 
+    /// `v` rounded to single precision (a stored L-BFGS pair), and those values widened back.
+    fn single(v: &[f64]) -> (Vec<f32>, Vec<f64>) {
+        let s: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+        let wide = s.iter().map(|&x| f64::from(x)).collect();
+        (s, wide)
+    }
+
     /// The sums equal plain sequential sums to round-off (1e-14 relative: 52 terms of size 1).
     #[test]
     fn reductions_equal_plain_sums() {
@@ -315,7 +323,8 @@ mod tests {
         let [a, b, c, d, e, f] = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0].map(|s| values(n, s));
         let plain: f64 = (0..n).map(|j| a[j] * b[j] * c[j]).sum();
         assert!((dot3(&a, &b, &c) - plain).abs() < 1e-14 * n as f64);
-        let got = pair_sums(&a, &b, [&c, &d, &e, &f]);
+        let ((a32, a), (b32, b)) = (single(&a), single(&b));
+        let got = pair_sums(&a32, &b32, [&c, &d, &e, &f]);
         let dot = |u: &[f64], v: &[f64]| (0..n).map(|j| u[j] * v[j]).sum::<f64>();
         let want = [
             dot(&a, &c),
@@ -348,13 +357,14 @@ mod tests {
     fn portable_build_matches_bit_for_bit() {
         let n = 50;
         let [a, b, c, d, e, f] = [0.5, 1.5, 2.5, 3.5, 4.5, 5.5].map(|s| values(n, s));
+        let ((a32, a), (b32, b)) = (single(&a), single(&b));
         let mut acc = [[0.0; LANES]; 6];
         let mut one = [0.0; LANES];
         for j in 0..n {
             pair_terms(&mut acc, j % LANES, a[j], b[j], [c[j], d[j], e[j], f[j]]);
             one[j % LANES] = (a[j] * b[j]).mul_add(c[j], one[j % LANES]);
         }
-        assert_eq!(pair_sums(&a, &b, [&c, &d, &e, &f]), acc.map(fold));
+        assert_eq!(pair_sums(&a32, &b32, [&c, &d, &e, &f]), acc.map(fold));
         assert_eq!(dot3(&a, &b, &c), fold(one));
         let mut quad = [[0.0; LANES]; 6];
         for j in 0..n {
