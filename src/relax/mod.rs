@@ -583,15 +583,17 @@ fn fill_factors(f: &mut Factors, p: &Piece, sym: &Symbols, metric: Metric, need:
     for (m, &k) in c.m[..len].iter_mut().zip(&p.k) {
         *m = metric.at(k);
     }
-    for (inv_m, m) in c.inv_m[..len].iter_mut().zip(&c.m) {
-        *inv_m = 1.0 / m;
+    // 1/M, 0 at k = 0: a select of the quotient, stored whole (a conditional store of the zero
+    // compiles to a masked store, which is microcoded and slow on AMD's cores).
+    for ((inv_m, m), &k) in c.inv_m[..len].iter_mut().zip(&c.m).zip(&p.k) {
+        let inv = 1.0 / m;
+        *inv_m = if k == 0.0 { 0.0 } else { inv };
     }
     let values = p.k[..len]
         .iter()
         .zip(&p.w)
-        .zip(c.inv_m.iter_mut().zip(c.qf.iter_mut().zip(c.aw.iter_mut())));
+        .zip(c.inv_m.iter().zip(c.qf.iter_mut().zip(c.aw.iter_mut())));
     for ((&k, &w), (inv_m, (qf, aw))) in values {
-        *inv_m = if k == 0.0 { 0.0 } else { *inv_m };
         *qf = metric.c_sigma * k * *inv_m;
         *aw = sym.area_prefactor * k * w;
     }

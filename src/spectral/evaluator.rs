@@ -600,7 +600,14 @@ fn combine_piece(
         }
     }
     if how.with_residual {
-        p.twice(&mut f.w, |l| if k[l] > 0.0 { p.w[l] } else { 0.0 });
+        p.twice(&mut f.w, |l| {
+            let w = p.w[l];
+            if k[l] > 0.0 {
+                w
+            } else {
+                0.0
+            }
+        });
         sums.residual_sq = dot3(&f.w[..len], mu, mu);
     }
     sums
