@@ -106,20 +106,16 @@ pub fn pair_sums(s: &[f32], y: &[f32], v: [&[f64]; 4]) -> [f64; 6] {
     }
     let mut acc = [[0.0; LANES]; 6];
     for j in 0..n {
-        pair_terms(
-            &mut acc,
-            j % LANES,
-            f64::from(s[j]),
-            f64::from(y[j]),
-            [v[0][j], v[1][j], v[2][j], v[3][j]],
-        );
+        pair_terms(&mut acc, j, s, y, v);
     }
     acc.map(fold)
 }
 
-/// One value's terms of [`pair_sums`] into lane `l`.
+/// Value `j`'s terms of [`pair_sums`] into its lane, j mod [`LANES`] (the pair widened).
 #[inline(always)]
-fn pair_terms(acc: &mut [[f64; LANES]; 6], l: usize, s: f64, y: f64, [wr, wq, ws, wy]: [f64; 4]) {
+fn pair_terms(acc: &mut [[f64; LANES]; 6], j: usize, s: &[f32], y: &[f32], v: [&[f64]; 4]) {
+    let (l, s, y) = (j % LANES, f64::from(s[j]), f64::from(y[j]));
+    let [wr, wq, ws, wy] = v.map(|v| v[j]);
     acc[0][l] = s.mul_add(wr, acc[0][l]);
     acc[1][l] = y.mul_add(wr, acc[1][l]);
     acc[2][l] = y.mul_add(wq, acc[2][l]);
@@ -288,13 +284,7 @@ mod avx2 {
             _mm256_storeu_pd(l.as_mut_ptr(), a);
         }
         for j in full..n {
-            pair_terms(
-                &mut lanes,
-                j % LANES,
-                f64::from(s[j]),
-                f64::from(y[j]),
-                [v[0][j], v[1][j], v[2][j], v[3][j]],
-            );
+            pair_terms(&mut lanes, j, s, y, v);
         }
         lanes.map(fold)
     }
@@ -361,7 +351,7 @@ mod tests {
         let mut acc = [[0.0; LANES]; 6];
         let mut one = [0.0; LANES];
         for j in 0..n {
-            pair_terms(&mut acc, j % LANES, a[j], b[j], [c[j], d[j], e[j], f[j]]);
+            pair_terms(&mut acc, j, &a32, &b32, [&c, &d, &e, &f]);
             one[j % LANES] = (a[j] * b[j]).mul_add(c[j], one[j % LANES]);
         }
         assert_eq!(pair_sums(&a32, &b32, [&c, &d, &e, &f]), acc.map(fold));
