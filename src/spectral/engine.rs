@@ -19,7 +19,7 @@
 //! nearest the last σ and rejects a step with no real root.
 
 use super::evaluator::{axis_symbol, write_inverse_inputs, Evaluator, ExplicitTerm, State};
-use super::kernels::{quadratic_sums, wide_fn, LANES};
+use super::kernels::{quadratic_sums, sum, wide_fn};
 use super::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
@@ -47,6 +47,24 @@ struct Update {
 }
 
 impl Update {
+    /// S = s2 k + s4 ε² k² at |k|² = `k`.
+    #[inline(always)]
+    fn stabilizer(&self, k: f64) -> f64 {
+        self.s2 * k + self.s4e2 * k * k
+    }
+
+    /// 1/D = 1/(a0 + Δt(2ε⁴k⁶ + S)) at |k|² = `k`.
+    #[inline(always)]
+    fn inverse_denominator(&self, k: f64) -> f64 {
+        1.0 / (self.a[0] + self.dt * (self.e4x2 * k * k * k + self.stabilizer(k)))
+    }
+
+    /// −Δt c_σ k⁴/D at |k|² = `k` and 1/D = `inv` (q1 = b1 times this, q0 = b2 times this).
+    #[inline(always)]
+    fn q_per_b(&self, k: f64, inv: f64) -> f64 {
+        -self.dt * self.c_sigma * k * k * inv
+    }
+
     /// The factors of the update at the values of piece `p`, each twice:
     ///
     /// ```text
@@ -66,14 +84,14 @@ impl Update {
         sigma: Option<f64>,
         f: &mut UpdateFactors,
     ) {
-        let [a0, a1, a2, b1, b2] = self.a;
+        let [_, a1, a2, b1, b2] = self.a;
         let dt = self.dt;
-        let s = |k: f64| self.s2 * k + self.s4e2 * k * k;
+        let s = |k: f64| self.stabilizer(k);
         for (inv, &k) in f.inv[..p.len].iter_mut().zip(&p.k) {
-            *inv = 1.0 / (a0 + dt * (self.e4x2 * k * k * k + s(k)));
+            *inv = self.inverse_denominator(k);
         }
         let (k, inv) = (&p.k, &f.inv);
-        let qc = |l: usize| -dt * self.c_sigma * k[l] * k[l] * inv[l];
+        let qc = |l: usize| self.q_per_b(k[l], inv[l]);
         let sig = sigma.unwrap_or(0.0);
         p.twice(&mut f.h1, |l| {
             (-a1 + dt * b1 * s(k[l])) * inv[l] + sig * b1 * qc(l)
@@ -145,17 +163,16 @@ fn quadratic_values(
     n: &[f64],
     t: &mut [[f64; PIECE]; 3],
 ) -> [f64; 3] {
-    let [a0, a1, _, b1, _] = u.a;
+    let [_, a1, _, b1, _] = u.a;
     let dt = u.dt;
     let len = p.len;
     let [tpp, tpq, tqq] = t;
     let terms = tpp[..len].iter_mut().zip(&mut tpq[..len]).zip(&mut tqq[..len]);
     let values = p.k[..len].iter().zip(&p.w).zip(x.chunks_exact(2).zip(n.chunks_exact(2)));
     for (((pp, pq), qq), ((&k, &w), (x, n))) in terms.zip(values) {
-        let s = u.s2 * k + u.s4e2 * k * k;
-        let inv = 1.0 / (a0 + dt * (u.e4x2 * k * k * k + s));
-        let (h1, n1) = ((-a1 + dt * b1 * s) * inv, dt * b1 * inv);
-        let q1 = b1 * (-dt * u.c_sigma * k * k * inv);
+        let inv = u.inverse_denominator(k);
+        let (h1, n1) = ((-a1 + dt * b1 * u.stabilizer(k)) * inv, dt * b1 * inv);
+        let q1 = b1 * u.q_per_b(k, inv);
         let aw = area_prefactor * k * w;
         let xx = x[0] * x[0] + x[1] * x[1];
         let xn = x[0] * n[0] + x[1] * n[1];
@@ -164,21 +181,8 @@ fn quadratic_values(
         *pq = aw * q1 * (h1 * xx + n1 * xn);
         *qq = aw * q1 * q1 * xx;
     }
-    [&tpp[..len], &tpq[..len], &tqq[..len]].map(lane_sum)
+    [&tpp[..len], &tpq[..len], &tqq[..len]].map(sum)
 }
-}
-
-/// Σ v in [`LANES`] partial sums (a vector register's; the same order in every build).
-#[inline(always)]
-fn lane_sum(v: &[f64]) -> f64 {
-    let mut acc = [0.0; LANES];
-    let blocks = v.chunks_exact(LANES);
-    let rest = blocks.remainder();
-    for b in blocks {
-        acc.iter_mut().zip(b).for_each(|(a, v)| *a += v);
-    }
-    acc.iter_mut().zip(rest).for_each(|(a, v)| *a += v);
-    (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
 wide_fn! {

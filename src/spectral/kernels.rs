@@ -49,6 +49,20 @@ macro_rules! wide_fn {
 }
 pub(crate) use wide_fn;
 
+/// Σ_j v_j in [`LANES`] partial sums (a loop the wide build vectorises; the same order, so the
+/// same value, in every build).
+#[inline(always)]
+pub fn sum(v: &[f64]) -> f64 {
+    let mut acc = [0.0; LANES];
+    let blocks = v.chunks_exact(LANES);
+    let rest = blocks.remainder();
+    for b in blocks {
+        acc.iter_mut().zip(b).for_each(|(a, v)| *a += v);
+    }
+    acc.iter_mut().zip(rest).for_each(|(a, v)| *a += v);
+    fold(acc)
+}
+
 /// Σ_j a_j b_j c_j over equal-length slices.
 pub fn dot3(a: &[f64], b: &[f64], c: &[f64]) -> f64 {
     assert!(a.len() == b.len() && a.len() == c.len());
