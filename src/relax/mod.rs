@@ -51,9 +51,9 @@ use crate::grid::Grid;
 use crate::model::{Measures, C0};
 use crate::numerics::nearest_root;
 use crate::spectral::evaluator::{
-    write_inverse_inputs, Evaluator, ExplicitTerm, Metric, State, Symbols,
+    write_inverse_value, Evaluator, ExplicitTerm, Metric, State, Symbols,
 };
-use crate::spectral::kernels::{pair_sums, quadratic_sums, wide_fn};
+use crate::spectral::kernels::{pair_sums, quadratic_sums, sum, wide_fn};
 use crate::spectral::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
 use ndarray::Array3;
 use rayon::prelude::*;
@@ -395,14 +395,16 @@ impl RelaxEngine {
             .map(|(t, ((hat, copy), lap))| {
                 let base = 2 * t * task;
                 let mut area = 0.0;
-                for_each_factored(sym, m, Need::Trial, t, hat.len(), |f, at| {
-                    let (local, g) = (at..at + f.len, base + at..base + at + f.len);
+                let mut terms = [0.0; PIECE];
+                for_each_piece(sym, t, hat.len(), |p, at| {
+                    let (local, g) = (at..at + p.reals(), base + at..base + at + p.reals());
                     let out = [
                         &mut hat[local.clone()],
                         &mut copy[local.clone()],
                         &mut lap[local],
                     ];
-                    area += trial_piece(f, out, (&x[g.clone()], &d[g]), (alpha, beta));
+                    let spectra = (&x[g.clone()], &d[g]);
+                    area += trial_values(sym, m, p, out, spectra, (alpha, beta), &mut terms);
                 });
                 area
             })
@@ -513,8 +515,6 @@ fn shift_gram(g: &mut [f64], n: usize) {
 enum Need {
     /// The direction's area sums: `aw`, `aq`, `aqq`.
     Area,
-    /// The trial state: `k`, `qf`, `aw`.
-    Trial,
     /// The gradient: `wm`, `wmm`, `inv_m`, `qf`.
     Gradient,
 }
@@ -534,8 +534,6 @@ struct Factors {
     len: usize,
     /// Scratch: the factors once per value.
     per_value: PerValue,
-    /// |k|².
-    k: Twice,
     /// w M(k).
     wm: Twice,
     /// w M(k)².
@@ -562,7 +560,6 @@ impl Factors {
                 qf: p,
                 aw: p,
             },
-            k: z,
             wm: z,
             wmm: z,
             inv_m: z,
@@ -584,31 +581,18 @@ fn fill_factors(f: &mut Factors, p: &Piece, sym: &Symbols, metric: Metric, need:
     for (m, &k) in c.m[..len].iter_mut().zip(&p.k) {
         *m = metric.at(k);
     }
-    // 1/M, 0 at k = 0: a select of the quotient, stored whole (a conditional store of the zero
-    // compiles to a masked store, which is microcoded and slow on AMD's cores).
-    for ((inv_m, m), &k) in c.inv_m[..len].iter_mut().zip(&c.m).zip(&p.k) {
-        let inv = 1.0 / m;
-        *inv_m = if k == 0.0 { 0.0 } else { inv };
-    }
-    let values = p.k[..len]
-        .iter()
-        .zip(&p.w)
-        .zip(c.inv_m.iter().zip(c.qf.iter_mut().zip(c.aw.iter_mut())));
-    for ((&k, &w), (inv_m, (qf, aw))) in values {
-        *qf = metric.c_sigma * k * *inv_m;
+    let values = p.k[..len].iter().zip(&p.w).zip(c.m.iter());
+    let out = c.inv_m[..len].iter_mut().zip(c.qf.iter_mut().zip(c.aw.iter_mut()));
+    for (((&k, &w), &m), (inv_m, (qf, aw))) in values.zip(out) {
+        (*inv_m, *qf) = inverse_metric(metric, k, m);
         *aw = sym.area_prefactor * k * w;
     }
-    let (k, w, m, inv_m, qf, aw) = (&p.k, &p.w, &c.m, &c.inv_m, &c.qf, &c.aw);
+    let (w, m, inv_m, qf, aw) = (&p.w, &c.m, &c.inv_m, &c.qf, &c.aw);
     match need {
         Need::Area => {
             p.twice(&mut f.aw, |l| aw[l]);
             p.twice(&mut f.aq, |l| aw[l] * qf[l]);
             p.twice(&mut f.aqq, |l| aw[l] * qf[l] * qf[l]);
-        }
-        Need::Trial => {
-            p.twice(&mut f.k, |l| k[l]);
-            p.twice(&mut f.qf, |l| qf[l]);
-            p.twice(&mut f.aw, |l| aw[l]);
         }
         Need::Gradient => {
             p.twice(&mut f.wm, |l| w[l] * m[l]);
@@ -666,15 +650,40 @@ fn direction_piece(
 }
 
 wide_fn! {
-/// One piece of [`RelaxEngine::write_trial`]: φ̂ + α d' + β q into `hat` and `copy`, and its
-/// −|k|² multiple into `lap`, from the piece's reals of φ̂ and d' (`(x, d)`); returns its area.
-fn trial_piece(f: &Factors, out: [&mut [f64]; 3], spectra: (&[f64], &[f64]), step: (f64, f64)) -> f64 {
-    let ([hat, copy, lap], (x, d), (alpha, beta)) = (out, spectra, step);
-    for (h, ((x, d), qf)) in hat.iter_mut().zip(x.iter().zip(d).zip(&f.qf)) {
-        *h = x + d * alpha + x * qf * beta;
+/// One piece of [`RelaxEngine::write_trial`], value by value: φ̂ + α d' + β q into `hat`, and
+/// the inverse transforms' inputs ([`write_inverse_value`]) into `copy` and `lap`, from the
+/// piece's reals of φ̂ and d' (`(x, d)`); returns its area (`terms` scratch).
+fn trial_values(
+    sym: &Symbols,
+    metric: Metric,
+    p: &Piece,
+    out: [&mut [f64]; 3],
+    spectra: (&[f64], &[f64]),
+    step: (f64, f64),
+    terms: &mut [f64; PIECE],
+) -> f64 {
+    let ((x, d), (alpha, beta), len) = (spectra, step, p.len);
+    let [hat, copy, lap] = out.map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let outputs = hat.zip(copy.zip(lap)).zip(&mut terms[..len]);
+    let (x, d) = (x[..p.reals()].as_chunks::<2>().0, d[..p.reals()].as_chunks::<2>().0);
+    let inputs = x.iter().zip(d).zip(p.k.iter().zip(&p.w));
+    for (((hat, (copy, lap)), term), ((x, d), (&k, &w))) in outputs.zip(inputs) {
+        let (_, qf) = inverse_metric(metric, k, metric.at(k));
+        *hat = [0, 1].map(|c| x[c] + d[c] * alpha + x[c] * qf * beta);
+        *term = write_inverse_value(*hat, k, sym.area_prefactor * k * w, copy, lap);
     }
-    write_inverse_inputs(hat, (&f.k, &f.aw), copy, lap)
+    sum(&terms[..len])
 }
+}
+
+/// 1/M(k), 0 at k = 0 (r(0) = 0), and q/φ̂ = c_σ |k|²/M(k) at |k|² = `k` and M(k) = `m`: a select
+/// of the quotient (a conditional store of the zero compiles to a masked store, which is
+/// microcoded and slow on AMD's cores).
+#[inline(always)]
+fn inverse_metric(metric: Metric, k: f64, m: f64) -> (f64, f64) {
+    let inv = 1.0 / m;
+    let inv_m = if k == 0.0 { 0.0 } else { inv };
+    (inv_m, metric.c_sigma * k * inv_m)
 }
 
 wide_fn! {

@@ -18,9 +18,9 @@
 //! quadratic computed by Parseval with no extra transform; the exact projection takes the root
 //! nearest the last σ and rejects a step with no real root.
 
-use super::evaluator::{axis_symbol, write_inverse_inputs, Evaluator, ExplicitTerm, State};
-use super::kernels::{quadratic_sums, sum, wide_fn};
-use super::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
+use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm, State};
+use super::kernels::{sum, wide_fn};
+use super::pieces::{for_each_piece, reals, reals_mut, Piece, PIECE};
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
@@ -65,192 +65,130 @@ impl Update {
         -self.dt * self.c_sigma * k * k * inv
     }
 
-    /// The factors of the update at the values of piece `p`, each twice:
-    ///
-    /// ```text
-    /// P̂ = h1 φ̂ⁿ + n1 N̂ⁿ + h0 φ̂ⁿ⁻¹ + n0 N̂ⁿ⁻¹,   Q̂ = q1 φ̂ⁿ + q0 φ̂ⁿ⁻¹,
-    /// h1 = (−a1 + Δt b1 S)/D, n1 = Δt b1/D, h0 = (−a2 + Δt b2 S)/D, n0 = Δt b2/D,
-    /// q1 = −Δt c_σ k⁴ b1/D, q0 = −Δt c_σ k⁴ b2/D,   D = a0 + Δt(2ε⁴k⁶ + S),
-    /// ```
-    ///
-    /// (k standing for |k|²), with σ's multiple of Q̂ folded into h1 and h0 when `sigma` is
-    /// given (φ̂^{n+1} itself; q1, q0 are then not formed). `PREV` false leaves h0, n0 and q0
-    /// unset (SBDF1). Also the area weight `aw`.
+    /// The real factors of the update at |k|² = `k` (see [`ValueFactors`]); `PREV` false
+    /// leaves h0, n0 and q0 zero (SBDF1).
     #[inline(always)]
-    fn factors<const PREV: bool>(
-        &self,
-        p: &Piece,
-        area_prefactor: f64,
-        sigma: Option<f64>,
-        f: &mut UpdateFactors,
-    ) {
+    fn at<const PREV: bool>(&self, k: f64) -> ValueFactors {
         let [_, a1, a2, b1, b2] = self.a;
-        let dt = self.dt;
-        let s = |k: f64| self.stabilizer(k);
-        for (inv, &k) in f.inv[..p.len].iter_mut().zip(&p.k) {
-            *inv = self.inverse_denominator(k);
-        }
-        let (k, inv) = (&p.k, &f.inv);
-        let qc = |l: usize| self.q_per_b(k[l], inv[l]);
-        let sig = sigma.unwrap_or(0.0);
-        p.twice(&mut f.h1, |l| {
-            (-a1 + dt * b1 * s(k[l])) * inv[l] + sig * b1 * qc(l)
-        });
-        p.twice(&mut f.n1, |l| dt * b1 * inv[l]);
-        if sigma.is_none() {
-            p.twice(&mut f.q1, |l| b1 * qc(l));
-        }
+        let (dt, s) = (self.dt, self.stabilizer(k));
+        let inv = self.inverse_denominator(k);
+        let qc = self.q_per_b(k, inv);
+        let mut f = ValueFactors {
+            h1: (-a1 + dt * b1 * s) * inv,
+            n1: dt * b1 * inv,
+            q1: b1 * qc,
+            h0: 0.0,
+            n0: 0.0,
+            q0: 0.0,
+        };
         if PREV {
-            p.twice(&mut f.h0, |l| {
-                (-a2 + dt * b2 * s(k[l])) * inv[l] + sig * b2 * qc(l)
-            });
-            p.twice(&mut f.n0, |l| dt * b2 * inv[l]);
-            if sigma.is_none() {
-                p.twice(&mut f.q0, |l| b2 * qc(l));
-            }
+            f.h0 = (-a2 + dt * b2 * s) * inv;
+            f.n0 = dt * b2 * inv;
+            f.q0 = b2 * qc;
         }
-        p.twice(&mut f.aw, |l| area_prefactor * k[l] * p.w[l]);
+        f
     }
 }
 
+/// The update at one wavenumber as real factors (k standing for |k|²):
+///
+/// ```text
+/// P̂ = h1 φ̂ⁿ + n1 N̂ⁿ + h0 φ̂ⁿ⁻¹ + n0 N̂ⁿ⁻¹,   Q̂ = q1 φ̂ⁿ + q0 φ̂ⁿ⁻¹,
+/// h1 = (−a1 + Δt b1 S)/D, n1 = Δt b1/D, h0 = (−a2 + Δt b2 S)/D, n0 = Δt b2/D,
+/// q1 = −Δt c_σ k⁴ b1/D, q0 = −Δt c_σ k⁴ b2/D,   D = a0 + Δt(2ε⁴k⁶ + S).
+/// ```
+struct ValueFactors {
+    h1: f64,
+    n1: f64,
+    h0: f64,
+    n0: f64,
+    q1: f64,
+    q0: f64,
+}
+
+impl ValueFactors {
+    /// (P̂, Q̂) at one value from the (re, im) of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (`PREV` false: the last
+    /// two unread).
+    #[inline(always)]
+    fn apply<const PREV: bool>(&self, [x, n, x0, n0]: [&[f64; 2]; 4]) -> ([f64; 2], [f64; 2]) {
+        let mut p = [0.0; 2];
+        let mut q = [0.0; 2];
+        for c in 0..2 {
+            p[c] = x[c] * self.h1 + n[c] * self.n1;
+            q[c] = x[c] * self.q1;
+            if PREV {
+                p[c] += x0[c] * self.h0 + n0[c] * self.n0;
+                q[c] += x0[c] * self.q0;
+            }
+        }
+        (p, q)
+    }
+}
+
+/// The values of a piece of `len` values as (re, im) pairs of the reals `inputs` = [φ̂ⁿ, N̂ⁿ,
+/// φ̂ⁿ⁻¹, N̂ⁿ⁻¹], zipped with the piece's |k|² and w. Without a previous step the last two
+/// inputs may be any reals of the piece (the SBDF1 sweeps do not read them).
+#[inline(always)]
+fn values<'a>(
+    p: &'a Piece,
+    inputs: [&'a [f64]; 4],
+) -> impl Iterator<Item = ([&'a [f64; 2]; 4], (f64, f64))> + 'a {
+    let [x, n, x0, n0] = inputs.map(|v| v[..p.reals()].as_chunks::<2>().0.iter());
+    let symbols = p.k[..p.len].iter().zip(&p.w[..p.len]);
+    x.zip(n)
+        .zip(x0.zip(n0))
+        .zip(symbols)
+        .map(|(((x, n), (x0, n0)), (&k, &w))| ([x, n, x0, n0], (k, w)))
+}
+
 wide_fn! {
-/// One piece of [`SpectralEngine::area_quadratic`] for a step with φ̂ⁿ⁻¹, N̂ⁿ⁻¹ terms (SBDF2):
-/// its (A_PP, A_PQ, A_QQ) from the inputs' reals [φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹] of the piece (`f` its
-/// scratch).
-fn quadratic_piece(
+/// One piece of [`SpectralEngine::area_quadratic`], value by value from the piece's reals
+/// `inputs` ([`values`]): with P̂, Q̂ of [`ValueFactors`] and the area weight
+/// a = (3/(2√2)) ε |k|² w, returns (A_PP, A_PQ, A_QQ) = Σ a (|P̂|², Re P̂Q̂*, |Q̂|²). Each value's
+/// factors are formed and used at once (`t` scratch for its three terms).
+fn quadratic_values<const PREV: bool>(
     u: &Update,
     p: &Piece,
     area_prefactor: f64,
     inputs: [&[f64]; 4],
-    f: &mut UpdateFactors,
-) -> [f64; 3] {
-    let [h1, n1, h0, n0] = inputs;
-    let n = p.reals();
-    u.factors::<true>(p, area_prefactor, None, f);
-    let (pv, qv) = (&mut f.p[..n], &mut f.q[..n]);
-    let current = h1.iter().zip(n1).zip(f.h1.iter().zip(&f.n1).zip(&f.q1));
-    for ((p, q), ((h, nl), ((fh, fnl), fq))) in pv.iter_mut().zip(qv.iter_mut()).zip(current) {
-        (*p, *q) = (h * fh + nl * fnl, h * fq);
-    }
-    let older = h0.iter().zip(n0).zip(f.h0.iter().zip(&f.n0).zip(&f.q0));
-    for ((p, q), ((h, nl), ((fh, fnl), fq))) in pv.iter_mut().zip(qv.iter_mut()).zip(older) {
-        (*p, *q) = (*p + (h * fh + nl * fnl), *q + h * fq);
-    }
-    // [Σ a P², –, –, Σ a P Q, –, Σ a Q²].
-    let aw = &f.aw[..n];
-    let sums = quadratic_sums(aw, aw, aw, pv, qv);
-    [sums[0], sums[3], sums[5]]
-}
-}
-
-wide_fn! {
-/// One piece of [`SpectralEngine::area_quadratic`] for a step without φ̂ⁿ⁻¹, N̂ⁿ⁻¹ terms (SBDF1),
-/// value by value from the piece's reals of φ̂ⁿ and N̂ⁿ (`x`, `n`): with the real factors of
-/// [`Update::factors`], P̂ = h1 φ̂ + n1 N̂ and Q̂ = q1 φ̂, so that
-///
-/// ```text
-/// |P̂|² = h1² |φ̂|² + 2 h1 n1 Re(φ̂ N̂*) + n1² |N̂|²,   Re(P̂ Q̂*) = q1 (h1 |φ̂|² + n1 Re(φ̂ N̂*)),
-/// |Q̂|² = q1² |φ̂|²,
-/// ```
-///
-/// each times the area weight a = (3/(2√2)) ε |k|² w: returns (A_PP, A_PQ, A_QQ). No factor
-/// tables: each value's factors are formed and used at once (`t` scratch for its three terms).
-fn quadratic_values(
-    u: &Update,
-    p: &Piece,
-    area_prefactor: f64,
-    x: &[f64],
-    n: &[f64],
     t: &mut [[f64; PIECE]; 3],
 ) -> [f64; 3] {
-    let [_, a1, _, b1, _] = u.a;
-    let dt = u.dt;
     let len = p.len;
     let [tpp, tpq, tqq] = t;
     let terms = tpp[..len].iter_mut().zip(&mut tpq[..len]).zip(&mut tqq[..len]);
-    let values = p.k[..len].iter().zip(&p.w).zip(x.chunks_exact(2).zip(n.chunks_exact(2)));
-    for (((pp, pq), qq), ((&k, &w), (x, n))) in terms.zip(values) {
-        let inv = u.inverse_denominator(k);
-        let (h1, n1) = ((-a1 + dt * b1 * u.stabilizer(k)) * inv, dt * b1 * inv);
-        let q1 = b1 * u.q_per_b(k, inv);
+    for (((pp, pq), qq), (v, (k, w))) in terms.zip(values(p, inputs)) {
+        let (pv, qv) = u.at::<PREV>(k).apply::<PREV>(v);
         let aw = area_prefactor * k * w;
-        let xx = x[0] * x[0] + x[1] * x[1];
-        let xn = x[0] * n[0] + x[1] * n[1];
-        let nn = n[0] * n[0] + n[1] * n[1];
-        *pp = aw * (h1 * h1 * xx + 2.0 * h1 * n1 * xn + n1 * n1 * nn);
-        *pq = aw * q1 * (h1 * xx + n1 * xn);
-        *qq = aw * q1 * q1 * xx;
+        *pp = aw * (pv[0] * pv[0] + pv[1] * pv[1]);
+        *pq = aw * (pv[0] * qv[0] + pv[1] * qv[1]);
+        *qq = aw * (qv[0] * qv[0] + qv[1] * qv[1]);
     }
     [&tpp[..len], &tpq[..len], &tqq[..len]].map(sum)
 }
 }
 
 wide_fn! {
-/// One piece of [`SpectralEngine::write_update`]: φ̂^{n+1} = P̂ + σQ̂ into `hat`, a copy into
-/// `copy` and −|k|²φ̂^{n+1} into `lap`; returns the piece's area (`f` its scratch).
-fn write_piece<const PREV: bool>(
+/// One piece of [`SpectralEngine::write_update`], value by value: φ̂^{n+1} = P̂ + σQ̂ into
+/// `hat`, and the inverse transforms' inputs ([`write_inverse_value`]) into `copy` and `lap`;
+/// returns the piece's area (`t` scratch for each value's term).
+fn write_values<const PREV: bool>(
     u: &Update,
     p: &Piece,
     area_prefactor: f64,
     sigma: f64,
     inputs: [&[f64]; 4],
     out: [&mut [f64]; 3],
-    f: &mut UpdateFactors,
+    t: &mut [f64; PIECE],
 ) -> f64 {
-    let ([h1, n1, h0, n0], [hat, copy, lap]) = (inputs, out);
-    u.factors::<PREV>(p, area_prefactor, Some(sigma), f);
-    p.twice(&mut f.k, |l| p.k[l]);
-    let current = h1.iter().zip(n1).zip(f.h1.iter().zip(&f.n1));
-    for (v, ((h, nl), (fh, fnl))) in hat.iter_mut().zip(current) {
-        *v = h * fh + nl * fnl;
+    let [hat, copy, lap] = out.map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let outputs = hat.zip(copy.zip(lap)).zip(&mut t[..p.len]);
+    for (((hat, (copy, lap)), term), (v, (k, w))) in outputs.zip(values(p, inputs)) {
+        let (pv, qv) = u.at::<PREV>(k).apply::<PREV>(v);
+        *hat = [pv[0] + sigma * qv[0], pv[1] + sigma * qv[1]];
+        *term = write_inverse_value(*hat, k, area_prefactor * k * w, copy, lap);
     }
-    if PREV {
-        let older = h0.iter().zip(n0).zip(f.h0.iter().zip(&f.n0));
-        for (v, ((h, nl), (fh, fnl))) in hat.iter_mut().zip(older) {
-            *v += h * fh + nl * fnl;
-        }
-    }
-    write_inverse_inputs(hat, (&f.k, &f.aw), copy, lap)
+    sum(&t[..p.len])
 }
-}
-
-/// The update's factors of one piece ([`Update::factors`]), each value's twice, and the
-/// sweeps' other per-piece tables.
-struct UpdateFactors {
-    h1: Twice,
-    n1: Twice,
-    h0: Twice,
-    n0: Twice,
-    q1: Twice,
-    q0: Twice,
-    /// 1/D once per value.
-    inv: [f64; PIECE],
-    /// The area weight (3/(2√2)) ε |k|² w.
-    aw: Twice,
-    /// |k|².
-    k: Twice,
-    /// P̂ and Q̂ of the piece's values.
-    p: Twice,
-    q: Twice,
-}
-
-impl UpdateFactors {
-    fn new() -> Self {
-        let z = [0.0; 2 * PIECE];
-        UpdateFactors {
-            h1: z,
-            n1: z,
-            h0: z,
-            n0: z,
-            q1: z,
-            q0: z,
-            inv: [0.0; PIECE],
-            aw: z,
-            k: z,
-            p: z,
-            q: z,
-        }
-    }
 }
 
 /// φ̂ⁿ, N̂ⁿ and (SBDF2) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, as interleaved reals.
@@ -274,15 +212,15 @@ impl<'a> Inputs<'a> {
         }
     }
 
-    /// The reals `range` of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (the last two empty without a previous step:
-    /// the SBDF1 sweeps do not read them).
+    /// The reals `range` of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (without a previous step the last two are
+    /// φ̂ⁿ, N̂ⁿ again: the SBDF1 sweeps do not read them).
     #[inline]
     fn reals(&self, range: std::ops::Range<usize>) -> [&'a [f64]; 4] {
-        let (h0, n0) = match self.prev {
-            Some((h, n)) => (&h[range.clone()], &n[range.clone()]),
-            None => (&[][..], &[][..]),
-        };
-        [&self.cur.0[range.clone()], &self.cur.1[range], h0, n0]
+        let (h, n) = (&self.cur.0[range.clone()], &self.cur.1[range.clone()]);
+        match self.prev {
+            Some((h0, n0)) => [h, n, &h0[range.clone()], &n0[range]],
+            None => [h, n, h, n],
+        }
     }
 }
 
@@ -450,8 +388,7 @@ impl SpectralEngine {
     }
 
     /// [`SpectralEngine::area_quadratic`]; `PREV` false takes the SBDF1 form (no φ̂ⁿ⁻¹,
-    /// N̂ⁿ⁻¹ terms) value by value ([`quadratic_values`]), true the factor tables
-    /// ([`quadratic_piece`]).
+    /// N̂ⁿ⁻¹ terms).
     fn area_quadratic_with<const PREV: bool>(&self, dt: f64) -> (f64, f64, f64) {
         let u = self.update(dt);
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
@@ -461,22 +398,13 @@ impl SpectralEngine {
             .into_par_iter()
             .map(|t| {
                 let mut acc = [0.0; 3];
-                let mut add = |s: [f64; 3]| acc = [acc[0] + s[0], acc[1] + s[1], acc[2] + s[2]];
+                let mut terms = [[0.0; PIECE]; 3];
                 let (a, len) = (sym.area_prefactor, task.min(total - t * task));
-                let reals =
-                    |p: &Piece, at: usize| inputs.reals(t * task + at..t * task + at + p.reals());
-                if PREV {
-                    let mut f = UpdateFactors::new();
-                    for_each_piece(sym, t, len, |p, at| {
-                        add(quadratic_piece(&u, p, a, reals(p, at), &mut f));
-                    });
-                } else {
-                    let mut terms = [[0.0; PIECE]; 3];
-                    for_each_piece(sym, t, len, |p, at| {
-                        let [x, n, ..] = reals(p, at);
-                        add(quadratic_values(&u, p, a, x, n, &mut terms));
-                    });
-                }
+                for_each_piece(sym, t, len, |p, at| {
+                    let x = inputs.reals(t * task + at..t * task + at + p.reals());
+                    let s = quadratic_values::<PREV>(&u, p, a, x, &mut terms);
+                    acc = [acc[0] + s[0], acc[1] + s[1], acc[2] + s[2]];
+                });
                 acc
             })
             .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
@@ -508,14 +436,14 @@ impl SpectralEngine {
             .zip(lap.par_chunks_mut(task))
             .enumerate()
             .map(|(t, ((hat, copy), lap))| {
-                let mut f = UpdateFactors::new();
+                let mut terms = [0.0; PIECE];
                 let mut area = 0.0;
                 for_each_piece(sym, t, hat.len(), |p, at| {
                     let r = at..at + p.reals();
                     let x = inputs.reals(t * task + r.start..t * task + r.end);
                     let out = [&mut hat[r.clone()], &mut copy[r.clone()], &mut lap[r]];
                     let a = sym.area_prefactor;
-                    area += write_piece::<PREV>(&u, p, a, sigma, x, out, &mut f);
+                    area += write_values::<PREV>(&u, p, a, sigma, x, out, &mut terms);
                 });
                 area
             })

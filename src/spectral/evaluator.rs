@@ -10,8 +10,8 @@
 //! inputs itself, in the sweep that makes φ̂ (as the time step does), skips the first sweep
 //! ([`Evaluator::finish`]).
 
-use super::kernels::{dot3, pointwise_sums, wide_fn};
-use super::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
+use super::kernels::{pointwise_sums, sum, wide_fn};
+use super::pieces::{for_each_piece, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
@@ -293,7 +293,7 @@ fn inverse_inputs(
         .zip(lap.par_chunks_mut(task))
         .enumerate()
         .map(|(t, (copy, lap))| {
-            let (mut k, mut aw) = ([0.0; 2 * PIECE], [0.0; 2 * PIECE]);
+            let mut terms = [0.0; PIECE];
             let mut area = 0.0;
             for_each_piece(sym, t, copy.len(), |p, at| {
                 let r = at..at + p.reals();
@@ -302,7 +302,7 @@ fn inverse_inputs(
                     &mut copy[r.clone()],
                     &mut lap[r],
                 );
-                area += inverse_inputs_piece(sym, p, h, copy, lap, &mut k, &mut aw);
+                area += inverse_inputs_piece(sym, p, h, copy, lap, &mut terms);
             });
             area
         })
@@ -310,37 +310,42 @@ fn inverse_inputs(
 }
 
 wide_fn! {
-/// One piece of [`inverse_inputs`] (`k`, `aw` its scratch): returns its area.
+/// One piece of [`inverse_inputs`], value by value ([`write_inverse_value`]; `terms` scratch for
+/// each value's area): returns its area.
 fn inverse_inputs_piece(
     sym: &Symbols,
     p: &Piece,
     h: &[f64],
     copy: &mut [f64],
     lap: &mut [f64],
-    k: &mut Twice,
-    aw: &mut Twice,
+    terms: &mut [f64; PIECE],
 ) -> f64 {
-    p.twice(k, |l| p.k[l]);
-    p.twice(aw, |l| sym.area_prefactor * p.k[l] * p.w[l]);
-    write_inverse_inputs(h, (k, aw), copy, lap)
+    let len = p.len;
+    let [copy, lap] = [copy, lap].map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let outputs = copy.zip(lap).zip(&mut terms[..len]);
+    let inputs = h[..p.reals()].as_chunks::<2>().0.iter().zip(p.k.iter().zip(&p.w));
+    for (((copy, lap), term), (h, (&k, &w))) in outputs.zip(inputs) {
+        *term = write_inverse_value(*h, k, sym.area_prefactor * k * w, copy, lap);
+    }
+    sum(&terms[..len])
 }
 }
 
-/// The inputs of an evaluation's inverse transforms over a piece's reals, from φ̂ (`h`):
-/// `copy = φ̂` and `lap = −|k|²φ̂`, with the piece's |k|² and area weight a = (3/(2√2)) ε |k|² w
-/// (each twice, `(k, aw)`); returns the piece's area Σ a φ̂². Every sweep that makes a new φ̂
-/// (the evaluation's first, the time step's update, the L-BFGS trial) ends with it.
+/// The inputs of an evaluation's inverse transforms at one value φ̂ = `h` (re, im) with |k|² = `k`
+/// and area weight `aw` = (3/(2√2)) ε |k|² w: `copy = φ̂` and `lap = −|k|²φ̂`; returns its area
+/// term a |φ̂|². Every sweep that makes a new φ̂ (the evaluation's first, the time step's update,
+/// the L-BFGS trial) ends with it.
 #[inline(always)]
-pub(crate) fn write_inverse_inputs(
-    h: &[f64],
-    (k, aw): (&[f64], &[f64]),
-    copy: &mut [f64],
-    lap: &mut [f64],
+pub(crate) fn write_inverse_value(
+    h: [f64; 2],
+    k: f64,
+    aw: f64,
+    copy: &mut [f64; 2],
+    lap: &mut [f64; 2],
 ) -> f64 {
-    for ((c, l), (&h, &k)) in copy.iter_mut().zip(lap.iter_mut()).zip(h.iter().zip(k)) {
-        (*c, *l) = (h, -(h * k));
-    }
-    dot3(&aw[..h.len()], h, h)
+    *copy = h;
+    *lap = [-(h[0] * k), -(h[1] * k)];
+    aw * (h[0] * h[0] + h[1] * h[1])
 }
 
 /// Sums of the pointwise pass.
@@ -473,25 +478,13 @@ impl CombineSums {
     }
 }
 
-/// Per-value factors of [`combine`], each twice.
-struct CombineFactors {
-    /// The explicit term's factors of FT[f'Φ] and FT[f]: (−2k², −2ε²k⁴) conserved, (2, 2ε²k²)
-    /// gradient.
-    n: Twice,
-    g: Twice,
-    /// 2ε²k² and 2ε⁴k⁴ (the gradient ĝ = 2 FT[f'Φ] + 2ε²k² FT[f] + 2ε⁴k⁴ φ̂), the latter with
-    /// the tension's (3/√2) ε σ k² added where only μ̂ needs it (conserved).
-    gk: Twice,
-    hk: Twice,
-    /// (3/√2) ε σ k² (gradient: μ̂ = ĝ + this × φ̂).
-    tk: Twice,
-    /// w, 0 at k = 0 (the residual's weight).
-    w: Twice,
-    /// w c_σ k² q̂/φ̂ and w q̂/φ̂ (the multiplier's sums).
-    wqq: Twice,
-    wq: Twice,
-    /// μ̂ of the piece's values.
-    mu: Twice,
+/// Each value's terms of [`combine`]'s sums (a piece's scratch).
+struct CombineTerms {
+    /// w |μ̂|² (0 at k = 0 and without the residual).
+    residual: [f64; PIECE],
+    /// w M |q̂|² and w Re(ĝ q̂*) (gradient).
+    qq: [f64; PIECE],
+    gq: [f64; PIECE],
 }
 
 /// The last spectral sweep: from FT[f'Φ] (in `n`), FT[f] (`g`) and φ̂ (`h`) write the explicit
@@ -518,24 +511,18 @@ fn combine(
     n.par_chunks_mut(task)
         .enumerate()
         .map(|(t, n)| {
-            let z = [0.0; 2 * PIECE];
-            let mut f = CombineFactors {
-                n: z,
-                g: z,
-                gk: z,
-                hk: z,
-                tk: z,
-                w: z,
-                wqq: z,
-                wq: z,
-                mu: z,
+            let z = [0.0; PIECE];
+            let mut terms = CombineTerms {
+                residual: z,
+                qq: z,
+                gq: z,
             };
             let mut sums = CombineSums::default();
             for_each_piece(sym, t, n.len(), |p, at| {
                 let r = at..at + p.reals();
                 let (g, h) = (&g[t * task..][r.clone()], &h[t * task..][r.clone()]);
                 let n = &mut n[r];
-                sums = sums.add(combine_piece(&how, p, g, h, n, &mut f));
+                sums = sums.add(combine_piece(&how, p, g, h, n, &mut terms));
             });
             sums
         })
@@ -552,64 +539,53 @@ struct Combine {
 }
 
 wide_fn! {
-/// One piece of [`combine`] (`f` its scratch).
+/// One piece of [`combine`], value by value (`t` scratch for each value's terms).
 fn combine_piece(
     how: &Combine,
     p: &Piece,
     g: &[f64],
     h: &[f64],
     n: &mut [f64],
-    f: &mut CombineFactors,
+    t: &mut CombineTerms,
 ) -> CombineSums {
-    let (e2, tension, k, len) = (how.e2, how.tension, &p.k, p.reals());
+    let (e2, tension, len) = (how.e2, how.tension, p.len);
+    let reals = p.reals();
+    let (g, h) = (g[..reals].as_chunks::<2>().0, h[..reals].as_chunks::<2>().0);
+    let n = n[..reals].as_chunks_mut::<2>().0;
+    let values = n.iter_mut().zip(g.iter().zip(h));
+    let symbols = p.k[..len].iter().zip(&p.w[..len]);
+    let terms = t.residual[..len].iter_mut().zip(t.qq[..len].iter_mut().zip(&mut t.gq[..len]));
+    // The residual's weight: w, 0 at k = 0 and when the residual is not wanted.
+    let residual_weight = |k: f64, w: f64| if how.with_residual && k > 0.0 { w } else { 0.0 };
+    let norm = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
     let mut sums = CombineSums::default();
-    let mu = &mut f.mu[..len];
-    p.twice(&mut f.gk, |l| 2.0 * e2 * k[l]);
     match how.explicit {
         ExplicitTerm::ConservedRhs => {
-            p.twice(&mut f.n, |l| -2.0 * k[l]);
-            p.twice(&mut f.g, |l| -2.0 * e2 * k[l] * k[l]);
-            p.twice(&mut f.hk, |l| 2.0 * e2 * e2 * k[l] * k[l] + tension * k[l]);
-            let values = n.iter_mut().zip(mu.iter_mut());
-            let factors = f.n.iter().zip(&f.g).zip(f.gk.iter().zip(&f.hk));
-            for (((o, mu), (&g, &h)), ((fnl, fg), (gk, hk))) in
-                values.zip(g.iter().zip(h)).zip(factors)
-            {
+            for (((o, (g, h)), (&k, &w)), (res, _)) in values.zip(symbols).zip(terms) {
+                let (fnl, fg) = (-2.0 * k, -2.0 * e2 * k * k);
+                let (gk, hk) = (2.0 * e2 * k, 2.0 * e2 * e2 * k * k + tension * k);
                 let nl = *o;
-                *mu = nl * 2.0 + g * gk + h * hk;
-                *o = nl * fnl + g * fg;
+                let mu = [0, 1].map(|c| nl[c] * 2.0 + g[c] * gk + h[c] * hk);
+                *o = [0, 1].map(|c| nl[c] * fnl + g[c] * fg);
+                *res = residual_weight(k, w) * norm(mu);
             }
         }
         ExplicitTerm::Gradient(m) => {
-            p.twice(&mut f.hk, |l| 2.0 * e2 * e2 * k[l] * k[l]);
-            p.twice(&mut f.tk, |l| tension * k[l]);
-            let qh = |l: usize| m.c_sigma * k[l] / m.at(k[l]);
-            p.twice(&mut f.wqq, |l| p.w[l] * m.c_sigma * k[l] * qh(l));
-            p.twice(&mut f.wq, |l| p.w[l] * qh(l));
-            let values = n.iter_mut().zip(mu.iter_mut());
-            let factors = f.gk.iter().zip(&f.hk).zip(&f.tk);
-            for (((o, mu), (&g, &h)), ((gk, hk), tk)) in
-                values.zip(g.iter().zip(h)).zip(factors)
-            {
-                let gradient = *o * 2.0 + g * gk + h * hk;
+            for (((o, (g, h)), (&k, &w)), (res, (qq, gq))) in values.zip(symbols).zip(terms) {
+                let (gk, hk, tk) = (2.0 * e2 * k, 2.0 * e2 * e2 * k * k, tension * k);
+                let qh = m.c_sigma * k / m.at(k);
+                let gradient = [0, 1].map(|c| o[c] * 2.0 + g[c] * gk + h[c] * hk);
                 *o = gradient;
-                *mu = gradient + h * tk;
+                let mu = [0, 1].map(|c| gradient[c] + h[c] * tk);
+                *res = residual_weight(k, w) * norm(mu);
+                *qq = w * m.c_sigma * k * qh * norm(*h);
+                *gq = w * qh * (gradient[0] * h[0] + gradient[1] * h[1]);
             }
-            sums.qq = dot3(&f.wqq[..len], h, h);
-            sums.gq = dot3(&f.wq[..len], n, h);
+            sums.qq = sum(&t.qq[..len]);
+            sums.gq = sum(&t.gq[..len]);
         }
     }
-    if how.with_residual {
-        p.twice(&mut f.w, |l| {
-            let w = p.w[l];
-            if k[l] > 0.0 {
-                w
-            } else {
-                0.0
-            }
-        });
-        sums.residual_sq = dot3(&f.w[..len], mu, mu);
-    }
+    sums.residual_sq = sum(&t.residual[..len]);
     sums
 }
 }

@@ -1,5 +1,5 @@
 //! The reductions of the spectral sweeps and of the relaxation, over a piece of a spectrum held
-//! as interleaved (re, im) reals (or a run of real-space values): Σ a b c, the six weighted
+//! as interleaved (re, im) reals (or a run of real-space values): a plain sum, the six weighted
 //! quadratic sums of two vectors, a stored L-BFGS pair's six inner products, and the sums of the
 //! real-space pass. Each keeps [`LANES`] partial sums and fuses each multiply-add (`mul_add`), so
 //! that the AVX2/FMA build, taken when the CPU has those instructions, gives the portable
@@ -60,21 +60,6 @@ pub fn sum(v: &[f64]) -> f64 {
         acc.iter_mut().zip(b).for_each(|(a, v)| *a += v);
     }
     acc.iter_mut().zip(rest).for_each(|(a, v)| *a += v);
-    fold(acc)
-}
-
-/// Σ_j a_j b_j c_j over equal-length slices.
-pub fn dot3(a: &[f64], b: &[f64], c: &[f64]) -> f64 {
-    assert!(a.len() == b.len() && a.len() == c.len());
-    #[cfg(target_arch = "x86_64")]
-    if has_avx2_fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked above); the lengths are equal (asserted).
-        return unsafe { avx2::dot3(a, b, c) };
-    }
-    let mut acc = [0.0; LANES];
-    for (j, ((a, b), c)) in a.iter().zip(b).zip(c).enumerate() {
-        acc[j % LANES] = (a * b).mul_add(*c, acc[j % LANES]);
-    }
     fold(acc)
 }
 
@@ -193,27 +178,6 @@ mod avx2 {
     use super::{fold, fold_pointwise, pair_terms, pointwise_terms, quadratic_terms, LANES};
     use std::arch::x86_64::*;
 
-    /// [`super::dot3`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
-    #[target_feature(enable = "avx2,fma")]
-    pub unsafe fn dot3(a: &[f64], b: &[f64], c: &[f64]) -> f64 {
-        let n = a.len();
-        let full = n - n % LANES;
-        let mut acc = _mm256_setzero_pd();
-        for j in (0..full).step_by(LANES) {
-            let ab = _mm256_mul_pd(
-                _mm256_loadu_pd(a.as_ptr().add(j)),
-                _mm256_loadu_pd(b.as_ptr().add(j)),
-            );
-            acc = _mm256_fmadd_pd(ab, _mm256_loadu_pd(c.as_ptr().add(j)), acc);
-        }
-        let mut lanes = [0.0; LANES];
-        _mm256_storeu_pd(lanes.as_mut_ptr(), acc);
-        for j in full..n {
-            lanes[j % LANES] = (a[j] * b[j]).mul_add(c[j], lanes[j % LANES]);
-        }
-        fold(lanes)
-    }
-
     /// [`super::pointwise_sums`] with AVX2/FMA: lane l takes the values j ≡ l (mod 4), as there.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn pointwise_sums(phi: &[f64], old: &[f64], big: &[f64]) -> [f64; 4] {
@@ -325,8 +289,8 @@ mod tests {
     fn reductions_equal_plain_sums() {
         let n = 52;
         let [a, b, c, d, e, f] = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0].map(|s| values(n, s));
-        let plain: f64 = (0..n).map(|j| a[j] * b[j] * c[j]).sum();
-        assert!((dot3(&a, &b, &c) - plain).abs() < 1e-14 * n as f64);
+        let plain: f64 = a.iter().sum();
+        assert!((sum(&a) - plain).abs() < 1e-14 * n as f64);
         let ((a32, a), (b32, b)) = (single(&a), single(&b));
         let got = pair_sums(&a32, &b32, [&c, &d, &e, &f]);
         let dot = |u: &[f64], v: &[f64]| (0..n).map(|j| u[j] * v[j]).sum::<f64>();
@@ -342,14 +306,14 @@ mod tests {
             assert!((g - w).abs() < 1e-14 * n as f64, "{g} against {w}");
         }
         let got = quadratic_sums(&a, &b, &c, &d, &e);
-        let sum = |f: &dyn Fn(usize) -> f64| (0..n).map(f).sum::<f64>();
+        let plain = |f: &dyn Fn(usize) -> f64| (0..n).map(f).sum::<f64>();
         let want = [
-            sum(&|j| a[j] * d[j] * d[j]),
-            sum(&|j| b[j] * d[j] * d[j]),
-            sum(&|j| c[j] * d[j] * d[j]),
-            sum(&|j| a[j] * d[j] * e[j]),
-            sum(&|j| b[j] * d[j] * e[j]),
-            sum(&|j| a[j] * e[j] * e[j]),
+            plain(&|j| a[j] * d[j] * d[j]),
+            plain(&|j| b[j] * d[j] * d[j]),
+            plain(&|j| c[j] * d[j] * d[j]),
+            plain(&|j| a[j] * d[j] * e[j]),
+            plain(&|j| b[j] * d[j] * e[j]),
+            plain(&|j| a[j] * e[j] * e[j]),
         ];
         for (g, w) in got.iter().zip(want) {
             assert!((g - w).abs() < 1e-14 * n as f64, "{g} against {w}");
@@ -363,13 +327,10 @@ mod tests {
         let [a, b, c, d, e, f] = [0.5, 1.5, 2.5, 3.5, 4.5, 5.5].map(|s| values(n, s));
         let ((a32, a), (b32, b)) = (single(&a), single(&b));
         let mut acc = [[0.0; LANES]; 6];
-        let mut one = [0.0; LANES];
         for j in 0..n {
             pair_terms(&mut acc, j, &a32, &b32, [&c, &d, &e, &f]);
-            one[j % LANES] = (a[j] * b[j]).mul_add(c[j], one[j % LANES]);
         }
         assert_eq!(pair_sums(&a32, &b32, [&c, &d, &e, &f]), acc.map(fold));
-        assert_eq!(dot3(&a, &b, &c), fold(one));
         let mut quad = [[0.0; LANES]; 6];
         for j in 0..n {
             quadratic_terms(&mut quad, j % LANES, [a[j], b[j], c[j]], d[j], e[j]);

@@ -803,7 +803,7 @@ fn gather_in_order(block: ArrayView2<Complex64>, lanes: &mut [Complex64], stride
     if is_x86_feature_detected!("avx") {
         // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
         unsafe {
-            avx::transpose_pairs(
+            avx::transpose_pairs::<false>(
                 block.as_ptr(),
                 block.strides()[0] as usize,
                 lanes.as_mut_ptr(),
@@ -830,7 +830,7 @@ fn scatter_in_order(lanes: &[Complex64], stride: usize, mut block: ArrayViewMut2
         let row_stride = block.strides()[0] as usize;
         // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
         unsafe {
-            avx::transpose_pairs(
+            avx::transpose_pairs::<true>(
                 lanes.as_ptr(),
                 stride,
                 block.as_mut_ptr(),
@@ -853,13 +853,17 @@ mod avx {
     use std::arch::x86_64::*;
 
     /// `dst[j · dst_stride + i] = src[i · src_stride + j]` for `i < n`, `j < m` (`(n, m)` =
-    /// `shape`): complex values transposed two rows and two columns at a time.
+    /// `shape`): complex values transposed two rows and two columns at a time. With
+    /// `DST_ROWS_OUTER` the loops walk the destination's rows (its stores contiguous, the loads
+    /// strided), else the source's rows (loads contiguous, stores strided): a strided side should
+    /// be the small lane buffer, which stays in L1, not the spectrum, whose rows a stride apart
+    /// share a few cache sets.
     ///
     /// # Safety
     /// The CPU has AVX; `src` holds `n` rows of `m` values `src_stride` apart and `dst` `m` rows
     /// of `n` values `dst_stride` apart; the two do not overlap.
     #[target_feature(enable = "avx")]
-    pub unsafe fn transpose_pairs(
+    pub unsafe fn transpose_pairs<const DST_ROWS_OUTER: bool>(
         src: *const Complex64,
         src_stride: usize,
         dst: *mut Complex64,
@@ -869,33 +873,41 @@ mod avx {
         let (src, dst) = (src as *const f64, dst as *mut f64);
         let at = |i: usize, j: usize, stride: usize| 2 * (i * stride + j);
         let (n2, m2) = (n - n % 2, m - m % 2);
-        for i in (0..n2).step_by(2) {
+        // Rows i, i + 1 and columns j, j + 1 of `src`.
+        let block = |i: usize, j: usize| {
+            let a = _mm256_loadu_pd(src.add(at(i, j, src_stride)));
+            let b = _mm256_loadu_pd(src.add(at(i + 1, j, src_stride)));
+            let (lo, hi) = (
+                _mm256_permute2f128_pd(a, b, 0x20),
+                _mm256_permute2f128_pd(a, b, 0x31),
+            );
+            _mm256_storeu_pd(dst.add(at(j, i, dst_stride)), lo);
+            _mm256_storeu_pd(dst.add(at(j + 1, i, dst_stride)), hi);
+        };
+        if DST_ROWS_OUTER {
             for j in (0..m2).step_by(2) {
-                let a = _mm256_loadu_pd(src.add(at(i, j, src_stride)));
-                let b = _mm256_loadu_pd(src.add(at(i + 1, j, src_stride)));
-                let (lo, hi) = (
-                    _mm256_permute2f128_pd(a, b, 0x20),
-                    _mm256_permute2f128_pd(a, b, 0x31),
-                );
-                _mm256_storeu_pd(dst.add(at(j, i, dst_stride)), lo);
-                _mm256_storeu_pd(dst.add(at(j + 1, i, dst_stride)), hi);
+                for i in (0..n2).step_by(2) {
+                    block(i, j);
+                }
             }
-            if m2 < m {
-                for r in [i, i + 1] {
-                    _mm_storeu_pd(
-                        dst.add(at(m2, r, dst_stride)),
-                        _mm_loadu_pd(src.add(at(r, m2, src_stride))),
-                    );
+        } else {
+            for i in (0..n2).step_by(2) {
+                for j in (0..m2).step_by(2) {
+                    block(i, j);
                 }
             }
         }
+        let one = |i: usize, j: usize| {
+            _mm_storeu_pd(
+                dst.add(at(j, i, dst_stride)),
+                _mm_loadu_pd(src.add(at(i, j, src_stride))),
+            );
+        };
+        if m2 < m {
+            (0..n2).for_each(|i| one(i, m2));
+        }
         if n2 < n {
-            for j in 0..m {
-                _mm_storeu_pd(
-                    dst.add(at(j, n2, dst_stride)),
-                    _mm_loadu_pd(src.add(at(n2, j, src_stride))),
-                );
-            }
+            (0..m).for_each(|j| one(n2, j));
         }
     }
 }
