@@ -53,8 +53,8 @@ use crate::numerics::nearest_root;
 use crate::spectral::evaluator::{
     write_inverse_value, Evaluator, ExplicitTerm, Metric, State, Symbols,
 };
-use crate::spectral::kernels::{pair_sums, quadratic_sums, sum, wide_fn};
-use crate::spectral::pieces::{for_each_piece, reals, reals_mut, Piece, Twice, PIECE};
+use crate::spectral::kernels::{pair_sums, sum, wide_fn};
+use crate::spectral::pieces::{for_each_piece, reals, reals_mut, Piece, PIECE};
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -365,10 +365,14 @@ impl RelaxEngine {
             .map(|(t, out)| {
                 let base = 2 * t * task;
                 let mut acc = AreaSums::default();
-                for_each_factored(sym, m, Need::Area, t, out.len(), |f, at| {
-                    let (o, g) = (&mut out[at..at + f.len], base + at..base + at + f.len);
-                    let sums = direction_piece(f, o, (r, x), pairs, &coefficients, g);
-                    acc = acc.add(sums);
+                let mut terms = [[0.0; PIECE]; 6];
+                for_each_piece(sym, t, out.len(), |p, at| {
+                    let (o, g) = (
+                        &mut out[at..at + p.reals()],
+                        base + at..base + at + p.reals(),
+                    );
+                    direction_piece(o, &r[g.clone()], pairs, &coefficients, g.clone());
+                    acc = acc.add(area_values(sym, m, p, &x[g], o, &mut terms));
                 });
                 acc
             })
@@ -510,132 +514,18 @@ fn shift_gram(g: &mut [f64], n: usize) {
     }
 }
 
-/// Which factors a sweep reads ([`Factors::fill`] forms only those).
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Need {
-    /// The direction's area sums: `aw`, `aq`, `aqq`.
-    Area,
-    /// The gradient: `wm`, `wmm`, `inv_m`, `qf`.
-    Gradient,
-}
-
-/// M, 1/M, q/φ̂ and the area weight of each value of a piece.
-struct PerValue {
-    m: [f64; PIECE],
-    inv_m: [f64; PIECE],
-    qf: [f64; PIECE],
-    aw: [f64; PIECE],
-}
-
-/// The per-wavenumber factors of one piece, each value's twice (for its real and imaginary
-/// parts).
-struct Factors {
-    /// Reals in use.
-    len: usize,
-    /// Scratch: the factors once per value.
-    per_value: PerValue,
-    /// w M(k).
-    wm: Twice,
-    /// w M(k)².
-    wmm: Twice,
-    /// 1/M(k), 0 at k = 0 (r(0) = 0).
-    inv_m: Twice,
-    /// q/φ̂ = c_σ |k|²/M(k).
-    qf: Twice,
-    /// The area weight a = (3/(2√2)) ε |k|² w, a q/φ̂ and a (q/φ̂)².
-    aw: Twice,
-    aq: Twice,
-    aqq: Twice,
-}
-
-impl Factors {
-    fn new() -> Self {
-        let z = [0.0; 2 * PIECE];
-        let p = [0.0; PIECE];
-        Factors {
-            len: 0,
-            per_value: PerValue {
-                m: p,
-                inv_m: p,
-                qf: p,
-                aw: p,
-            },
-            wm: z,
-            wmm: z,
-            inv_m: z,
-            qf: z,
-            aw: z,
-            aq: z,
-            aqq: z,
-        }
-    }
-}
-
-wide_fn! {
-/// The factors `need` of piece `p` into `f`: first one per value (loops the compiler vectorises, the
-/// division included), then each twice.
-fn fill_factors(f: &mut Factors, p: &Piece, sym: &Symbols, metric: Metric, need: Need) {
-    let len = p.len;
-    f.len = p.reals();
-    let c = &mut f.per_value;
-    for (m, &k) in c.m[..len].iter_mut().zip(&p.k) {
-        *m = metric.at(k);
-    }
-    let values = p.k[..len].iter().zip(&p.w).zip(c.m.iter());
-    let out = c.inv_m[..len].iter_mut().zip(c.qf.iter_mut().zip(c.aw.iter_mut()));
-    for (((&k, &w), &m), (inv_m, (qf, aw))) in values.zip(out) {
-        (*inv_m, *qf) = inverse_metric(metric, k, m);
-        *aw = sym.area_prefactor * k * w;
-    }
-    let (w, m, inv_m, qf, aw) = (&p.w, &c.m, &c.inv_m, &c.qf, &c.aw);
-    match need {
-        Need::Area => {
-            p.twice(&mut f.aw, |l| aw[l]);
-            p.twice(&mut f.aq, |l| aw[l] * qf[l]);
-            p.twice(&mut f.aqq, |l| aw[l] * qf[l] * qf[l]);
-        }
-        Need::Gradient => {
-            p.twice(&mut f.wm, |l| w[l] * m[l]);
-            p.twice(&mut f.wmm, |l| w[l] * m[l] * m[l]);
-            p.twice(&mut f.inv_m, |l| inv_m[l]);
-            p.twice(&mut f.qf, |l| qf[l]);
-        }
-    }
-}
-}
-
-/// Calls `f(factors, at)` for every piece of parallel task `t` ([`for_each_piece`]) with the
-/// factors `need`.
-#[inline(always)]
-fn for_each_factored(
-    sym: &Symbols,
-    metric: Metric,
-    need: Need,
-    t: usize,
-    reals: usize,
-    mut f: impl FnMut(&Factors, usize),
-) {
-    let mut factors = Factors::new();
-    for_each_piece(sym, t, reals, |p, at| {
-        fill_factors(&mut factors, p, sym, metric, need);
-        f(&factors, at);
-    });
-}
-
 wide_fn! {
 /// One piece of [`RelaxEngine::write_direction`]: d' = −c_r r − Σ_j (c_y,j y_j + c_s,j s_j)
-/// into `out` over the pairs from `d.off`, from the reals `g` of r, φ̂ (`(r, x)`) and the pairs;
-/// returns the piece's area sums.
+/// into `out` over the pairs from `d.off`, from the piece's reals `r` of r and the reals `g` of
+/// the pairs.
 fn direction_piece(
-    f: &Factors,
     out: &mut [f64],
-    spectra: (&[f64], &[f64]),
+    r: &[f64],
     pairs: &VecDeque<Pair>,
     d: &Direction,
     g: std::ops::Range<usize>,
-) -> AreaSums {
-    let (r, x) = spectra;
-    for (o, r) in out.iter_mut().zip(&r[g.clone()]) {
+) {
+    for (o, r) in out.iter_mut().zip(r) {
         *o = -(r * d.c_r);
     }
     for (j, p) in pairs.iter().skip(d.off).enumerate() {
@@ -645,7 +535,53 @@ fn direction_piece(
             *o -= f64::from(y) * cy + f64::from(s) * cs;
         }
     }
-    area_sums(f, &x[g], out)
+}
+}
+
+wide_fn! {
+/// The area sums of one piece ([`AreaSums`]) value by value, x = φ̂ and d = d' as interleaved
+/// reals: with the area weight a = (3/(2√2)) ε |k|² w and q/φ̂ = c_σ|k|²/M,
+/// xx = Σ a |x|², xq = Σ a (q/φ̂) |x|², qq = Σ a (q/φ̂)² |x|², xd = Σ a Re(x d*),
+/// qd = Σ a (q/φ̂) Re(x d*), dd = Σ a |d|² (`t` scratch for each value's terms).
+fn area_values(
+    sym: &Symbols,
+    metric: Metric,
+    p: &Piece,
+    x: &[f64],
+    d: &[f64],
+    t: &mut [[f64; PIECE]; 6],
+) -> AreaSums {
+    let len = p.len;
+    let (x, d) = (
+        x[..p.reals()].as_chunks::<2>().0,
+        d[..p.reals()].as_chunks::<2>().0,
+    );
+    let [txx, txq, tqq, txd, tqd, tdd] = t;
+    let terms = (txx.iter_mut().zip(txq.iter_mut()).zip(tqq.iter_mut()))
+        .zip(txd.iter_mut().zip(tqd.iter_mut()).zip(tdd.iter_mut()));
+    let values = x.iter().zip(d).zip(p.k[..len].iter().zip(&p.w[..len]));
+    for ((((xx, xq), qq), ((xd, qd), dd)), ((x, d), (&k, &w))) in terms.zip(values) {
+        let aw = sym.area_prefactor * k * w;
+        let (_, qf) = inverse_metric(metric, k, metric.at(k));
+        let (aq, aqq) = (aw * qf, aw * qf * qf);
+        let (x2, xd2, d2) = (
+            x[0] * x[0] + x[1] * x[1],
+            x[0] * d[0] + x[1] * d[1],
+            d[0] * d[0] + d[1] * d[1],
+        );
+        (*xx, *xq, *qq) = (aw * x2, aq * x2, aqq * x2);
+        (*xd, *qd, *dd) = (aw * xd2, aq * xd2, aw * d2);
+    }
+    let [xx, xq, qq, xd, qd, dd] =
+        [&*txx, &*txq, &*tqq, &*txd, &*tqd, &*tdd].map(|v| sum(&v[..len]));
+    AreaSums {
+        xx,
+        xq,
+        qq,
+        xd,
+        qd,
+        dd,
+    }
 }
 }
 
@@ -687,17 +623,39 @@ fn inverse_metric(metric: Metric, k: f64, m: f64) -> (f64, f64) {
 }
 
 wide_fn! {
-/// A piece of [`gradient_sweep`]: q = (q/φ̂) φ̂ and r = M⁻¹ĝ + σq from the piece's reals of φ̂
-/// and ĝ (`(x, g)`), and their weighted copies w M r, w M q (`out` = [q, r, wr, wq]).
-fn gradient_values(f: &Factors, spectra: (&[f64], &[f64]), sigma: f64, out: [&mut [f64]; 4]) {
-    let ((xs, gs), [q, r, wr, wq]) = (spectra, out);
-    let outputs = q.iter_mut().zip(r.iter_mut()).zip(wr.iter_mut().zip(wq.iter_mut()));
-    let inputs = xs.iter().zip(gs).zip(f.inv_m.iter().zip(&f.qf).zip(&f.wm));
-    for (((q, r), (wr, wq)), ((x, g), ((inv_m, qf), wm))) in outputs.zip(inputs) {
-        *q = qf * x;
-        *r = g * inv_m + x * (sigma * qf);
-        (*wr, *wq) = (wm * *r, wm * *q);
+/// A piece of [`gradient_sweep`], value by value: q = (q/φ̂) φ̂ and r = M⁻¹ĝ + σq from the
+/// piece's reals of φ̂ and ĝ (`(x, g)`), r into `r`, q and the weighted copies w M r, w M q into
+/// `out` = [q, wr, wq]; returns [Σ wM |r|², Σ wM² |r|², Σ wM Re(r q*)] (`t` scratch for each
+/// value's terms).
+fn gradient_values(
+    metric: Metric,
+    p: &Piece,
+    spectra: (&[f64], &[f64]),
+    sigma: f64,
+    r: &mut [f64],
+    out: [&mut [f64]; 3],
+    t: &mut [[f64; PIECE]; 3],
+) -> [f64; 3] {
+    let ((xs, gs), len) = (spectra, p.len);
+    let [xs, gs] = [xs, gs].map(|v| v[..p.reals()].as_chunks::<2>().0);
+    let [q, wr, wq] = out;
+    let [r, q, wr, wq] = [r, q, wr, wq].map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let [trr, tres, tqr] = t;
+    let terms = trr.iter_mut().zip(tres.iter_mut()).zip(tqr.iter_mut());
+    let outputs = r.zip(q).zip(wr.zip(wq)).zip(terms);
+    let inputs = xs.iter().zip(gs).zip(p.k[..len].iter().zip(&p.w[..len]));
+    for ((((r, q), (wr, wq)), ((rr, res), qr)), ((x, g), (&k, &w))) in outputs.zip(inputs) {
+        let m = metric.at(k);
+        let (inv_m, qf) = inverse_metric(metric, k, m);
+        let wm = w * m;
+        *q = [0, 1].map(|c| qf * x[c]);
+        *r = [0, 1].map(|c| g[c] * inv_m + x[c] * (sigma * qf));
+        (*wr, *wq) = (r.map(|v| wm * v), q.map(|v| wm * v));
+        let r2 = r[0] * r[0] + r[1] * r[1];
+        (*rr, *res) = (wm * r2, w * m * m * r2);
+        *qr = wm * (r[0] * q[0] + r[1] * q[1]);
     }
+    [&*trr, &*tres, &*tqr].map(|v| sum(&v[..len]))
 }
 }
 
@@ -706,34 +664,27 @@ wide_fn! {
 /// single precision from the piece's reals of (φ̂, r) and (x_old, r_old), and w M s, w M y of
 /// the rounded values, so that the pair's sums are those of the pair as stored.
 fn pair_values(
-    f: &Factors,
+    metric: Metric,
+    p: &Piece,
     new: (&[f64], &[f64]),
     old: (&[f64], &[f64]),
     pair: [&mut [f32]; 2],
     weighted: [&mut [f64]; 2],
 ) {
     let ((xs, rs), (x_old, r_old), [s, y], [ws, wy]) = (new, old, pair, weighted);
-    let outputs = s.iter_mut().zip(y.iter_mut()).zip(ws.iter_mut().zip(wy.iter_mut()));
-    let inputs = xs.iter().zip(x_old).zip(rs.iter().zip(r_old).zip(&f.wm));
-    for (((s, y), (ws, wy)), ((x, xo), ((r, ro), wm))) in outputs.zip(inputs) {
-        (*s, *y) = ((x - xo) as f32, (r - ro) as f32);
-        (*ws, *wy) = (wm * f64::from(*s), wm * f64::from(*y));
+    let [xs, rs, x_old, r_old] = [xs, rs, x_old, r_old].map(|v| v[..p.reals()].as_chunks::<2>().0);
+    let [s, y] = [s, y].map(|v| v.as_chunks_mut::<2>().0.iter_mut());
+    let [ws, wy] = [ws, wy].map(|v| v.as_chunks_mut::<2>().0.iter_mut());
+    let outputs = s.zip(y).zip(ws.zip(wy));
+    let values = xs.iter().zip(x_old).zip(rs.iter().zip(r_old));
+    let inputs = values.zip(p.k[..p.len].iter().zip(&p.w[..p.len]));
+    for (((s, y), (ws, wy)), (((x, xo), (r, ro)), (&k, &w))) in outputs.zip(inputs) {
+        let wm = w * metric.at(k);
+        *s = [0, 1].map(|c| (x[c] - xo[c]) as f32);
+        *y = [0, 1].map(|c| (r[c] - ro[c]) as f32);
+        (*ws, *wy) = (s.map(|v| wm * f64::from(v)), y.map(|v| wm * f64::from(v)));
     }
 }
-}
-
-/// The area sums of one piece ([`AreaSums`]), x = φ̂ and d = d' as interleaved reals.
-fn area_sums(f: &Factors, x: &[f64], d: &[f64]) -> AreaSums {
-    let n = f.len;
-    let [xx, xq, qq, xd, qd, dd] = quadratic_sums(&f.aw[..n], &f.aq[..n], &f.aqq[..n], x, d);
-    AreaSums {
-        xx,
-        xq,
-        qq,
-        xd,
-        qd,
-        dd,
-    }
 }
 
 /// ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*) by a plain sum over spectra held as interleaved reals (no
@@ -785,27 +736,25 @@ fn gradient_sweep(
         let base = 2 * t * task;
         let mut acc = GradientSums::zero();
         // The piece's w M r, w M q, w M s_new, w M y_new (the last two 0 without a new pair),
-        // and q.
+        // q and each value's terms of the sums.
         let mut v = [[0.0; 2 * PIECE]; 4];
         let mut q = [0.0; 2 * PIECE];
-        for_each_factored(sym, m, Need::Gradient, t, r.len(), |f, at| {
-            let (n, local, gl) = (f.len, at..at + f.len, base + at..base + at + f.len);
+        let mut terms = [[0.0; PIECE]; 3];
+        for_each_piece(sym, t, r.len(), |p, at| {
+            let (n, local, gl) = (
+                p.reals(),
+                at..at + p.reals(),
+                base + at..base + at + p.reals(),
+            );
             let (xs, gs, rs) = (&x[gl.clone()], &g[gl.clone()], &mut r[local.clone()]);
             let [wr, wq, ws, wy] = &mut v;
-            gradient_values(
-                f,
-                (xs, gs),
-                sigma,
-                [&mut q[..n], rs, &mut wr[..n], &mut wq[..n]],
-            );
-            // [Σ wM r², Σ wM² r², –, Σ wM r q, –, –].
-            let sums = quadratic_sums(&f.wm[..n], &f.wmm[..n], &f.wm[..n], rs, &q[..n]);
-            (acc.rr, acc.res) = (acc.rr + sums[0], acc.res + sums[1]);
-            acc.qr += sums[3];
+            let out = [&mut q[..n], &mut wr[..n], &mut wq[..n]];
+            let [rr, res, qr] = gradient_values(m, p, (xs, gs), sigma, rs, out, &mut terms);
+            (acc.rr, acc.res, acc.qr) = (acc.rr + rr, acc.res + res, acc.qr + qr);
             if let Some((x_old, r_old, s, y)) = new.as_mut() {
                 let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
                 let old = (&x_old[gl.clone()], &r_old[gl.clone()]);
-                pair_values(f, (xs, rs), old, [s, y], [&mut ws[..n], &mut wy[..n]]);
+                pair_values(m, p, (xs, rs), old, [s, y], [&mut ws[..n], &mut wy[..n]]);
             }
             let v = v.each_ref().map(|v| &v[..n]);
             for (p, sums) in pairs.iter().zip(&mut acc.pairs) {

@@ -1,10 +1,9 @@
 //! The reductions of the spectral sweeps and of the relaxation, over a piece of a spectrum held
-//! as interleaved (re, im) reals (or a run of real-space values): a plain sum, the six weighted
-//! quadratic sums of two vectors, a stored L-BFGS pair's six inner products, and the sums of the
-//! real-space pass. Each keeps [`LANES`] partial sums and fuses each multiply-add (`mul_add`), so
-//! that the AVX2/FMA build, taken when the CPU has those instructions, gives the portable
-//! build's results bit for bit. [`wide_fn`] compiles a sweep's element-wise loops for the same
-//! instructions.
+//! as interleaved (re, im) reals (or a run of real-space values): a plain sum, a stored L-BFGS
+//! pair's six inner products and the sums of the real-space pass. Each keeps [`LANES`] partial
+//! sums (the last two fuse each multiply-add, `mul_add`), so that the AVX2/FMA build, taken when
+//! the CPU has those instructions, gives the portable build's results bit for bit. [`wide_fn`]
+//! compiles a sweep's element-wise loops for the same instructions.
 
 /// Partial sums per reduction: one AVX2 register of f64.
 pub const LANES: usize = 4;
@@ -61,34 +60,6 @@ pub fn sum(v: &[f64]) -> f64 {
     }
     acc.iter_mut().zip(rest).for_each(|(a, v)| *a += v);
     fold(acc)
-}
-
-/// [Σ a x², Σ b x², Σ c x², Σ a x d, Σ b x d, Σ a d²] over equal-length slices.
-pub fn quadratic_sums(a: &[f64], b: &[f64], c: &[f64], x: &[f64], d: &[f64]) -> [f64; 6] {
-    let n = x.len();
-    assert!([a, b, c, d].iter().all(|v| v.len() == n));
-    #[cfg(target_arch = "x86_64")]
-    if has_avx2_fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked above); the lengths are equal (asserted).
-        return unsafe { avx2::quadratic_sums(a, b, c, x, d) };
-    }
-    let mut acc = [[0.0; LANES]; 6];
-    for j in 0..n {
-        quadratic_terms(&mut acc, j % LANES, [a[j], b[j], c[j]], x[j], d[j]);
-    }
-    acc.map(fold)
-}
-
-/// One value's terms of [`quadratic_sums`] into lane `l`.
-#[inline(always)]
-fn quadratic_terms(acc: &mut [[f64; LANES]; 6], l: usize, [a, b, c]: [f64; 3], x: f64, d: f64) {
-    let (xx, xd, dd) = (x * x, x * d, d * d);
-    acc[0][l] = a.mul_add(xx, acc[0][l]);
-    acc[1][l] = b.mul_add(xx, acc[1][l]);
-    acc[2][l] = c.mul_add(xx, acc[2][l]);
-    acc[3][l] = a.mul_add(xd, acc[3][l]);
-    acc[4][l] = b.mul_add(xd, acc[4][l]);
-    acc[5][l] = a.mul_add(dd, acc[5][l]);
 }
 
 /// With v = [w M r, w M q, w M s_new, w M y_new] over the piece, a stored pair's
@@ -175,7 +146,7 @@ fn fold(a: [f64; LANES]) -> f64 {
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use super::{fold, fold_pointwise, pair_terms, pointwise_terms, quadratic_terms, LANES};
+    use super::{fold, fold_pointwise, pair_terms, pointwise_terms, LANES};
     use std::arch::x86_64::*;
 
     /// [`super::pointwise_sums`] with AVX2/FMA: lane l takes the values j ≡ l (mod 4), as there.
@@ -202,42 +173,6 @@ mod avx2 {
             pointwise_terms(&mut lanes, j % LANES, phi[j], old[j], big[j]);
         }
         fold_pointwise(lanes)
-    }
-
-    /// [`super::quadratic_sums`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
-    #[target_feature(enable = "avx2,fma")]
-    pub unsafe fn quadratic_sums(
-        a: &[f64],
-        b: &[f64],
-        c: &[f64],
-        x: &[f64],
-        d: &[f64],
-    ) -> [f64; 6] {
-        let n = x.len();
-        let full = n - n % LANES;
-        let mut acc = [_mm256_setzero_pd(); 6];
-        for j in (0..full).step_by(LANES) {
-            let [av, bv, cv, xv, dv] = [a, b, c, x, d].map(|v| _mm256_loadu_pd(v.as_ptr().add(j)));
-            let (xx, xd, dd) = (
-                _mm256_mul_pd(xv, xv),
-                _mm256_mul_pd(xv, dv),
-                _mm256_mul_pd(dv, dv),
-            );
-            acc[0] = _mm256_fmadd_pd(av, xx, acc[0]);
-            acc[1] = _mm256_fmadd_pd(bv, xx, acc[1]);
-            acc[2] = _mm256_fmadd_pd(cv, xx, acc[2]);
-            acc[3] = _mm256_fmadd_pd(av, xd, acc[3]);
-            acc[4] = _mm256_fmadd_pd(bv, xd, acc[4]);
-            acc[5] = _mm256_fmadd_pd(av, dd, acc[5]);
-        }
-        let mut lanes = [[0.0; LANES]; 6];
-        for (l, a) in lanes.iter_mut().zip(acc) {
-            _mm256_storeu_pd(l.as_mut_ptr(), a);
-        }
-        for j in full..n {
-            quadratic_terms(&mut lanes, j % LANES, [a[j], b[j], c[j]], x[j], d[j]);
-        }
-        lanes.map(fold)
     }
 
     /// [`super::pair_sums`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
@@ -305,19 +240,6 @@ mod tests {
         for (g, w) in got.iter().zip(want) {
             assert!((g - w).abs() < 1e-14 * n as f64, "{g} against {w}");
         }
-        let got = quadratic_sums(&a, &b, &c, &d, &e);
-        let plain = |f: &dyn Fn(usize) -> f64| (0..n).map(f).sum::<f64>();
-        let want = [
-            plain(&|j| a[j] * d[j] * d[j]),
-            plain(&|j| b[j] * d[j] * d[j]),
-            plain(&|j| c[j] * d[j] * d[j]),
-            plain(&|j| a[j] * d[j] * e[j]),
-            plain(&|j| b[j] * d[j] * e[j]),
-            plain(&|j| a[j] * e[j] * e[j]),
-        ];
-        for (g, w) in got.iter().zip(want) {
-            assert!((g - w).abs() < 1e-14 * n as f64, "{g} against {w}");
-        }
     }
 
     /// The portable build's lanes give the dispatched build's sums bit for bit.
@@ -331,11 +253,6 @@ mod tests {
             pair_terms(&mut acc, j, &a32, &b32, [&c, &d, &e, &f]);
         }
         assert_eq!(pair_sums(&a32, &b32, [&c, &d, &e, &f]), acc.map(fold));
-        let mut quad = [[0.0; LANES]; 6];
-        for j in 0..n {
-            quadratic_terms(&mut quad, j % LANES, [a[j], b[j], c[j]], d[j], e[j]);
-        }
-        assert_eq!(quadratic_sums(&a, &b, &c, &d, &e), quad.map(fold));
         let mut point = [[0.0; LANES]; 4];
         for j in 0..n {
             pointwise_terms(&mut point, j % LANES, a[j], b[j], c[j]);

@@ -1,7 +1,8 @@
-//! Walking a spectrum in pieces: the sweeps over a spectrum take their per-wavenumber factors
-//! (|k|², w and what follows from them) a piece at a time into short tables, then run loops over
-//! the piece's values as interleaved (re, im) reals, which the compiler vectorises, and sum with
-//! the kernels of [`super::kernels`].
+//! Walking a spectrum in pieces: the sweeps over a spectrum take |k|² and w a piece at a time
+//! into two short tables, then run loops over the piece's values as (re, im) pairs of
+//! interleaved reals, forming each value's factors (what follows from |k|² and w) where they are
+//! used, which the compiler vectorises; each value's terms of a sum go to a short scratch table,
+//! summed with the kernels of [`super::kernels`].
 //!
 //! A piece is as many whole spectral rows as fit in [`PIECE`] values, or a part of one longer
 //! row: at 48³ or 64³ (rows of 25 or 33 values) a piece is seven or ten rows, so a sweep that
@@ -13,9 +14,6 @@ use rustfft::num_complex::Complex64;
 
 /// Values per piece.
 pub const PIECE: usize = 256;
-
-/// A per-value factor of a piece, each value's twice (for its real and imaginary parts).
-pub type Twice = [f64; 2 * PIECE];
 
 /// |k|² and the weight w of each value of a piece (see [`Symbols`]).
 pub struct Piece {
@@ -39,14 +37,6 @@ impl Piece {
     /// The piece's reals.
     pub fn reals(&self) -> usize {
         2 * self.len
-    }
-
-    /// `table[..2 len]` = v(0), v(0), v(1), v(1), … for a factor `v` of each value.
-    #[inline(always)]
-    pub fn twice(&self, table: &mut Twice, v: impl Fn(usize) -> f64) {
-        for (l, pair) in table[..2 * self.len].chunks_exact_mut(2).enumerate() {
-            pair.fill(v(l));
-        }
     }
 }
 
