@@ -659,10 +659,10 @@ mod tests {
     use super::*;
     use serde_json::json;
 
-    /// The area quadratic A(σ) = A_PP + 2σ A_PQ + σ² A_QQ of a step (the value-by-value sweep of
-    /// SBDF1, the factor tables of SBDF2) equals the area of the update written at that σ, to
-    /// 1e-12 (relative), at σ = −0.3, 0, 0.7 on an odd-sized box (pieces filled unevenly): a
-    /// term or a weight wrong in either form would miss by far more.
+    /// The area quadratic A(σ) = A_PP + 2σ A_PQ + σ² A_QQ of a step (SBDF1, and SBDF2 with its
+    /// φ̂ⁿ⁻¹, N̂ⁿ⁻¹ terms) equals the area of the update written at that σ, to 1e-12 (relative),
+    /// at σ = −0.3, 0, 0.7 on an odd-sized box (pieces filled unevenly): a term or a weight wrong
+    /// in either sweep would miss by far more.
     #[test]
     fn area_quadratic_predicts_the_written_area() {
         for scheme in ["sbdf1", "sbdf2"] {
