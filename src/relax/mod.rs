@@ -54,7 +54,7 @@ use crate::spectral::evaluator::{
     write_inverse_value, Evaluator, ExplicitTerm, Metric, State, Symbols,
 };
 use crate::spectral::kernels::{pair_sums, sum, wide_fn};
-use crate::spectral::pieces::{for_each_piece, reals, reals_mut, Piece, PIECE};
+use crate::spectral::pieces::{for_each_piece, re_dot, reals, reals_mut, Piece, PIECE};
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -552,23 +552,15 @@ fn area_values(
     t: &mut [[f64; PIECE]; 6],
 ) -> AreaSums {
     let len = p.len;
-    let (x, d) = (
-        x[..p.reals()].as_chunks::<2>().0,
-        d[..p.reals()].as_chunks::<2>().0,
-    );
     let [txx, txq, tqq, txd, tqd, tdd] = t;
     let terms = (txx.iter_mut().zip(txq.iter_mut()).zip(tqq.iter_mut()))
         .zip(txd.iter_mut().zip(tqd.iter_mut()).zip(tdd.iter_mut()));
-    let values = x.iter().zip(d).zip(p.k[..len].iter().zip(&p.w[..len]));
-    for ((((xx, xq), qq), ((xd, qd), dd)), ((x, d), (&k, &w))) in terms.zip(values) {
+    let values = p.pairs(x).iter().zip(p.pairs(d)).zip(p.symbols());
+    for ((((xx, xq), qq), ((xd, qd), dd)), ((&x, &d), (k, w))) in terms.zip(values) {
         let aw = sym.area_prefactor * k * w;
         let (_, qf) = inverse_metric(metric, k, metric.at(k));
         let (aq, aqq) = (aw * qf, aw * qf * qf);
-        let (x2, xd2, d2) = (
-            x[0] * x[0] + x[1] * x[1],
-            x[0] * d[0] + x[1] * d[1],
-            d[0] * d[0] + d[1] * d[1],
-        );
+        let (x2, xd2, d2) = (re_dot(x, x), re_dot(x, d), re_dot(d, d));
         (*xx, *xq, *qq) = (aw * x2, aq * x2, aqq * x2);
         (*xd, *qd, *dd) = (aw * xd2, aq * xd2, aw * d2);
     }
@@ -599,11 +591,10 @@ fn trial_values(
     terms: &mut [f64; PIECE],
 ) -> f64 {
     let ((x, d), (alpha, beta), len) = (spectra, step, p.len);
-    let [hat, copy, lap] = out.map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let [hat, copy, lap] = out.map(|o| p.pairs_mut(o).iter_mut());
     let outputs = hat.zip(copy.zip(lap)).zip(&mut terms[..len]);
-    let (x, d) = (x[..p.reals()].as_chunks::<2>().0, d[..p.reals()].as_chunks::<2>().0);
-    let inputs = x.iter().zip(d).zip(p.k.iter().zip(&p.w));
-    for (((hat, (copy, lap)), term), ((x, d), (&k, &w))) in outputs.zip(inputs) {
+    let inputs = p.pairs(x).iter().zip(p.pairs(d)).zip(p.symbols());
+    for (((hat, (copy, lap)), term), ((x, d), (k, w))) in outputs.zip(inputs) {
         let (_, qf) = inverse_metric(metric, k, metric.at(k));
         *hat = [0, 1].map(|c| x[c] + d[c] * alpha + x[c] * qf * beta);
         *term = write_inverse_value(*hat, k, sym.area_prefactor * k * w, copy, lap);
@@ -637,23 +628,22 @@ fn gradient_values(
     t: &mut [[f64; PIECE]; 3],
 ) -> [f64; 3] {
     let ((xs, gs), len) = (spectra, p.len);
-    let [xs, gs] = [xs, gs].map(|v| v[..p.reals()].as_chunks::<2>().0);
     let [q, wr, wq] = out;
-    let [r, q, wr, wq] = [r, q, wr, wq].map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let [r, q, wr, wq] = [r, q, wr, wq].map(|o| p.pairs_mut(o).iter_mut());
     let [trr, tres, tqr] = t;
     let terms = trr.iter_mut().zip(tres.iter_mut()).zip(tqr.iter_mut());
     let outputs = r.zip(q).zip(wr.zip(wq)).zip(terms);
-    let inputs = xs.iter().zip(gs).zip(p.k[..len].iter().zip(&p.w[..len]));
-    for ((((r, q), (wr, wq)), ((rr, res), qr)), ((x, g), (&k, &w))) in outputs.zip(inputs) {
+    let inputs = p.pairs(xs).iter().zip(p.pairs(gs)).zip(p.symbols());
+    for ((((r, q), (wr, wq)), ((rr, res), qr)), ((x, g), (k, w))) in outputs.zip(inputs) {
         let m = metric.at(k);
         let (inv_m, qf) = inverse_metric(metric, k, m);
         let wm = w * m;
         *q = [0, 1].map(|c| qf * x[c]);
         *r = [0, 1].map(|c| g[c] * inv_m + x[c] * (sigma * qf));
         (*wr, *wq) = (r.map(|v| wm * v), q.map(|v| wm * v));
-        let r2 = r[0] * r[0] + r[1] * r[1];
+        let r2 = re_dot(*r, *r);
         (*rr, *res) = (wm * r2, w * m * m * r2);
-        *qr = wm * (r[0] * q[0] + r[1] * q[1]);
+        *qr = wm * re_dot(*r, *q);
     }
     [&*trr, &*tres, &*tqr].map(|v| sum(&v[..len]))
 }
@@ -672,13 +662,13 @@ fn pair_values(
     weighted: [&mut [f64]; 2],
 ) {
     let ((xs, rs), (x_old, r_old), [s, y], [ws, wy]) = (new, old, pair, weighted);
-    let [xs, rs, x_old, r_old] = [xs, rs, x_old, r_old].map(|v| v[..p.reals()].as_chunks::<2>().0);
-    let [s, y] = [s, y].map(|v| v.as_chunks_mut::<2>().0.iter_mut());
-    let [ws, wy] = [ws, wy].map(|v| v.as_chunks_mut::<2>().0.iter_mut());
+    let [xs, rs, x_old, r_old] = [xs, rs, x_old, r_old].map(|v| p.pairs(v));
+    let [s, y] = [s, y].map(|v| p.pairs_mut(v).iter_mut());
+    let [ws, wy] = [ws, wy].map(|v| p.pairs_mut(v).iter_mut());
     let outputs = s.zip(y).zip(ws.zip(wy));
     let values = xs.iter().zip(x_old).zip(rs.iter().zip(r_old));
-    let inputs = values.zip(p.k[..p.len].iter().zip(&p.w[..p.len]));
-    for (((s, y), (ws, wy)), (((x, xo), (r, ro)), (&k, &w))) in outputs.zip(inputs) {
+    let inputs = values.zip(p.symbols());
+    for (((s, y), (ws, wy)), (((x, xo), (r, ro)), (k, w))) in outputs.zip(inputs) {
         let wm = w * metric.at(k);
         *s = [0, 1].map(|c| (x[c] - xo[c]) as f32);
         *y = [0, 1].map(|c| (r[c] - ro[c]) as f32);

@@ -20,7 +20,7 @@
 
 use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm, State};
 use super::kernels::{sum, wide_fn};
-use super::pieces::{for_each_piece, reals, reals_mut, Piece, PIECE};
+use super::pieces::{for_each_piece, re_dot, reals, reals_mut, Piece, PIECE};
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
@@ -133,12 +133,11 @@ fn values<'a>(
     p: &'a Piece,
     inputs: [&'a [f64]; 4],
 ) -> impl Iterator<Item = ([&'a [f64; 2]; 4], (f64, f64))> + 'a {
-    let [x, n, x0, n0] = inputs.map(|v| v[..p.reals()].as_chunks::<2>().0.iter());
-    let symbols = p.k[..p.len].iter().zip(&p.w[..p.len]);
+    let [x, n, x0, n0] = inputs.map(|v| p.pairs(v).iter());
     x.zip(n)
         .zip(x0.zip(n0))
-        .zip(symbols)
-        .map(|(((x, n), (x0, n0)), (&k, &w))| ([x, n, x0, n0], (k, w)))
+        .zip(p.symbols())
+        .map(|(((x, n), (x0, n0)), kw)| ([x, n, x0, n0], kw))
 }
 
 wide_fn! {
@@ -159,9 +158,9 @@ fn quadratic_values<const PREV: bool>(
     for (((pp, pq), qq), (v, (k, w))) in terms.zip(values(p, inputs)) {
         let (pv, qv) = u.at::<PREV>(k).apply::<PREV>(v);
         let aw = area_prefactor * k * w;
-        *pp = aw * (pv[0] * pv[0] + pv[1] * pv[1]);
-        *pq = aw * (pv[0] * qv[0] + pv[1] * qv[1]);
-        *qq = aw * (qv[0] * qv[0] + qv[1] * qv[1]);
+        *pp = aw * re_dot(pv, pv);
+        *pq = aw * re_dot(pv, qv);
+        *qq = aw * re_dot(qv, qv);
     }
     [&tpp[..len], &tpq[..len], &tqq[..len]].map(sum)
 }
@@ -180,7 +179,7 @@ fn write_values<const PREV: bool>(
     out: [&mut [f64]; 3],
     t: &mut [f64; PIECE],
 ) -> f64 {
-    let [hat, copy, lap] = out.map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let [hat, copy, lap] = out.map(|o| p.pairs_mut(o).iter_mut());
     let outputs = hat.zip(copy.zip(lap)).zip(&mut t[..p.len]);
     for (((hat, (copy, lap)), term), (v, (k, w))) in outputs.zip(values(p, inputs)) {
         let (pv, qv) = u.at::<PREV>(k).apply::<PREV>(v);

@@ -11,7 +11,7 @@
 //! ([`Evaluator::finish`]).
 
 use super::kernels::{pointwise_sums, sum, wide_fn};
-use super::pieces::{for_each_piece, reals, reals_mut, Piece, PIECE};
+use super::pieces::{for_each_piece, re_dot, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
@@ -321,10 +321,9 @@ fn inverse_inputs_piece(
     terms: &mut [f64; PIECE],
 ) -> f64 {
     let len = p.len;
-    let [copy, lap] = [copy, lap].map(|o| o.as_chunks_mut::<2>().0.iter_mut());
+    let [copy, lap] = [copy, lap].map(|o| p.pairs_mut(o).iter_mut());
     let outputs = copy.zip(lap).zip(&mut terms[..len]);
-    let inputs = h[..p.reals()].as_chunks::<2>().0.iter().zip(p.k.iter().zip(&p.w));
-    for (((copy, lap), term), (h, (&k, &w))) in outputs.zip(inputs) {
+    for (((copy, lap), term), (h, (k, w))) in outputs.zip(p.pairs(h).iter().zip(p.symbols())) {
         *term = write_inverse_value(*h, k, sym.area_prefactor * k * w, copy, lap);
     }
     sum(&terms[..len])
@@ -345,7 +344,7 @@ pub(crate) fn write_inverse_value(
 ) -> f64 {
     *copy = h;
     *lap = [-(h[0] * k), -(h[1] * k)];
-    aw * (h[0] * h[0] + h[1] * h[1])
+    aw * re_dot(h, h)
 }
 
 /// Sums of the pointwise pass.
@@ -549,37 +548,33 @@ fn combine_piece(
     t: &mut CombineTerms,
 ) -> CombineSums {
     let (e2, tension, len) = (how.e2, how.tension, p.len);
-    let reals = p.reals();
-    let (g, h) = (g[..reals].as_chunks::<2>().0, h[..reals].as_chunks::<2>().0);
-    let n = n[..reals].as_chunks_mut::<2>().0;
-    let values = n.iter_mut().zip(g.iter().zip(h));
-    let symbols = p.k[..len].iter().zip(&p.w[..len]);
+    let values = p.pairs_mut(n).iter_mut().zip(p.pairs(g).iter().zip(p.pairs(h)));
+    let symbols = p.symbols();
     let terms = t.residual[..len].iter_mut().zip(t.qq[..len].iter_mut().zip(&mut t.gq[..len]));
     // The residual's weight: w, 0 at k = 0 and when the residual is not wanted.
     let residual_weight = |k: f64, w: f64| if how.with_residual && k > 0.0 { w } else { 0.0 };
-    let norm = |v: [f64; 2]| v[0] * v[0] + v[1] * v[1];
     let mut sums = CombineSums::default();
     match how.explicit {
         ExplicitTerm::ConservedRhs => {
-            for (((o, (g, h)), (&k, &w)), (res, _)) in values.zip(symbols).zip(terms) {
+            for (((o, (g, h)), (k, w)), (res, _)) in values.zip(symbols).zip(terms) {
                 let (fnl, fg) = (-2.0 * k, -2.0 * e2 * k * k);
                 let (gk, hk) = (2.0 * e2 * k, 2.0 * e2 * e2 * k * k + tension * k);
                 let nl = *o;
                 let mu = [0, 1].map(|c| nl[c] * 2.0 + g[c] * gk + h[c] * hk);
                 *o = [0, 1].map(|c| nl[c] * fnl + g[c] * fg);
-                *res = residual_weight(k, w) * norm(mu);
+                *res = residual_weight(k, w) * re_dot(mu, mu);
             }
         }
         ExplicitTerm::Gradient(m) => {
-            for (((o, (g, h)), (&k, &w)), (res, (qq, gq))) in values.zip(symbols).zip(terms) {
+            for (((o, (g, h)), (k, w)), (res, (qq, gq))) in values.zip(symbols).zip(terms) {
                 let (gk, hk, tk) = (2.0 * e2 * k, 2.0 * e2 * e2 * k * k, tension * k);
                 let qh = m.c_sigma * k / m.at(k);
                 let gradient = [0, 1].map(|c| o[c] * 2.0 + g[c] * gk + h[c] * hk);
                 *o = gradient;
                 let mu = [0, 1].map(|c| gradient[c] + h[c] * tk);
-                *res = residual_weight(k, w) * norm(mu);
-                *qq = w * m.c_sigma * k * qh * norm(*h);
-                *gq = w * qh * (gradient[0] * h[0] + gradient[1] * h[1]);
+                *res = residual_weight(k, w) * re_dot(mu, mu);
+                *qq = w * m.c_sigma * k * qh * re_dot(*h, *h);
+                *gq = w * qh * re_dot(gradient, *h);
             }
             sums.qq = sum(&t.qq[..len]);
             sums.gq = sum(&t.gq[..len]);

@@ -38,6 +38,31 @@ impl Piece {
     pub fn reals(&self) -> usize {
         2 * self.len
     }
+
+    /// The piece's values as (re, im) pairs, from reals `v` starting at its first.
+    #[inline(always)]
+    pub fn pairs<'a, T>(&self, v: &'a [T]) -> &'a [[T; 2]] {
+        v[..self.reals()].as_chunks::<2>().0
+    }
+
+    /// [`Piece::pairs`], writable.
+    #[inline(always)]
+    pub fn pairs_mut<'a, T>(&self, v: &'a mut [T]) -> &'a mut [[T; 2]] {
+        v[..self.reals()].as_chunks_mut::<2>().0
+    }
+
+    /// (|k|², w) of each value.
+    #[inline(always)]
+    pub fn symbols(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let (k, w) = (&self.k[..self.len], &self.w[..self.len]);
+        k.iter().copied().zip(w.iter().copied())
+    }
+}
+
+/// Re(a b*) of two values given as (re, im); |a|² when b = a.
+#[inline(always)]
+pub fn re_dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
 }
 
 wide_fn! {
