@@ -1,5 +1,6 @@
 //! Spectral machinery: planned real transforms on the computational grid.
 
+pub(crate) mod columns;
 pub mod engine;
 pub mod evaluator;
 pub(crate) mod kernels;

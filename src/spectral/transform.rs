@@ -29,6 +29,7 @@ use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftPlanner};
 
+use super::columns::ColumnFft;
 use crate::grid::AxisKind;
 
 /// Complex values in one batch of gathered lanes (32 KiB: stays in L1 with the FFT scratch).
@@ -86,6 +87,9 @@ struct LaneKernel {
     identity: Vec<usize>,
     /// DCT twiddles `w_k = e^{−iπk/(2m)}`; empty for the FFT.
     twiddle: Vec<Complex64>,
+    /// The FFT of a strided stage done down the columns in place (no lanes), when the length
+    /// allows it ([`ColumnFft::new`]).
+    columns: Option<ColumnFft>,
 }
 
 impl LaneKernel {
@@ -116,6 +120,9 @@ impl LaneKernel {
             pos,
             identity: (0..len).collect(),
             twiddle,
+            columns: (padded && kind == AxisKind::Periodic)
+                .then(|| ColumnFft::new(len))
+                .flatten(),
         }
     }
 
@@ -509,6 +516,13 @@ impl Plan {
             .map(|k| k.batch * k.stride)
             .max()
             .unwrap_or(0);
+        let columns = kernels
+            .clone()
+            .flat_map(|k| &k.columns)
+            .map(ColumnFft::scratch_len)
+            .max()
+            .unwrap_or(0);
+        lanes = lanes.max(columns);
         let mut scratch = kernels.map(|k| k.scratch_len).max().unwrap_or(0);
         match &self.last {
             LastAxis::Real { r2c, c2r } => {
@@ -706,9 +720,9 @@ fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale:
     }
 }
 
-/// Transform a piece `[outer, len, width]` of the spectrum along its middle axis: a block of
-/// columns at a time is gathered into contiguous lanes, transformed in one batched call and
-/// scattered back.
+/// Transform a piece `[outer, len, width]` of the spectrum along its middle axis: down the
+/// columns in place when the kernel has a column FFT, else a block of columns at a time is
+/// gathered into contiguous lanes, transformed in one batched call and scattered back.
 fn strided_piece(
     mut piece: ArrayViewMut3<Complex64>,
     kernel: &LaneKernel,
@@ -716,6 +730,12 @@ fn strided_piece(
     dir: Direction,
     work: &mut Work,
 ) {
+    if let (Packing::Complex, Some(columns)) = (packing, &kernel.columns) {
+        for slab in piece.outer_iter_mut() {
+            columns.process(dir == Direction::Inverse, slab, &mut work.lanes);
+        }
+        return;
+    }
     let per_lane = packing.columns_per_lane();
     let columns = kernel.batch * per_lane;
     let (from, to) = kernel.orders(dir);

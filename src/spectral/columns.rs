@@ -1,0 +1,562 @@
+//! Batched complex FFTs down the columns of a block of rows, vectorised across the columns: the
+//! strided axes' transforms without gathering the columns into lanes (no transposes).
+//!
+//! Each column `x_i` (`i = 0..n`, row `i` of the block) becomes `X_j = Σ_i x_i e^{∓2πi j i/n}`
+//! (`−` forward, `+` inverse, unnormalised, as `rustfft`). The algorithm is Stockham's
+//! self-sorting decimation in frequency with radices 4, 3 and 2: a stage of radix `R` on
+//! sub-sequences of length `L` (stride `s = n/L`, `m = L/R`) maps, for `p < m`, `q < s`,
+//!
+//! ```text
+//! y[q + s (R p + r)] = w_L^{p r} Σ_l x[q + s (p + m l)] w_R^{l r},   w_L = e^{∓2πi/L},
+//! ```
+//!
+//! and the last stage leaves the spectrum in natural order. A stage reads and writes whole rows
+//! of a block of columns, so every operation acts on two columns at once (AVX2/FMA registers of
+//! two complex values). The first stage reads the strided block, the last writes it, and the
+//! stages between work in two small contiguous buffers that stay in L1. While a block is
+//! transformed, the next block's rows are prefetched.
+//!
+//! Measured against the gather–FFT–scatter route (`rustfft` on transposed lanes), the whole
+//! spectral step, interleaved runs on one machine: 64³ 4.99–5.00 → 4.69–4.73 ms on one thread,
+//! 3.35–3.38 → 2.87–3.06 ms on two; 128³ unchanged within the noise. AVX-512 registers (four
+//! values) made the 64³ step slower than the lanes route (5.5–5.6 ms), and without the prefetch
+//! the 128³ step took 63.5–66.6 ms against 59.7–60.9.
+//!
+//! Every column's arithmetic is the same whatever its place in a block (a complex product is
+//! `(a c − b d, b c + a d)` with each sum fused; a row's last, partial register is loaded and
+//! stored as half a register): a column gives the same bits in a block of any width or alone.
+
+use std::f64::consts::PI;
+
+use ndarray::ArrayViewMut2;
+use rustfft::num_complex::Complex64;
+
+/// Columns per block (16 complex values: four cache lines of a row).
+const BLOCK: usize = 16;
+
+/// One Stockham stage: radix `radix` on sub-sequences of length `len`, `stride` = n/`len`; its
+/// twiddles `w_L^{p r}` at `[p (R − 1) + r − 1]` for `p < len/radix`, `1 ≤ r < radix`.
+#[derive(Debug)]
+struct Stage {
+    radix: usize,
+    len: usize,
+    stride: usize,
+    forward: Vec<Complex64>,
+    inverse: Vec<Complex64>,
+}
+
+/// A planned column FFT of length `n` (a product of 2s and 3s).
+#[derive(Debug)]
+pub struct ColumnFft {
+    n: usize,
+    stages: Vec<Stage>,
+}
+
+impl ColumnFft {
+    /// The plan for columns of length `n`, if `n > 1` is a product of 2s and 3s and the CPU has
+    /// AVX2 and FMA (the kernels' instructions); `None` otherwise.
+    pub fn new(n: usize) -> Option<Self> {
+        if !super::kernels::has_avx2_fma() {
+            return None;
+        }
+        let radices = radices(n)?;
+        let mut stages = Vec::with_capacity(radices.len());
+        let mut len = n;
+        for radix in radices {
+            let m = len / radix;
+            let twiddles = |sign: f64| -> Vec<Complex64> {
+                (0..m)
+                    .flat_map(|p| (1..radix).map(move |r| (p * r) % len))
+                    .map(|e| Complex64::from_polar(1.0, sign * 2.0 * PI * e as f64 / len as f64))
+                    .collect()
+            };
+            stages.push(Stage {
+                radix,
+                len,
+                stride: n / len,
+                forward: twiddles(-1.0),
+                inverse: twiddles(1.0),
+            });
+            len = m;
+        }
+        Some(ColumnFft { n, stages })
+    }
+
+    /// Scratch values [`Self::process`] needs.
+    pub fn scratch_len(&self) -> usize {
+        2 * self.n * BLOCK
+    }
+
+    /// Transform every column of `block` (`n` rows, each contiguous) in place, forward
+    /// (`e^{−2πi j i/n}`) or inverse (`e^{+2πi j i/n}`, unnormalised).
+    ///
+    /// # Panics
+    /// If `block` does not have `n` contiguous rows or `scratch` is shorter than
+    /// [`Self::scratch_len`].
+    pub fn process(
+        &self,
+        inverse: bool,
+        mut block: ArrayViewMut2<Complex64>,
+        scratch: &mut [Complex64],
+    ) {
+        let (rows, cols) = block.dim();
+        assert_eq!(rows, self.n, "rows of the block");
+        assert!(cols <= 1 || block.strides()[1] == 1, "rows are contiguous");
+        assert!(scratch.len() >= self.scratch_len(), "scratch length");
+        let row_stride = block.strides()[0] as usize;
+        let base = block.as_mut_ptr();
+        for c0 in (0..cols).step_by(BLOCK) {
+            let rows = |c0| Rows {
+                // SAFETY: c0 < cols, inside the block's first row.
+                at: unsafe { base.add(c0) },
+                stride: row_stride,
+            };
+            let width = BLOCK.min(cols - c0);
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the columns c0..c0 + width of the n rows `row_stride` apart lie in `block`
+            // (checked above), as do those of the next block; the scratch holds two buffers of
+            // n × width values; the CPU has AVX2 and FMA (`Self::new`).
+            unsafe {
+                if c0 + BLOCK < cols {
+                    x86::prefetch(rows(c0 + BLOCK), self.n, BLOCK.min(cols - c0 - BLOCK));
+                }
+                self.columns_avx2(inverse, rows(c0), width, scratch);
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            unreachable!(
+                "no plan without AVX2 ({:p}, {width}, {inverse})",
+                rows(c0).at
+            );
+        }
+    }
+
+    /// [`Self::columns`] in AVX2 registers.
+    ///
+    /// # Safety
+    /// As for [`Self::columns`].
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn columns_avx2(
+        &self,
+        inverse: bool,
+        rows: Rows,
+        width: usize,
+        scratch: &mut [Complex64],
+    ) {
+        // SAFETY: the caller's conditions.
+        unsafe { self.columns::<x86::Y>(inverse, rows, width, scratch) }
+    }
+
+    /// All stages on the `width` columns at `rows`, in vectors of `V` (the last one of a row
+    /// partly filled).
+    ///
+    /// # Safety
+    /// `rows` holds n rows of `width` values; `scratch` 2 n `width` values; the CPU has `V`'s
+    /// instructions.
+    #[inline(always)]
+    unsafe fn columns<V: Vector>(
+        &self,
+        inverse: bool,
+        rows: Rows,
+        width: usize,
+        scratch: &mut [Complex64],
+    ) {
+        let (a, b) = scratch[..2 * self.n * width].split_at_mut(self.n * width);
+        let buffers = [a.as_mut_ptr(), b.as_mut_ptr()].map(|at| Rows { at, stride: width });
+        let last = self.stages.len() - 1;
+        for (k, stage) in self.stages.iter().enumerate() {
+            let src = if k == 0 { rows } else { buffers[(k - 1) % 2] };
+            let dst = if k == last { rows } else { buffers[k % 2] };
+            let twiddles = if inverse {
+                &stage.inverse
+            } else {
+                &stage.forward
+            };
+            // SAFETY: the caller's conditions; every row index a stage forms is below n.
+            unsafe {
+                stage.run::<V>(inverse, twiddles, src, dst, width);
+            }
+        }
+    }
+}
+
+/// The radices of the stages for length `n`: 4s, then a 2 if one is left, then 3s; `None` if
+/// `n < 2` or `n` has another prime factor.
+fn radices(n: usize) -> Option<Vec<usize>> {
+    if n < 2 {
+        return None;
+    }
+    let (mut rest, mut radices) = (n, Vec::new());
+    while rest.is_multiple_of(4) {
+        radices.push(4);
+        rest /= 4;
+    }
+    if rest.is_multiple_of(2) {
+        radices.push(2);
+        rest /= 2;
+    }
+    while rest.is_multiple_of(3) {
+        radices.push(3);
+        rest /= 3;
+    }
+    (rest == 1).then_some(radices)
+}
+
+/// Rows of complex values `stride` apart from `at`.
+#[derive(Clone, Copy)]
+struct Rows {
+    at: *mut Complex64,
+    stride: usize,
+}
+
+impl Rows {
+    /// Row `i`, column `c`.
+    #[inline(always)]
+    unsafe fn at(self, i: usize, c: usize) -> *mut Complex64 {
+        // SAFETY: the caller keeps (i, c) inside the rows.
+        unsafe { self.at.add(i * self.stride + c) }
+    }
+}
+
+impl Stage {
+    /// This stage on the first `width` columns of `src` into `dst`, in vectors of `V`.
+    ///
+    /// # Safety
+    /// `src` and `dst` hold n rows of `width` columns; the CPU has `V`'s instructions.
+    #[inline(always)]
+    unsafe fn run<V: Vector>(
+        &self,
+        inverse: bool,
+        twiddles: &[Complex64],
+        src: Rows,
+        dst: Rows,
+        width: usize,
+    ) {
+        // SAFETY: the caller's conditions.
+        unsafe {
+            match (self.radix, inverse) {
+                (4, false) => self.butterflies::<V, 4, false>(twiddles, src, dst, width),
+                (4, true) => self.butterflies::<V, 4, true>(twiddles, src, dst, width),
+                (3, false) => self.butterflies::<V, 3, false>(twiddles, src, dst, width),
+                (3, true) => self.butterflies::<V, 3, true>(twiddles, src, dst, width),
+                (_, false) => self.butterflies::<V, 2, false>(twiddles, src, dst, width),
+                (_, true) => self.butterflies::<V, 2, true>(twiddles, src, dst, width),
+            }
+        }
+    }
+
+    /// The radix-`R` butterflies of this stage: for `p = 0` the twiddles are 1 and are skipped.
+    ///
+    /// # Safety
+    /// As for [`Self::run`].
+    #[inline(always)]
+    unsafe fn butterflies<V: Vector, const R: usize, const INVERSE: bool>(
+        &self,
+        twiddles: &[Complex64],
+        src: Rows,
+        dst: Rows,
+        width: usize,
+    ) {
+        let (s, m) = (self.stride, self.len / R);
+        let whole = width - width % V::VALUES;
+        for p in 0..m {
+            let w: [Complex64; R] = std::array::from_fn(|r| match r {
+                0 => Complex64::ONE,
+                _ => twiddles[p * (R - 1) + r - 1],
+            });
+            for q in 0..s {
+                // SAFETY: rows q + s (p + m l) and q + s (R p + r) are below n = s R m.
+                let (x, y) = unsafe {
+                    (
+                        std::array::from_fn(|l| src.at(q + s * (p + m * l), 0).cast_const()),
+                        std::array::from_fn(|r| dst.at(q + s * (R * p + r), 0)),
+                    )
+                };
+                // SAFETY: the rows are inside `src` and `dst`, columns c..c + count below width.
+                unsafe {
+                    for c in (0..whole).step_by(V::VALUES) {
+                        butterfly::<V, R, INVERSE>(x, y, c, V::VALUES, &w, p == 0);
+                    }
+                    if whole < width {
+                        butterfly::<V, R, INVERSE>(x, y, whole, width - whole, &w, p == 0);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// One butterfly on the `count` columns from `c` of rows `x` into rows `y`, the outputs
+/// `r ≥ 1` times `w[r]` (unless `unit`).
+///
+/// # Safety
+/// The rows hold the columns `c..c + count`; the CPU has `V`'s instructions.
+#[inline(always)]
+unsafe fn butterfly<V: Vector, const R: usize, const INVERSE: bool>(
+    x: [*const Complex64; R],
+    y: [*mut Complex64; R],
+    c: usize,
+    count: usize,
+    w: &[Complex64; R],
+    unit: bool,
+) {
+    // SAFETY: the caller's conditions.
+    unsafe {
+        let mut v = [V::load(x[0].add(c), count); R];
+        for l in 1..R {
+            v[l] = V::load(x[l].add(c), count);
+        }
+        let out = dft::<V, R, INVERSE>(v);
+        out[0].store(y[0].add(c), count);
+        for r in 1..R {
+            let o = if unit { out[r] } else { out[r].times(w[r]) };
+            o.store(y[r].add(c), count);
+        }
+    }
+}
+
+/// The `R`-point DFT `Σ_l x_l w_R^{l r}`, `w_R = e^{∓2πi/R}` (`R` = 2, 3 or 4).
+#[inline(always)]
+fn dft<V: Vector, const R: usize, const INVERSE: bool>(x: [V; R]) -> [V; R] {
+    let mut out = x;
+    match R {
+        4 => out.copy_from_slice(&radix4(INVERSE, [x[0], x[1], x[2], x[3]])),
+        3 => out.copy_from_slice(&radix3(INVERSE, [x[0], x[1], x[2]])),
+        _ => out.copy_from_slice(&[x[0].add(x[1]), x[0].sub(x[1])]),
+    }
+    out
+}
+
+/// The 4-point DFT `Σ_l x_l w_4^{l r}`, `w_4 = ∓i`.
+#[inline(always)]
+fn radix4<V: Vector>(inverse: bool, [a, b, c, d]: [V; 4]) -> [V; 4] {
+    let (apc, amc, bpd) = (a.add(c), a.sub(c), b.add(d));
+    // ±i (b − d): forward +i, inverse −i.
+    let jbmd = if inverse {
+        b.sub(d).times_minus_i()
+    } else {
+        b.sub(d).times_i()
+    };
+    [apc.add(bpd), amc.sub(jbmd), apc.sub(bpd), amc.add(jbmd)]
+}
+
+/// The 3-point DFT `Σ_l x_l w_3^{l r}`, `w_3 = −1/2 ∓ i√3/2`.
+#[inline(always)]
+fn radix3<V: Vector>(inverse: bool, [a, b, c]: [V; 3]) -> [V; 3] {
+    let t = b.add(c);
+    let u = a.sub(t.scale(0.5));
+    // ∓i (√3/2)(b − c).
+    let v = b.sub(c).scale(0.75f64.sqrt());
+    let v = if inverse {
+        v.times_i()
+    } else {
+        v.times_minus_i()
+    };
+    [a.add(t), u.add(v), u.sub(v)]
+}
+
+/// Complex values in a register: `VALUES` of them, interleaved (re, im).
+trait Vector: Copy {
+    const VALUES: usize;
+    /// The first `count` (1..=VALUES) values from `p`, the rest zero.
+    unsafe fn load(p: *const Complex64, count: usize) -> Self;
+    /// The first `count` values to `p`.
+    unsafe fn store(self, p: *mut Complex64, count: usize);
+    fn add(self, o: Self) -> Self;
+    fn sub(self, o: Self) -> Self;
+    /// Times a real.
+    fn scale(self, s: f64) -> Self;
+    /// `(a + ib)(c + id) = (a c − b d) + i (b c + a d)`, each sum fused.
+    fn times(self, w: Complex64) -> Self;
+    /// `i (a + ib) = −b + ia`.
+    fn times_i(self) -> Self;
+    /// `−i (a + ib) = b − ia`.
+    fn times_minus_i(self) -> Self;
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    //! The register `Y` (AVX2/FMA, two complex values) and the prefetch.
+
+    use super::{Rows, Vector};
+    use rustfft::num_complex::Complex64;
+    use std::arch::x86_64::*;
+
+    #[derive(Clone, Copy)]
+    pub(super) struct Y(__m256d);
+
+    impl Vector for Y {
+        const VALUES: usize = 2;
+        #[inline(always)]
+        unsafe fn load(p: *const Complex64, count: usize) -> Self {
+            // SAFETY: the caller's pointer holds `count` values.
+            unsafe {
+                if count == 2 {
+                    Y(_mm256_loadu_pd(p.cast()))
+                } else {
+                    Y(_mm256_castpd128_pd256(_mm_loadu_pd(p.cast())))
+                }
+            }
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut Complex64, count: usize) {
+            // SAFETY: the caller's pointer holds `count` values.
+            unsafe {
+                if count == 2 {
+                    _mm256_storeu_pd(p.cast(), self.0)
+                } else {
+                    _mm_storeu_pd(p.cast(), _mm256_castpd256_pd128(self.0))
+                }
+            }
+        }
+        #[inline(always)]
+        fn add(self, o: Self) -> Self {
+            // SAFETY (all methods): built only inside functions enabling AVX2 and FMA.
+            Y(unsafe { _mm256_add_pd(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn sub(self, o: Self) -> Self {
+            Y(unsafe { _mm256_sub_pd(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn scale(self, s: f64) -> Self {
+            Y(unsafe { _mm256_mul_pd(self.0, _mm256_set1_pd(s)) })
+        }
+        #[inline(always)]
+        fn times(self, w: Complex64) -> Self {
+            unsafe {
+                let swapped = _mm256_permute_pd(self.0, 0b0101);
+                let cross = _mm256_mul_pd(swapped, _mm256_set1_pd(w.im));
+                Y(_mm256_fmaddsub_pd(self.0, _mm256_set1_pd(w.re), cross))
+            }
+        }
+        #[inline(always)]
+        fn times_i(self) -> Self {
+            unsafe {
+                let swapped = _mm256_permute_pd(self.0, 0b0101);
+                Y(_mm256_xor_pd(swapped, _mm256_setr_pd(-0.0, 0.0, -0.0, 0.0)))
+            }
+        }
+        #[inline(always)]
+        fn times_minus_i(self) -> Self {
+            unsafe {
+                let swapped = _mm256_permute_pd(self.0, 0b0101);
+                Y(_mm256_xor_pd(swapped, _mm256_setr_pd(0.0, -0.0, 0.0, -0.0)))
+            }
+        }
+    }
+
+    /// Prefetch the first `width` columns of the `n` rows at `rows` into L1.
+    ///
+    /// # Safety
+    /// The rows hold those columns; the CPU has SSE.
+    #[inline(always)]
+    pub(super) unsafe fn prefetch(rows: Rows, n: usize, width: usize) {
+        for i in 0..n {
+            // Four complex values a cache line.
+            for c in (0..width).step_by(4) {
+                // SAFETY: the caller's conditions.
+                unsafe { _mm_prefetch::<_MM_HINT_T0>(rows.at(i, c).cast_const().cast()) };
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    /// The naive DFT of column `c`: `Σ_i x_i e^{∓2πi j i/n}`.
+    fn naive(a: &Array2<Complex64>, c: usize, inverse: bool) -> Vec<Complex64> {
+        let n = a.nrows();
+        let sign = if inverse { 1.0 } else { -1.0 };
+        (0..n)
+            .map(|j| {
+                (0..n)
+                    .map(|i| {
+                        let e = ((i * j) % n) as f64;
+                        a[[i, c]] * Complex64::from_polar(1.0, sign * 2.0 * PI * e / n as f64)
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// Pseudo-random values in [−1, 1) (a fixed linear congruential sequence).
+    fn values(rows: usize, cols: usize, seed: u64) -> Array2<Complex64> {
+        let mut s = seed;
+        let mut next = move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        };
+        Array2::from_shape_fn((rows, cols), |_| Complex64::new(next(), next()))
+    }
+
+    /// Every column equals the naive DFT to 1e-14 × Σ|x| (round-off of O(log n) stages), for
+    /// lengths 2^a 3^b from 2 to 192, forward and inverse, blocks of one column to more than a
+    /// block, as a column range of wider rows (the columns outside untouched).
+    #[test]
+    fn columns_match_the_naive_dft() {
+        if !super::super::kernels::has_avx2_fma() {
+            return;
+        }
+        for n in [
+            2, 3, 4, 6, 8, 9, 12, 16, 18, 24, 27, 32, 48, 64, 96, 128, 192,
+        ] {
+            let fft = ColumnFft::new(n).expect("a product of 2s and 3s");
+            let mut scratch = vec![Complex64::default(); fft.scratch_len()];
+            for (cols, width) in [(1, 1), (3, 5), (8, 8), (21, 23), (37, 37)] {
+                for inverse in [false, true] {
+                    let before = values(n, width, (n * 100 + cols) as u64);
+                    let mut a = before.clone();
+                    fft.process(inverse, a.slice_mut(ndarray::s![.., ..cols]), &mut scratch);
+                    for c in 0..width {
+                        if c >= cols {
+                            assert_eq!(a.column(c), before.column(c), "n {n}: column {c} moved");
+                            continue;
+                        }
+                        let size: f64 = before.column(c).iter().map(|v| v.norm()).sum();
+                        for (j, e) in naive(&before, c, inverse).iter().enumerate() {
+                            let err = (a[[j, c]] - e).norm();
+                            assert!(
+                                err <= 1e-14 * size,
+                                "n {n}, cols {cols}, inverse {inverse}: column {c}, j {j}: \
+                                 error {err:.2e} against Σ|x| = {size:.2e}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A column's result does not depend on the block it is in: the same bits alone as in a
+    /// block of 37 (two whole blocks and a partial one, each row ending in half a register).
+    #[test]
+    fn a_column_gives_the_same_bits_in_any_block() {
+        let Some(fft) = ColumnFft::new(48) else {
+            return;
+        };
+        let mut scratch = vec![Complex64::default(); fft.scratch_len()];
+        let before = values(48, 37, 7);
+        let mut all = before.clone();
+        fft.process(false, all.view_mut(), &mut scratch);
+        for c in [0, 5, 31, 36] {
+            let mut alone = before.slice(ndarray::s![.., c..c + 1]).to_owned();
+            fft.process(false, alone.view_mut(), &mut scratch);
+            assert_eq!(alone.column(0), all.column(c), "column {c}");
+        }
+    }
+
+    /// Lengths with another prime factor, and 1, have no plan.
+    #[test]
+    fn other_lengths_have_no_plan() {
+        for n in [0, 1, 5, 7, 10, 40, 100] {
+            assert!(radices(n).is_none(), "n = {n}");
+        }
+        assert_eq!(radices(96), Some(vec![4, 4, 2, 3]));
+    }
+}
