@@ -167,14 +167,9 @@ impl ColumnFft {
         for (k, stage) in self.stages.iter().enumerate() {
             let src = if k == 0 { rows } else { buffers[(k - 1) % 2] };
             let dst = if k == last { rows } else { buffers[k % 2] };
-            let twiddles = if inverse {
-                &stage.inverse
-            } else {
-                &stage.forward
-            };
             // SAFETY: the caller's conditions; every row index a stage forms is below n.
             unsafe {
-                stage.run::<V>(inverse, twiddles, src, dst, width);
+                stage.run::<V>(inverse, src, dst, width);
             }
         }
     }
@@ -224,23 +219,16 @@ impl Stage {
     /// # Safety
     /// `src` and `dst` hold n rows of `width` columns; the CPU has `V`'s instructions.
     #[inline(always)]
-    unsafe fn run<V: Vector>(
-        &self,
-        inverse: bool,
-        twiddles: &[Complex64],
-        src: Rows,
-        dst: Rows,
-        width: usize,
-    ) {
+    unsafe fn run<V: Vector>(&self, inverse: bool, src: Rows, dst: Rows, width: usize) {
         // SAFETY: the caller's conditions.
         unsafe {
             match (self.radix, inverse) {
-                (4, false) => self.butterflies::<V, 4, false>(twiddles, src, dst, width),
-                (4, true) => self.butterflies::<V, 4, true>(twiddles, src, dst, width),
-                (3, false) => self.butterflies::<V, 3, false>(twiddles, src, dst, width),
-                (3, true) => self.butterflies::<V, 3, true>(twiddles, src, dst, width),
-                (_, false) => self.butterflies::<V, 2, false>(twiddles, src, dst, width),
-                (_, true) => self.butterflies::<V, 2, true>(twiddles, src, dst, width),
+                (4, false) => self.butterflies::<V, 4, false>(src, dst, width),
+                (4, true) => self.butterflies::<V, 4, true>(src, dst, width),
+                (3, false) => self.butterflies::<V, 3, false>(src, dst, width),
+                (3, true) => self.butterflies::<V, 3, true>(src, dst, width),
+                (_, false) => self.butterflies::<V, 2, false>(src, dst, width),
+                (_, true) => self.butterflies::<V, 2, true>(src, dst, width),
             }
         }
     }
@@ -252,12 +240,16 @@ impl Stage {
     #[inline(always)]
     unsafe fn butterflies<V: Vector, const R: usize, const INVERSE: bool>(
         &self,
-        twiddles: &[Complex64],
         src: Rows,
         dst: Rows,
         width: usize,
     ) {
         let (s, m) = (self.stride, self.len / R);
+        let twiddles = if INVERSE {
+            &self.inverse
+        } else {
+            &self.forward
+        };
         let whole = width - width % V::VALUES;
         for p in 0..m {
             let w: [Complex64; R] = std::array::from_fn(|r| match r {

@@ -87,9 +87,6 @@ struct LaneKernel {
     identity: Vec<usize>,
     /// DCT twiddles `w_k = e^{−iπk/(2m)}`; empty for the FFT.
     twiddle: Vec<Complex64>,
-    /// The FFT of a strided stage done down the columns in place (no lanes), when the length
-    /// allows it ([`ColumnFft::new`]).
-    columns: Option<ColumnFft>,
 }
 
 impl LaneKernel {
@@ -120,9 +117,6 @@ impl LaneKernel {
             pos,
             identity: (0..len).collect(),
             twiddle,
-            columns: (padded && kind == AxisKind::Periodic)
-                .then(|| ColumnFft::new(len))
-                .flatten(),
         }
     }
 
@@ -208,6 +202,30 @@ enum LastAxis {
     Mirror(LaneKernel),
 }
 
+/// How a strided axis (0 or 1) is transformed.
+enum Strided {
+    /// Down the columns in place: a periodic axis whose length [`ColumnFft::new`] plans.
+    Columns(ColumnFft),
+    /// Gathered into lanes, transformed by a batched kernel and scattered back.
+    Lanes(LaneKernel),
+}
+
+impl Strided {
+    /// The transform of axis `a` of `shape` with walls `kinds`.
+    fn new(
+        planner: &mut FftPlanner<f64>,
+        a: usize,
+        shape: [usize; 3],
+        kinds: [AxisKind; 3],
+    ) -> Self {
+        let columns = (kinds[a] == AxisKind::Periodic).then(|| ColumnFft::new(shape[a]));
+        match columns.flatten() {
+            Some(columns) => Strided::Columns(columns),
+            None => Strided::Lanes(LaneKernel::new(planner, shape[a], kinds[a], true)),
+        }
+    }
+}
+
 /// Scratch owned by one parallel chunk.
 struct Work {
     lanes: Vec<Complex64>,
@@ -221,7 +239,7 @@ struct Plan {
     spectral: [usize; 3],
     last: LastAxis,
     /// Kernels of axes 0 and 1; `None` for an axis of length 1 (identity).
-    strided: [Option<LaneKernel>; 2],
+    strided: [Option<Strided>; 2],
     packing: Packing,
 }
 
@@ -267,9 +285,8 @@ impl Transform {
                 false,
             )),
         };
-        let strided = [0, 1].map(|a| {
-            (shape[a] > 1).then(|| LaneKernel::new(&mut planner, shape[a], kinds[a], true))
-        });
+        let strided =
+            [0, 1].map(|a| (shape[a] > 1).then(|| Strided::new(&mut planner, a, shape, kinds)));
         let real_only = kinds[2] == AxisKind::Mirror
             && (0..2).all(|a| shape[a] == 1 || kinds[a] == AxisKind::Mirror);
         let mut spectral = shape;
@@ -510,20 +527,16 @@ impl Transform {
 impl Plan {
     /// Scratch for one parallel chunk, sized for every stage.
     fn new_work(&self) -> Work {
-        let kernels = self.strided.iter().flatten();
-        let mut lanes = kernels
-            .clone()
-            .map(|k| k.batch * k.stride)
-            .max()
-            .unwrap_or(0);
-        let columns = kernels
-            .clone()
-            .flat_map(|k| &k.columns)
-            .map(ColumnFft::scratch_len)
-            .max()
-            .unwrap_or(0);
-        lanes = lanes.max(columns);
-        let mut scratch = kernels.map(|k| k.scratch_len).max().unwrap_or(0);
+        let (mut lanes, mut scratch) = (0, 0);
+        for strided in self.strided.iter().flatten() {
+            match strided {
+                Strided::Columns(c) => lanes = lanes.max(c.scratch_len()),
+                Strided::Lanes(k) => {
+                    lanes = lanes.max(k.batch * k.stride);
+                    scratch = scratch.max(k.scratch_len);
+                }
+            }
+        }
         match &self.last {
             LastAxis::Real { r2c, c2r } => {
                 scratch = scratch
@@ -721,21 +734,24 @@ fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale:
 }
 
 /// Transform a piece `[outer, len, width]` of the spectrum along its middle axis: down the
-/// columns in place when the kernel has a column FFT, else a block of columns at a time is
-/// gathered into contiguous lanes, transformed in one batched call and scattered back.
+/// columns in place, or a block of columns at a time gathered into contiguous lanes,
+/// transformed in one batched call and scattered back.
 fn strided_piece(
     mut piece: ArrayViewMut3<Complex64>,
-    kernel: &LaneKernel,
+    strided: &Strided,
     packing: Packing,
     dir: Direction,
     work: &mut Work,
 ) {
-    if let (Packing::Complex, Some(columns)) = (packing, &kernel.columns) {
-        for slab in piece.outer_iter_mut() {
-            columns.process(dir == Direction::Inverse, slab, &mut work.lanes);
+    let kernel = match strided {
+        Strided::Columns(columns) => {
+            for slab in piece.outer_iter_mut() {
+                columns.process(dir == Direction::Inverse, slab, &mut work.lanes);
+            }
+            return;
         }
-        return;
-    }
+        Strided::Lanes(kernel) => kernel,
+    };
     let per_lane = packing.columns_per_lane();
     let columns = kernel.batch * per_lane;
     let (from, to) = kernel.orders(dir);
