@@ -61,6 +61,7 @@ pub mod model;
 pub mod numerics;
 pub mod observers;
 pub mod output;
+pub mod private;
 pub mod record;
 pub mod relax;
 pub mod render;

@@ -24,6 +24,7 @@
 use super::lanes::{in_lanes, largest, total, Kernel, Lane};
 use crate::grid::{AxisKind, Grid};
 use crate::model::{bulk, bulk_derivative};
+use crate::private::Private;
 use crate::stencil::{above, below};
 use rayon::prelude::*;
 
@@ -153,47 +154,15 @@ impl Sums {
 }
 
 /// One thread's buffers: the halo planes of φ' (two below the slab, two above), the ring of
-/// three Φ planes, one row of a Laplacian, a row of ones (the uniform εC0's field), and the
-/// slab's sums.
+/// three Φ planes, one row of a Laplacian, a row of ones (the uniform εC0's field), each
+/// [`Private`] to the thread, and the slab's sums.
 #[derive(Debug)]
 struct Pipe {
-    halo: Private,
-    big: Private,
-    row: Private,
-    ones: Private,
+    halo: Private<f64>,
+    big: Private<f64>,
+    row: Private<f64>,
+    ones: Private<f64>,
     sums: Sums,
-}
-
-/// A thread's own buffer of `len` values between two guards of [`GUARD`] unused values, so that
-/// no pair of cache lines it touches (the unit of the L2's adjacent-line prefetch) holds another
-/// thread's data. Without the guards the two threads' one-row buffers could share a line with
-/// each other's heap neighbours: the 2-thread step at 64³ then ran in 0.6 to 1.5 ms from one
-/// process to the next.
-#[derive(Debug)]
-struct Private(Vec<f64>);
-
-/// Unused values on either side of a [`Private`] buffer: 128 bytes.
-const GUARD: usize = 16;
-
-impl Private {
-    /// `len` copies of `value`, guarded.
-    fn new(len: usize, value: f64) -> Self {
-        Private(vec![value; len + 2 * GUARD])
-    }
-}
-
-impl std::ops::Deref for Private {
-    type Target = [f64];
-    fn deref(&self) -> &[f64] {
-        &self.0[GUARD..self.0.len() - GUARD]
-    }
-}
-
-impl std::ops::DerefMut for Private {
-    fn deref_mut(&mut self) -> &mut [f64] {
-        let end = self.0.len() - GUARD;
-        &mut self.0[GUARD..end]
-    }
 }
 
 /// The planned sweep: layout and per-thread buffers (allocated once).

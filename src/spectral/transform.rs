@@ -31,6 +31,7 @@ use rustfft::{Fft, FftPlanner};
 
 use super::columns::ColumnFft;
 use crate::grid::AxisKind;
+use crate::private::Private;
 
 /// Complex values in one batch of gathered lanes (32 KiB: stays in L1 with the FFT scratch).
 const LANE_BUFFER: usize = 2048;
@@ -228,8 +229,8 @@ impl Strided {
 
 /// Scratch owned by one parallel chunk.
 struct Work {
-    lanes: Vec<Complex64>,
-    scratch: Vec<Complex64>,
+    lanes: Private<Complex64>,
+    scratch: Private<Complex64>,
 }
 
 /// Everything fixed at planning time (shared read-only by the parallel chunks).
@@ -549,8 +550,8 @@ impl Plan {
             }
         }
         Work {
-            lanes: vec![Complex64::default(); lanes],
-            scratch: vec![Complex64::default(); scratch],
+            lanes: Private::new(lanes, Complex64::default()),
+            scratch: Private::new(scratch, Complex64::default()),
         }
     }
 
