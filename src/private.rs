@@ -6,7 +6,7 @@ use std::ops::{Deref, DerefMut};
 /// adjacent-line prefetch.
 const GUARD_BYTES: usize = 128;
 
-/// A thread's own buffer of `len` values between two guards of [`GUARD_BYTES`] unused bytes, so
+/// A thread's own buffer of `len` values between two guards of 128 unused bytes, so
 /// that no line it touches holds another thread's data. Per-thread buffers allocated one after
 /// another otherwise share a line where one ends and the next begins, and two threads writing
 /// them pass the line back and forth: the FD step on 2 threads ran in 0.6 to 1.5 ms at 64³

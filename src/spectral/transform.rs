@@ -249,6 +249,9 @@ struct Plan {
 pub struct Transform {
     plan: Plan,
     works: Vec<Work>,
+    /// Two real slabs per thread: the fields of [`Transform::round_trip`] that never reach a
+    /// full array.
+    slab_fields: Vec<Private<f64>>,
 }
 
 impl fmt::Debug for Transform {
@@ -307,7 +310,15 @@ impl Transform {
             },
         };
         let works = (0..threads.max(1)).map(|_| plan.new_work()).collect();
-        Transform { plan, works }
+        let slab = shape[1] * shape[2];
+        let slab_fields = (0..threads.max(1))
+            .map(|_| Private::new(2 * slab, 0.0))
+            .collect();
+        Transform {
+            plan,
+            works,
+            slab_fields,
+        }
     }
 
     /// Shape `[s0, s1, s2]` of the spectrum: `s_a = n_a`, except `s2 = n2/2 + 1` when axis 2
@@ -331,7 +342,7 @@ impl Transform {
     /// # Panics
     /// If the shapes differ from the plan or an array is not in standard layout.
     pub fn forward(&mut self, input: &mut Array3<f64>, out: &mut Array3<Complex64>) {
-        let Transform { plan, works } = self;
+        let Transform { plan, works, .. } = self;
         assert_eq!(input.shape(), plan.shape, "input shape");
         assert_eq!(out.shape(), plan.spectral, "spectrum shape");
         let x = input.as_slice_mut().expect("input in standard layout");
@@ -368,7 +379,7 @@ impl Transform {
     /// # Panics
     /// If the shapes differ from the plan or an array is not in standard layout.
     pub fn inverse(&mut self, input: &mut Array3<Complex64>, out: &mut Array3<f64>) {
-        let Transform { plan, works } = self;
+        let Transform { plan, works, .. } = self;
         assert_eq!(input.shape(), plan.spectral, "spectrum shape");
         assert_eq!(out.shape(), plan.shape, "output shape");
         let y = input.as_slice_mut().expect("spectrum in standard layout");
@@ -394,6 +405,96 @@ impl Transform {
                 .zip(works.par_iter_mut())
                 .for_each(|((y, x), work)| plan.last.inverse_rows(y, x, n2, scale, work));
         }
+    }
+
+    /// A round trip through real space, slab by slab: the inverse transforms of `a` into `real`
+    /// and of `b` into a slab of scratch, then per slab of axis 0 `visit(first, x_a, x_b, y)`
+    /// (`first` the slab's first index in `real`, `x_a` its slab of `real`, `x_b` and `y` two
+    /// slabs of scratch), which leaves in `y` and `x_b` the fields whose forward transforms
+    /// replace `a` and `b`. The same as [`Transform::inverse`] twice, `visit` over the box and
+    /// [`Transform::forward`] twice, but each slab's fields stay in cache from the inverse
+    /// transforms to the forward ones, and the two scratch fields never reach memory. Returns
+    /// the slabs' values summed by `add` (in slab order within a thread, then over the
+    /// threads), or `None`, having done nothing, when the box has fewer slabs than threads.
+    ///
+    /// # Panics
+    /// If the shapes are not those of the plan.
+    pub fn round_trip<S: Send>(
+        &mut self,
+        [a, b]: [&mut Array3<Complex64>; 2],
+        real: &mut Array3<f64>,
+        visit: impl Fn(usize, &[f64], &mut [f64], &mut [f64]) -> S + Sync,
+        add: impl Fn(S, S) -> S + Sync,
+    ) -> Option<S> {
+        let Transform {
+            plan,
+            works,
+            slab_fields,
+        } = self;
+        let [n0, n1, n2] = plan.shape;
+        let threads = works.len();
+        if n0 < threads {
+            return None;
+        }
+        for y in [&*a, &*b] {
+            assert_eq!(y.shape(), plan.spectral, "spectrum shape");
+        }
+        assert_eq!(real.shape(), plan.shape, "real shape");
+        let (ya, yb) = (
+            a.as_slice_mut().expect("layout"),
+            b.as_slice_mut().expect("layout"),
+        );
+        let x = real.as_slice_mut().expect("real field in standard layout");
+        plan.strided_pass(0, Direction::Inverse, ya, works);
+        plan.strided_pass(0, Direction::Inverse, yb, works);
+        let (slab, spectral_slab) = (n1 * n2, n1 * plan.spectral[2]);
+        let scale = 1.0 / (n0 * slab) as f64;
+        // The slabs from `first_slab` of one thread: `ya`, `yb`, `x` hold just those slabs.
+        let slabs = |first_slab: usize,
+                     (ya, yb, x): (&mut [Complex64], &mut [Complex64], &mut [f64]),
+                     work: &mut Work,
+                     fields: &mut [f64]|
+         -> Option<S> {
+            let (xb, y) = fields.split_at_mut(slab);
+            let ya = ya.chunks_exact_mut(spectral_slab);
+            let yb = yb.chunks_exact_mut(spectral_slab);
+            let mut total: Option<S> = None;
+            for (i, ((ya, yb), x)) in ya.zip(yb).zip(x.chunks_exact_mut(slab)).enumerate() {
+                plan.inverse_slabs(ya, x, scale, work);
+                plan.inverse_slabs(yb, xb, scale, work);
+                let value = visit((first_slab + i) * slab, x, xb, y);
+                plan.forward_slabs(y, ya, work);
+                plan.forward_slabs(xb, yb, work);
+                total = Some(match total {
+                    Some(t) => add(t, value),
+                    None => value,
+                });
+            }
+            total
+        };
+        let total = if threads == 1 {
+            slabs(0, (ya, yb, x), &mut works[0], &mut slab_fields[0])
+        } else {
+            let per = n0.div_ceil(threads);
+            ya.par_chunks_mut(per * spectral_slab)
+                .zip(yb.par_chunks_mut(per * spectral_slab))
+                .zip(x.par_chunks_mut(per * slab))
+                .zip(works.par_iter_mut().zip(slab_fields.par_iter_mut()))
+                .enumerate()
+                .map(|(t, (((ya, yb), x), (work, fields)))| {
+                    slabs(t * per, (ya, yb, x), work, fields)
+                })
+                .reduce(
+                    || None,
+                    |p, q| match (p, q) {
+                        (Some(p), Some(q)) => Some(add(p, q)),
+                        (p, q) => p.or(q),
+                    },
+                )
+        };
+        plan.strided_pass(0, Direction::Forward, ya, works);
+        plan.strided_pass(0, Direction::Forward, yb, works);
+        total
     }
 
     /// Signed wavenumber of every spectral index, per axis, for grid spacing `h`:
