@@ -168,28 +168,47 @@ fn makhoul_positions(m: usize) -> Vec<usize> {
         .collect()
 }
 
-/// From `V = FFT(v)` of the reordered lane to the DCT-II, in place:
-/// `X_k = (w_k V_k + w̄_k V_{m−k}) / 2` (and `X_0 = V_0`). The map is C-linear, so it holds for
-/// complex lanes (the DCT of the real and imaginary parts).
+/// From `V = FFT(v)` of the reordered lane to the DCT-II, in place: `X_0 = V_0` and, with
+/// `w_k = e^{−iπk/(2m)} = c_k − i s_k` (so `w_{m−k} = −i w̄_k`), `a = V_k`, `b = V_{m−k}`,
+///
+/// ```text
+/// X_k     = (w_k a + w̄_k b)/2         = (c_k (a + b) − i s_k (a − b))/2,
+/// X_{m−k} = (w_{m−k} b + w̄_{m−k} a)/2 = (s_k (a + b) + i c_k (a − b))/2.
+/// ```
+///
+/// The map is C-linear, so it holds for complex lanes (the DCT of the real and imaginary parts).
 fn dct_post_twiddle(lane: &mut [Complex64], w: &[Complex64]) {
     let m = lane.len();
     for k in 1..=m / 2 {
-        let (a, b) = (lane[k], lane[m - k]);
-        lane[k] = 0.5 * (w[k] * a + w[k].conj() * b);
-        lane[m - k] = 0.5 * (w[m - k] * b + w[m - k].conj() * a);
+        let (c, s) = (w[k].re, -w[k].im);
+        let (sum, diff) = (lane[k] + lane[m - k], lane[k] - lane[m - k]);
+        lane[k] = 0.5 * (c * sum - times_i(s * diff));
+        lane[m - k] = 0.5 * (s * sum + times_i(c * diff));
     }
 }
 
-/// Inverse of [`dct_post_twiddle`] up to the FFT normalisation, in place:
-/// `V_k = w̄_k (X_k − i X_{m−k})` (and `V_0 = X_0`).
+/// Inverse of [`dct_post_twiddle`] up to the FFT normalisation, in place: `V_0 = X_0` and, with
+/// `a = X_k`, `b = X_{m−k}`,
+///
+/// ```text
+/// V_k     = w̄_k (a − i b)         = P + iQ,
+/// V_{m−k} = w̄_{m−k} (b − i a)     = P − iQ,     P = c_k a + s_k b,  Q = s_k a − c_k b.
+/// ```
 fn dct_pre_twiddle(lane: &mut [Complex64], w: &[Complex64]) {
     let m = lane.len();
-    let i = Complex64::i();
     for k in 1..=m / 2 {
+        let (c, s) = (w[k].re, -w[k].im);
         let (a, b) = (lane[k], lane[m - k]);
-        lane[k] = w[k].conj() * (a - i * b);
-        lane[m - k] = w[m - k].conj() * (b - i * a);
+        let (p, q) = (c * a + s * b, s * a - c * b);
+        lane[k] = p + times_i(q);
+        lane[m - k] = p - times_i(q);
     }
+}
+
+/// i z.
+#[inline(always)]
+fn times_i(z: Complex64) -> Complex64 {
+    Complex64::new(-z.im, z.re)
 }
 
 /// The transform along the last (contiguous) axis.
