@@ -72,9 +72,12 @@ fn bench_steps(c: &mut Criterion) {
             }
         }
         group.sample_size(100);
-        let id = BenchmarkId::new(format!("{method}/eighth"), "64^3/t2");
-        let make = || engine(method, 64, json!(["x", "y", "z"]));
-        time_steps(&mut group, id, 2, make, dt);
+        // 32³ computed points: `vesicle run` takes one thread below 2¹⁷ (`cli::SERIAL_BELOW`).
+        for threads in [1, 2] {
+            let id = BenchmarkId::new(format!("{method}/eighth"), format!("64^3/t{threads}"));
+            let make = || engine(method, 64, json!(["x", "y", "z"]));
+            time_steps(&mut group, id, threads, make, dt);
+        }
     }
     group.finish();
 }
