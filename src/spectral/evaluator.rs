@@ -146,9 +146,10 @@ pub struct Evaluator {
     /// Spectral scratch: the input of the ∇²φ inverse transform, then FT[f] (the engines also
     /// use it between evaluations).
     pub spare: Array3<Complex64>,
-    /// Real scratch: ∇²φ, then f.
+    /// Real scratch: the field a state is made from ([`Evaluator::state_of`]); with the
+    /// transforms apart ([`pointwise_apart`]), ∇²φ, then f.
     work: Array3<f64>,
-    /// Real scratch: f'Φ.
+    /// Real scratch with the transforms apart: f'Φ.
     work2: Array3<f64>,
 }
 
