@@ -6,10 +6,10 @@
 //! sums of F, V, max|φ|), and a spectral one that combines the forward transforms into the
 //! explicit term and sums the residual (and, for the relaxational engine's gradient, the area
 //! multiplier's two sums in its metric). The real-space sweep runs slab by slab between the
-//! transforms' slab stages ([`Transform::round_trip`]), so that ∇²φ, f and f'Φ live in a slab of
-//! cache and only φ reaches memory; a box with fewer slabs than threads (2D) takes the
-//! transforms one at a time over full arrays instead. |k|² and the Parseval weights come from per-axis
-//! tables ([`Symbols`]), not from full-size arrays. An engine that can write the two inverse
+//! transforms' slab stages ([`Transform::round_trip`]), so that ∇²φ, f and f'Φ live in a slab
+//! of cache and only φ reaches memory; a box with fewer slabs than threads (2D) takes the
+//! transforms one at a time over full arrays instead. |k|² and the Parseval weights come from
+//! per-axis tables ([`Symbols`]), not from full-size arrays. An engine that can write the two inverse
 //! inputs itself, in the sweep that makes φ̂ (as the time step does), skips the first sweep
 //! ([`Evaluator::finish`]).
 
@@ -324,7 +324,7 @@ fn pointwise_apart(
             let phi = &phi[range.clone()];
             pointwise_range(eps, phi, old, slice_c0(c0, range), lap, fphi)
         })
-        .reduce(PointSums::zero, PointSums::add);
+        .reduce(PointSums::default, PointSums::add);
     transform.forward(fphi, first);
     transform.forward(lap, second);
     sums
@@ -407,7 +407,8 @@ pub(crate) fn write_inverse_value(
     aw * re_dot(h, h)
 }
 
-/// Sums of the pointwise pass.
+/// Sums of the pointwise pass (zero by default).
+#[derive(Default)]
 struct PointSums {
     /// Σ Φ².
     phi_sq: f64,
@@ -420,15 +421,6 @@ struct PointSums {
 }
 
 impl PointSums {
-    fn zero() -> Self {
-        PointSums {
-            phi_sq: 0.0,
-            phi: 0.0,
-            max_abs: 0.0,
-            change: 0.0,
-        }
-    }
-
     fn add(self, o: Self) -> Self {
         PointSums {
             phi_sq: self.phi_sq + o.phi_sq,
@@ -439,7 +431,7 @@ impl PointSums {
     }
 }
 
-/// Real-space values per run of [`pointwise`]: its Φ are kept for the sums (4 KiB).
+/// Real-space values per run of [`pointwise_range`]: its Φ are kept for the sums (4 KiB).
 const RUN: usize = 512;
 
 /// The real-space sweep over a range of values: with `lap` = ∇²φ on entry, Φ = f(φ) − ε²∇²φ,
@@ -454,7 +446,7 @@ fn pointwise_range(
     lap: &mut [f64],
     fphi: &mut [f64],
 ) -> PointSums {
-    let mut acc = PointSums::zero();
+    let mut acc = PointSums::default();
     let mut big = [0.0; RUN];
     let runs = lap.chunks_mut(RUN).zip(fphi.chunks_mut(RUN));
     for (i, (lap, fphi)) in runs.enumerate() {
@@ -478,7 +470,8 @@ fn pointwise_range(
 }
 
 wide_fn! {
-/// One run of [`pointwise_range`]'s element-wise loop: `lap ← f(φ)`, `fphi ← f'(φ) Φ` and `big ← Φ`.
+/// One run of [`pointwise_range`]'s element-wise loop: `lap ← f(φ)`, `fphi ← f'(φ) Φ` and
+/// `big ← Φ`.
 fn pointwise_run(
     eps: f64,
     phi: &[f64],

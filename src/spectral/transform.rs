@@ -433,12 +433,13 @@ impl Transform {
     /// replace `a` and `b`. The same as [`Transform::inverse`] twice, `visit` over the box and
     /// [`Transform::forward`] twice, but each slab's fields stay in cache from the inverse
     /// transforms to the forward ones, and the two scratch fields never reach memory. Returns
-    /// the slabs' values summed by `add` (in slab order within a thread, then over the
-    /// threads), or `None`, having done nothing, when the box has fewer slabs than threads.
+    /// the slabs' values summed by `add` from `S::default()` (in slab order within a thread,
+    /// then over the threads), or `None`, having done nothing, when the box has fewer slabs
+    /// than threads.
     ///
     /// # Panics
     /// If the shapes are not those of the plan.
-    pub fn round_trip<S: Send>(
+    pub fn round_trip<S: Send + Default>(
         &mut self,
         [a, b]: [&mut Array3<Complex64>; 2],
         real: &mut Array3<f64>,
@@ -473,21 +474,17 @@ impl Transform {
                      (ya, yb, x): (&mut [Complex64], &mut [Complex64], &mut [f64]),
                      work: &mut Work,
                      fields: &mut [f64]|
-         -> Option<S> {
+         -> S {
             let (xb, y) = fields.split_at_mut(slab);
             let ya = ya.chunks_exact_mut(spectral_slab);
             let yb = yb.chunks_exact_mut(spectral_slab);
-            let mut total: Option<S> = None;
+            let mut total = S::default();
             for (i, ((ya, yb), x)) in ya.zip(yb).zip(x.chunks_exact_mut(slab)).enumerate() {
                 plan.inverse_slabs(ya, x, scale, work);
                 plan.inverse_slabs(yb, xb, scale, work);
-                let value = visit((first_slab + i) * slab, x, xb, y);
+                total = add(total, visit((first_slab + i) * slab, x, xb, y));
                 plan.forward_slabs(y, ya, work);
                 plan.forward_slabs(xb, yb, work);
-                total = Some(match total {
-                    Some(t) => add(t, value),
-                    None => value,
-                });
             }
             total
         };
@@ -503,17 +500,11 @@ impl Transform {
                 .map(|(t, (((ya, yb), x), (work, fields)))| {
                     slabs(t * per, (ya, yb, x), work, fields)
                 })
-                .reduce(
-                    || None,
-                    |p, q| match (p, q) {
-                        (Some(p), Some(q)) => Some(add(p, q)),
-                        (p, q) => p.or(q),
-                    },
-                )
+                .reduce(S::default, &add)
         };
         plan.strided_pass(0, Direction::Forward, ya, works);
         plan.strided_pass(0, Direction::Forward, yb, works);
-        total
+        Some(total)
     }
 
     /// Signed wavenumber of every spectral index, per axis, for grid spacing `h`:
