@@ -9,6 +9,7 @@ use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion};
 use serde_json::json;
 use std::time::{Duration, Instant};
+use vesicle::awake::KeepAwake;
 use vesicle::config;
 use vesicle::engine::Engine;
 use vesicle::setup;
@@ -35,8 +36,9 @@ fn engine_of(scene: serde_json::Value) -> Box<dyn Engine + Send> {
 }
 
 /// Time `steps` of an engine made by `make` in a pool of `threads`. The timing loop runs inside
-/// the pool, as `vesicle run` does (the whole run is one `install`): installing each step from
-/// outside would add two thread wake-ups per step, which the program never pays.
+/// the pool with the other workers kept awake, as `vesicle run`'s step loop does (the whole run
+/// is one `install`): installing each step from outside would add two thread wake-ups per
+/// step, which the program never pays.
 fn time_steps(
     group: &mut BenchmarkGroup<WallTime>,
     id: BenchmarkId,
@@ -52,6 +54,7 @@ fn time_steps(
     let mut t = 0.0;
     group.bench_function(id, |b| {
         pool.install(|| {
+            let _awake = KeepAwake::start();
             b.iter(|| {
                 e.step(t, dt).expect("step");
                 t += dt;
@@ -118,6 +121,7 @@ fn bench_relaxation(c: &mut Criterion) {
         group.bench_function(id, |b| {
             b.iter_custom(|iters| {
                 pool.install(|| {
+                    let _awake = KeepAwake::start();
                     let mut total = Duration::ZERO;
                     for _ in 0..iters {
                         if taken == 30 {

@@ -43,6 +43,7 @@
 //! println!("{}: F = {}, residual = {}", stopped.as_str(), last.energy, last.residual);
 //! ```
 
+pub mod awake;
 pub mod axisym;
 pub mod checkpoint;
 pub mod cli;

@@ -20,6 +20,7 @@ mod stop;
 pub use start::{build_engine, check_stability, stability_bound, Prepared};
 pub use stop::{StopRules, Stopped};
 
+use crate::awake::KeepAwake;
 use crate::engine::{Diverged, Engine, StepReport};
 use crate::error::{Error, Result};
 use crate::record::Record;
@@ -220,6 +221,8 @@ impl Simulation {
         if let Some(s) = rules.check(c.t, c.last_dt, c.step, self.engine.residual()) {
             return Ok(s);
         }
+        // The pool's other workers wait for each step's parallel regions without sleeping.
+        let _awake = KeepAwake::start();
         loop {
             let report = self.advance(rules.t_end)?;
             self.clock.wall_seconds = wall_before + started.elapsed().as_secs_f64();
