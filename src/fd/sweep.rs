@@ -21,7 +21,7 @@
 //! ghost φ_{−1} = φ_0 every stage's field is even about the wall, so the extension evaluates the
 //! same stencil as [`crate::stencil`]'s ghosts.
 
-use super::lanes::{in_lanes, largest, total, Kernel, Lane};
+use super::lanes::{in_lanes, largest, total, Acc, Kernel, Lane};
 use crate::grid::{AxisKind, Grid};
 use crate::model::{bulk, bulk_derivative};
 use crate::private::Private;
@@ -304,16 +304,28 @@ impl Pipe {
         } else {
             &mut self.halo[s.halo_slot(z) * p..][..p]
         };
+        let (kernel, mut acc) = (Advance { dt: s.k.dt }, Acc::zero());
         for j in 0..l.rows {
             laplacian_row(l, mu, j, s.k.inv_h2, &mut self.row);
             let r = j * l.len..(j + 1) * l.len;
             if own {
-                advance_row(&old[r.clone()], &self.row, s.k.dt, &mut out[r], sums);
+                in_lanes(
+                    &kernel,
+                    [&old[r.clone()], &self.row],
+                    [&mut out[r]],
+                    &mut acc,
+                );
             } else {
                 for ((o, &u), &m) in out[r.clone()].iter_mut().zip(&old[r]).zip(self.row.iter()) {
                     *o = u + s.k.dt * m;
                 }
             }
+        }
+        if own {
+            let ([sum, max_phi, max_lap], [sum_t, max_phi_t, max_lap_t]) = acc.finish();
+            sums.phi += total(sum, sum_t);
+            sums.max_phi = largest(max_phi, max_phi_t, sums.max_phi);
+            sums.max_lap_mu = largest(max_lap, max_lap_t, sums.max_lap_mu);
         }
     }
 
@@ -333,6 +345,7 @@ impl Pipe {
             None => (&self.ones[..], s.k.uniform),
         };
         let own = s.owns(z);
+        let (kernel, mut acc) = (Potential { k: s.k, scale }, Acc::zero());
         for j in 0..l.rows {
             laplacian_row(l, phis, j, s.k.inv_h2, &mut self.row);
             let r = j * l.len..(j + 1) * l.len;
@@ -345,10 +358,20 @@ impl Pipe {
             };
             if own {
                 let q = &mut mu[(z - s.z0) as usize * p..][..p][r.clone()];
-                potential_row(&point, s.k, &mut big[r], q, sums);
+                in_lanes(
+                    &kernel,
+                    [point.phi, point.lap, point.c0],
+                    [&mut big[r], q],
+                    &mut acc,
+                );
             } else {
                 bulk_row(&point, s.k, &mut big[r]);
             }
+        }
+        if own {
+            let ([energy, phi_lap], [energy_t, phi_lap_t]) = acc.finish();
+            sums.energy += total(energy, energy_t);
+            sums.phi_lap += total(phi_lap, phi_lap_t);
         }
     }
 
@@ -359,11 +382,19 @@ impl Pipe {
         let at = |z| -> &[f64] { &self.big[ring(z) * p..][..p] };
         let big = [at(z - 1), at(z), at(z + 1)];
         let out = &mut mu[(z - s.z0) as usize * p..][..p];
+        let kernel = Correct {
+            e2x2: 2.0 * s.k.e2,
+            shift: s.k.shift,
+        };
+        let mut acc = Acc::zero();
         for j in 0..l.rows {
             laplacian_row(l, big, j, s.k.inv_h2, &mut self.row);
             let r = j * l.len..(j + 1) * l.len;
-            correct_row(&self.row, s.k, &mut out[r], sums);
+            in_lanes(&kernel, [&self.row], [&mut out[r]], &mut acc);
         }
+        let ([dev, dev_sq], [dev_t, dev_sq_t]) = acc.finish();
+        sums.dev += total(dev, dev_t);
+        sums.dev_sq += total(dev_sq, dev_sq_t);
     }
 }
 
@@ -464,16 +495,6 @@ fn along_row(
     }
 }
 
-/// Stage 1 on a row of the slab: `new = old + Δt lap` (lap = ∇²_h μⁿ), with Σ new, max|new|
-/// and max|lap| into `sums`.
-#[inline(always)]
-fn advance_row(old: &[f64], lap: &[f64], dt: f64, new: &mut [f64], sums: &mut Sums) {
-    let [sum, max_phi, max_lap] = in_lanes(&Advance { dt }, [old, lap], [new]);
-    sums.phi += total(sum);
-    sums.max_phi = largest(max_phi, sums.max_phi);
-    sums.max_lap_mu = largest(max_lap, sums.max_lap_mu);
-}
-
 /// Stage 1 at a point: φ' = φⁿ + Δt ∇²_h μⁿ; sums φ', maxima of |φ'| and |∇²_h μⁿ|.
 struct Advance {
     dt: f64,
@@ -509,16 +530,6 @@ fn bulk_row(p: &Point, k: &Coefficients, big: &mut [f64]) {
     }
 }
 
-/// Stage 2 on a row of the slab: Φ = f(φ) − ε²L and q = 2 f'(φ) Φ − (3/√2) ε σ L
-/// (L = ∇²_h φ), with Σ Φ² and Σ φ L into `sums`.
-#[inline(always)]
-fn potential_row(p: &Point, k: &Coefficients, big: &mut [f64], q: &mut [f64], sums: &mut Sums) {
-    let kernel = Potential { k, scale: p.scale };
-    let [energy, phi_lap] = in_lanes(&kernel, [p.phi, p.lap, p.c0], [big, q]);
-    sums.energy += total(energy);
-    sums.phi_lap += total(phi_lap);
-}
-
 /// Stage 2 at a point of φ' (inputs φ', L = ∇²_h φ', the unramped εC0 or 1): Φ and q; sums
 /// Φ² and φ' L.
 struct Potential<'a> {
@@ -538,19 +549,6 @@ impl Kernel<3, 2, 2> for Potential<'_> {
         acc[1] = acc[1] + phi * lap;
         [big, q]
     }
-}
-
-/// Stage 3 on a row: μ = q − 2ε² ∇²_h Φ (`lap`, q in `mu`), with Σ(μ − c) and Σ(μ − c)² into
-/// `sums`.
-#[inline(always)]
-fn correct_row(lap: &[f64], k: &Coefficients, mu: &mut [f64], sums: &mut Sums) {
-    let kernel = Correct {
-        e2x2: 2.0 * k.e2,
-        shift: k.shift,
-    };
-    let [dev, dev_sq] = in_lanes(&kernel, [lap], [mu]);
-    sums.dev += total(dev);
-    sums.dev_sq += total(dev_sq);
 }
 
 /// Stage 3 at a point (input ∇²_h Φ, output q becoming μ): μ = q − 2ε² ∇²_h Φ; sums μ − c and
