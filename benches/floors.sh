@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # The step benches against the C floors of ../shared/bench, interleaved: for every configuration,
 # ROUNDS times in turn, the C program, our criterion bench (filtered to that one bench), the C
-# program again. Prints our median, the two C medians around it and their ratio; then per
-# configuration the median ratio and its range. On a shared machine a C median can move by half
-# between two runs a minute apart, so a ratio is only worth the C runs taken beside it.
+# program again. `spectral_lagrangian` is our spectral step with the area held as fft_limit holds
+# it, by the Lagrangian update, without the projection's sweep. Prints our median, the two C
+# medians around it and their ratio; then per configuration the median ratio and its range. On a
+# shared machine a C median can move by half between two runs a minute apart, so a ratio is only
+# worth the C runs taken beside it.
 #
 # Needs the C programs built first (README, "Performance"):
 #   make -C ../shared/bench O="$PWD/target/cbench"
-# Usage, from the project root: bash benches/floors.sh [ROUNDS]   (default 3; about 4 min a round)
+# Usage, from the project root: bash benches/floors.sh [ROUNDS]   (default 3; about 2.5 min a round)
 set -euo pipefail
 rounds=${1:-3}
 cbench=target/cbench
@@ -37,6 +39,8 @@ our_median() {
 }
 
 configs=("spectral 64 1" "spectral 64 2" "spectral 128 1" "spectral 128 2"
+    "spectral_lagrangian 64 1" "spectral_lagrangian 64 2"
+    "spectral_lagrangian 128 1" "spectral_lagrangian 128 2"
     "fd 64 1" "fd 64 2" "fd 128 1" "fd 128 2")
 cargo bench --bench step --no-run -q
 results=$(mktemp)
@@ -48,7 +52,7 @@ for ((r = 1; r <= rounds; r++)); do
         ours=$(our_median "$method" "$n" "$threads")
         after=$(c_median "$method" "$n" "$threads")
         ratio=$(awk -v o="$ours" -v a="$before" -v b="$after" 'BEGIN { printf "%.2f", 2 * o / (a + b) }')
-        printf '%-8s %4s³ t%s  ours %8.3f ms  C %8.3f %8.3f ms  ratio %s\n' \
+        printf '%-19s %4s³ t%s  ours %8.3f ms  C %8.3f %8.3f ms  ratio %s\n' \
             "$method" "$n" "$threads" "$ours" "$before" "$after" "$ratio" | tee -a "$results"
     done
 done
@@ -59,5 +63,5 @@ for c in "${configs[@]}"; do
     grep -E "^$method +$n³ t$threads " "$results" | awk '{ print $NF }' | sort -n |
         awk -v c="$method $n³ t$threads" '{ v[NR] = $1 }
             END { m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
-                  printf "%-18s %.2f× (%.2f–%.2f)\n", c, m, v[1], v[NR] }'
+                  printf "%-29s %.2f× (%.2f–%.2f)\n", c, m, v[1], v[NR] }'
 done

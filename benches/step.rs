@@ -1,7 +1,8 @@
 //! One complete time step of each engine (criterion): the spectral SBDF1 step (four real
-//! transforms, the fused sweeps and the area projection) and the FD explicit-Euler step, on full
-//! periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads; and one L-BFGS
-//! iteration of the relaxational engine against one conserved step on the 48³ prolate of
+//! transforms, the fused sweeps and the area projection; `spectral_lagrangian`: the area held by
+//! the Lagrangian update instead, as the C floor `fft_limit` holds it) and the FD explicit-Euler
+//! step, on full periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads; and one
+//! L-BFGS iteration of the relaxational engine against one conserved step on the 48³ prolate of
 //! DESIGN.md §7. Compare with `benches/fft.rs` (the transforms alone) and with the C floors of
 //! `../shared/bench` timed in the same session (README, "Performance").
 
@@ -15,13 +16,19 @@ use vesicle::engine::Engine;
 use vesicle::setup;
 use vesicle::simulation::Simulation;
 
-/// A prepared engine for a prolate (v = 0.85, R0 = n/4) on an n³ box.
+/// A prepared engine for a prolate (v = 0.85, R0 = n/4) on an n³ box, the area held by the
+/// method's default (spectral: the exact projection; FD: the Lagrangian update), or by the
+/// Lagrangian update σ^{n+1} = σⁿ + α (Aⁿ − A0) for `spectral_lagrangian` (no quadratic sweep).
 fn engine(method: &str, n: usize, symmetry: serde_json::Value) -> Box<dyn Engine + Send> {
+    let (method, area) = match method {
+        "spectral_lagrangian" => ("spectral", json!({"method": "lagrangian"})),
+        _ => (method, json!({})),
+    };
     engine_of(json!({
         "dim": 3, "n": [n, n, n], "h": 1.0, "eps": 1.0, "method": method,
         "dt": if method == "fd" { 4e-4 } else { 0.5 }, "max_steps": 1,
         "initial": {"shape": "spheroid", "reduced_volume": 0.85, "r0": n as f64 / 4.0},
-        "symmetry": symmetry
+        "symmetry": symmetry, "area": area
     }))
 }
 
@@ -65,7 +72,11 @@ fn time_steps(
 
 fn bench_steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("step");
-    for (method, dt) in [("spectral", 0.5), ("fd", 4e-4)] {
+    for (method, dt) in [
+        ("spectral", 0.5),
+        ("spectral_lagrangian", 0.5),
+        ("fd", 4e-4),
+    ] {
         for n in [64usize, 128] {
             group.sample_size(if n == 128 { 10 } else { 100 });
             for threads in [1, 2] {
@@ -75,6 +86,9 @@ fn bench_steps(c: &mut Criterion) {
             }
         }
         group.sample_size(100);
+        if method == "spectral_lagrangian" {
+            continue;
+        }
         // 32³ computed points: `vesicle run` takes one thread below 2¹⁷ (`cli::SERIAL_BELOW`).
         for threads in [1, 2] {
             let id = BenchmarkId::new(format!("{method}/eighth"), format!("64^3/t{threads}"));
