@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The step benches against the C floors of ../shared/bench, interleaved: for every configuration,
 # ROUNDS times in turn, the C program, our criterion bench (filtered to that one bench), the C
-# program again. `spectral_lagrangian` is our spectral step with the area held as fft_limit holds
-# it, by the Lagrangian update, without the projection's sweep. Prints our median, the two C
+# program again. `spectral_unconstrained` is our spectral step as fft_limit times its own: the
+# area not held (σ = 0), so without the projection's sweep. Prints our median, the two C
 # medians around it and their ratio; then per configuration the median ratio and its range. On a
 # shared machine a C median can move by half between two runs a minute apart, so a ratio is only
 # worth the C runs taken beside it.
@@ -39,8 +39,8 @@ our_median() {
 }
 
 configs=("spectral 64 1" "spectral 64 2" "spectral 128 1" "spectral 128 2"
-    "spectral_lagrangian 64 1" "spectral_lagrangian 64 2"
-    "spectral_lagrangian 128 1" "spectral_lagrangian 128 2"
+    "spectral_unconstrained 64 1" "spectral_unconstrained 64 2"
+    "spectral_unconstrained 128 1" "spectral_unconstrained 128 2"
     "fd 64 1" "fd 64 2" "fd 128 1" "fd 128 2")
 cargo bench --bench step --no-run -q
 results=$(mktemp)

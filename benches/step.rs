@@ -1,8 +1,8 @@
 //! One complete time step of each engine (criterion): the spectral SBDF1 step (four real
-//! transforms, the fused sweeps and the area projection; `spectral_lagrangian`: the area held by
-//! the Lagrangian update instead, as the C floor `fft_limit` holds it) and the FD explicit-Euler
-//! step, on full periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads; and one
-//! L-BFGS iteration of the relaxational engine against one conserved step on the 48³ prolate of
+//! transforms, the fused sweeps and the area projection; `spectral_unconstrained`: the area not
+//! held, σ = 0, as the C floor `fft_limit` times its step) and the FD explicit-Euler step, on
+//! full periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads; and one L-BFGS
+//! iteration of the relaxational engine against one conserved step on the 48³ prolate of
 //! DESIGN.md §7. Compare with `benches/fft.rs` (the transforms alone) and with the C floors of
 //! `../shared/bench` timed in the same session (README, "Performance").
 
@@ -17,11 +17,11 @@ use vesicle::setup;
 use vesicle::simulation::Simulation;
 
 /// A prepared engine for a prolate (v = 0.85, R0 = n/4) on an n³ box, the area held by the
-/// method's default (spectral: the exact projection; FD: the Lagrangian update), or by the
-/// Lagrangian update σ^{n+1} = σⁿ + α (Aⁿ − A0) for `spectral_lagrangian` (no quadratic sweep).
+/// method's default (spectral: the exact projection; FD: the Lagrangian update), or not held
+/// (σ = 0, no quadratic sweep; A is still summed) for `spectral_unconstrained`.
 fn engine(method: &str, n: usize, symmetry: serde_json::Value) -> Box<dyn Engine + Send> {
     let (method, area) = match method {
-        "spectral_lagrangian" => ("spectral", json!({"method": "lagrangian"})),
+        "spectral_unconstrained" => ("spectral", json!({"method": "none"})),
         _ => (method, json!({})),
     };
     engine_of(json!({
@@ -74,7 +74,7 @@ fn bench_steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("step");
     for (method, dt) in [
         ("spectral", 0.5),
-        ("spectral_lagrangian", 0.5),
+        ("spectral_unconstrained", 0.5),
         ("fd", 4e-4),
     ] {
         for n in [64usize, 128] {
@@ -86,7 +86,7 @@ fn bench_steps(c: &mut Criterion) {
             }
         }
         group.sample_size(100);
-        if method == "spectral_lagrangian" {
+        if method == "spectral_unconstrained" {
             continue;
         }
         // 32³ computed points: `vesicle run` takes one thread below 2¹⁷ (`cli::SERIAL_BELOW`).
