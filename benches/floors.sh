@@ -52,7 +52,7 @@ for ((r = 1; r <= rounds; r++)); do
         ours=$(our_median "$method" "$n" "$threads")
         after=$(c_median "$method" "$n" "$threads")
         ratio=$(awk -v o="$ours" -v a="$before" -v b="$after" 'BEGIN { printf "%.2f", 2 * o / (a + b) }')
-        printf '%-19s %4s³ t%s  ours %8.3f ms  C %8.3f %8.3f ms  ratio %s\n' \
+        printf '%-22s %4s³ t%s  ours %8.3f ms  C %8.3f %8.3f ms  ratio %s\n' \
             "$method" "$n" "$threads" "$ours" "$before" "$after" "$ratio" | tee -a "$results"
     done
 done
@@ -63,5 +63,5 @@ for c in "${configs[@]}"; do
     grep -E "^$method +$n³ t$threads " "$results" | awk '{ print $NF }' | sort -n |
         awk -v c="$method $n³ t$threads" '{ v[NR] = $1 }
             END { m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
-                  printf "%-29s %.2f× (%.2f–%.2f)\n", c, m, v[1], v[NR] }'
+                  printf "%-32s %.2f× (%.2f–%.2f)\n", c, m, v[1], v[NR] }'
 done
