@@ -9,7 +9,7 @@
 #
 # Needs the C programs built first (README, "Performance"):
 #   make -C ../shared/bench O="$PWD/target/cbench"
-# Usage, from the project root: bash benches/floors.sh [ROUNDS]   (default 3; about 2.5 min a round)
+# Usage, from the project root: bash benches/floors.sh [ROUNDS]   (default 3; about 2 min a round)
 set -euo pipefail
 rounds=${1:-3}
 cbench=target/cbench
