@@ -33,9 +33,10 @@ pub const MAGIC: &[u8] = b"VESICLE-CHECKPOINT\n";
 /// The checkpoint's file name in a run folder.
 pub const FILE_NAME: &str = "checkpoint.bin";
 
-/// A run's state at the end of an accepted step.
+/// A run's state at the end of an accepted step: the engine's arrays borrowed from it when the
+/// checkpoint is written, owned when it is read.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Checkpoint {
+pub struct Checkpoint<'a> {
     /// The program version that wrote it.
     pub version: String,
     /// The resolved scene (`summary.json`'s `"spec"`).
@@ -43,7 +44,7 @@ pub struct Checkpoint {
     /// The simulation clock.
     pub clock: Clock,
     /// The engine's state.
-    pub engine: Saved,
+    pub engine: Saved<'a>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -84,7 +85,7 @@ fn clock_values(c: &Clock) -> [f64; 7] {
     ]
 }
 
-impl Checkpoint {
+impl Checkpoint<'_> {
     /// The checkpoint's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut bytes = Vec::new();
@@ -162,7 +163,7 @@ impl Checkpoint {
     /// # Errors
     /// `Error::Config` on field `checkpoint` when the bytes are not a whole checkpoint of this
     /// program version.
-    pub fn from_bytes(bytes: &[u8], source: &Path) -> Result<Self> {
+    pub fn from_bytes(bytes: &[u8], source: &Path) -> Result<Checkpoint<'static>> {
         let bad = |reason: String| {
             Error::config(
                 "checkpoint",
@@ -251,14 +252,14 @@ impl Checkpoint {
                 .ok_or_else(|| bad(format!("array `{}` is larger than the file", a.name)))?;
             let array = if per == 1 {
                 let data: Vec<f64> = (0..len).filter_map(|_| values.next()).collect();
-                SavedArray::Real(Array3::from_shape_vec((n0, n1, n2), data).expect("checked size"))
+                let a = Array3::from_shape_vec((n0, n1, n2), data).expect("checked size");
+                SavedArray::Real(a.into())
             } else {
                 let data: Vec<Complex64> = (0..len)
                     .filter_map(|_| Some(Complex64::new(values.next()?, values.next()?)))
                     .collect();
-                SavedArray::Complex(
-                    Array3::from_shape_vec((n0, n1, n2), data).expect("checked size"),
-                )
+                let a = Array3::from_shape_vec((n0, n1, n2), data).expect("checked size");
+                SavedArray::Complex(a.into())
             };
             engine.arrays.push((a.name.clone(), array));
         }
@@ -304,7 +305,7 @@ impl Checkpoint {
     /// # Errors
     /// `Error::Config` on field `checkpoint` if it is missing or not a whole checkpoint of this
     /// version.
-    pub fn read(dir: &Path) -> Result<Self> {
+    pub fn read(dir: &Path) -> Result<Checkpoint<'static>> {
         let path = dir.join(FILE_NAME);
         let bytes = std::fs::read(&path).map_err(|e| {
             Error::config("checkpoint", format!("cannot read {}: {e}", path.display()))
@@ -388,21 +389,24 @@ impl Iterator for F64s<'_> {
 mod tests {
     use super::*;
 
-    fn sample() -> Checkpoint {
+    fn sample() -> Checkpoint<'static> {
         let saved = Saved::default()
             .scalar("sigma", -0.07)
             .scalar("dt_next", f64::NAN)
             .array(
                 "phi",
-                SavedArray::Real(Array3::from_shape_fn((1, 3, 4), |(_, i, j)| {
-                    i as f64 - j as f64
-                })),
+                SavedArray::Real(
+                    Array3::from_shape_fn((1, 3, 4), |(_, i, j)| i as f64 - j as f64).into(),
+                ),
             )
             .array(
                 "hat",
-                SavedArray::Complex(Array3::from_shape_fn((2, 2, 2), |(a, b, c)| {
-                    Complex64::new(a as f64, b as f64 * 0.5 - c as f64)
-                })),
+                SavedArray::Complex(
+                    Array3::from_shape_fn((2, 2, 2), |(a, b, c)| {
+                        Complex64::new(a as f64, b as f64 * 0.5 - c as f64)
+                    })
+                    .into(),
+                ),
             );
         let mut clock = Clock::new(0.5);
         clock.step = 12;
@@ -456,12 +460,15 @@ mod tests {
         let mut c = sample();
         c.engine = c
             .engine
-            .array("s_0", SavedArray::Single(shape, reals.clone()))
+            .array("s_0", SavedArray::Single(shape, reals.clone().into()))
             .array(
                 "big",
-                SavedArray::Complex(Array3::from_shape_fn((32, 64, 65), |(a, b, d)| {
-                    Complex64::new((a * b) as f64 / 7.0, d as f64 - 0.1)
-                })),
+                SavedArray::Complex(
+                    Array3::from_shape_fn((32, 64, 65), |(a, b, d)| {
+                        Complex64::new((a * b) as f64 / 7.0, d as f64 - 0.1)
+                    })
+                    .into(),
+                ),
             );
         let bytes = c.to_bytes();
         assert!(bytes.len() > 3 * CHUNK, "{} bytes", bytes.len());

@@ -478,18 +478,18 @@ impl Engine for FdEngine {
         "fd"
     }
 
-    fn save(&self) -> Saved {
+    fn save(&self) -> Saved<'_> {
         Saved::default()
             .scalar("sigma", self.sigma)
             .scalar("max_bound_ratio", self.max_bound_ratio)
             .scalar("volume0", self.volume0)
             .scalar("mu_mean", self.mu_mean)
-            .array("phi", SavedArray::Real(self.phi.clone()))
+            .array("phi", SavedArray::Real(self.phi.view().into()))
     }
 
-    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String> {
+    fn restore(&mut self, saved: &Saved<'_>, t: f64) -> Result<(), String> {
         let phi = saved.real("phi", self.phi.shape())?;
-        self.phi.assign(phi);
+        self.phi.assign(&phi);
         self.sigma = saved.get("sigma")?;
         self.max_bound_ratio = saved.get("max_bound_ratio")?;
         self.volume0 = saved.get("volume0")?;

@@ -849,32 +849,31 @@ impl Engine for RelaxEngine {
         "relaxational (L-BFGS)"
     }
 
-    fn save(&self) -> Saved {
+    fn save(&self) -> Saved<'_> {
         let mut saved = Saved::default()
             .scalar("stalled", if self.stalled { 1.0 } else { 0.0 })
             .scalar("pairs", self.pairs.len() as f64)
-            .array("phi_hat", SavedArray::Complex(self.cur.hat.clone()));
+            .array("phi_hat", SavedArray::Complex(self.cur.hat.view().into()));
         let (n0, n1, n2) = self.cur.hat.dim();
         let shape = [n0, n1, n2];
-        let array = |v: &Vec<f32>| SavedArray::Single(shape, v.clone());
         // The Gram entries as they were accumulated, so that a resumed run is bitwise the
         // uninterrupted one (the inner products of the state are recomputed by the same sweep).
         let n = self.pairs.len();
         let gram = Array3::from_shape_fn((2, n, n), |(g, i, j)| {
             [&self.sy, &self.yy][g][i * MAX_MEMORY + j]
         });
-        saved = saved.array("gram", SavedArray::Real(gram));
+        saved = saved.array("gram", SavedArray::Real(gram.into()));
         for (i, p) in self.pairs.iter().enumerate() {
             saved = saved
-                .array(&format!("s_{i}"), array(&p.s))
-                .array(&format!("y_{i}"), array(&p.y));
+                .array(&format!("s_{i}"), SavedArray::Single(shape, p.s[..].into()))
+                .array(&format!("y_{i}"), SavedArray::Single(shape, p.y[..].into()));
         }
         saved
     }
 
-    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String> {
+    fn restore(&mut self, saved: &Saved<'_>, t: f64) -> Result<(), String> {
         let shape = self.cur.hat.shape().to_vec();
-        self.cur.hat.assign(saved.complex("phi_hat", &shape)?);
+        self.cur.hat.assign(&saved.complex("phi_hat", &shape)?);
         self.stalled = saved.get("stalled")? != 0.0;
         let n = saved.get("pairs")?;
         if !(0.0..=self.memory as f64).contains(&n) || n.fract() != 0.0 {

@@ -616,24 +616,27 @@ impl Engine for SpectralEngine {
         "spectral"
     }
 
-    fn save(&self) -> Saved {
+    fn save(&self) -> Saved<'_> {
         let mut saved = Saved::default()
             .scalar("sigma", self.sigma)
             .scalar("volume0", self.volume0)
             .scalar("dt_prev", self.dt_prev)
             .scalar("dt_next", self.dt_next.unwrap_or(f64::NAN))
-            .array("phi_hat", SavedArray::Complex(self.cur.hat.clone()));
+            .array("phi_hat", SavedArray::Complex(self.cur.hat.view().into()));
         if let Some((hat, nonlinear)) = &self.prev {
             saved = saved
-                .array("prev_phi_hat", SavedArray::Complex(hat.clone()))
-                .array("prev_nonlinear", SavedArray::Complex(nonlinear.clone()));
+                .array("prev_phi_hat", SavedArray::Complex(hat.view().into()))
+                .array(
+                    "prev_nonlinear",
+                    SavedArray::Complex(nonlinear.view().into()),
+                );
         }
         saved
     }
 
-    fn restore(&mut self, saved: &Saved, t: f64) -> Result<(), String> {
+    fn restore(&mut self, saved: &Saved<'_>, t: f64) -> Result<(), String> {
         let shape = self.cur.hat.shape().to_vec();
-        self.cur.hat.assign(saved.complex("phi_hat", &shape)?);
+        self.cur.hat.assign(&saved.complex("phi_hat", &shape)?);
         self.sigma = saved.get("sigma")?;
         self.volume0 = saved.get("volume0")?;
         self.dt_prev = saved.get("dt_prev")?;
@@ -641,8 +644,8 @@ impl Engine for SpectralEngine {
         self.dt_next = (!dt_next.is_nan()).then_some(dt_next);
         self.prev = match (self.scheme, saved.complex("prev_phi_hat", &shape)) {
             (Scheme::Sbdf2, Ok(hat)) => Some((
-                hat.clone(),
-                saved.complex("prev_nonlinear", &shape)?.clone(),
+                hat.to_owned(),
+                saved.complex("prev_nonlinear", &shape)?.to_owned(),
             )),
             _ => None,
         };
