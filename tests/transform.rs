@@ -373,6 +373,59 @@ fn hermitian_symmetrize_projects_onto_real_field_spectra() {
     }
 }
 
+/// The projection is the pairwise mean X(k) ← (X(k) + conj X(−k))/2, X(−k) ← its conjugate,
+/// bit for bit, on 1, 2 and 3 threads (the slabs of k0 and −k0 go to one task; a slab paired
+/// with the wrong partner, or a pair visited twice, would differ), on every layout, with odd and
+/// even n0 and n2 and in 2D.
+#[test]
+fn hermitian_symmetrize_is_the_pairwise_mean_on_any_thread_count() {
+    for shape in [[4, 6, 8], [5, 7, 6], [6, 5, 9], [1, 6, 4], [1, 5, 5]] {
+        for kinds in ALL_KINDS {
+            let t0 = Transform::new(shape, kinds, 1);
+            let mut rng = Lcg(9);
+            let y = Array3::from_shape_simple_fn(t0.spectral_shape(), || {
+                Complex64::new(rng.next(), rng.next())
+            });
+            let mut expect = y.clone();
+            let [s0, s1, s2] = t0.spectral_shape();
+            let neg = |i: usize, a: usize| match kinds[a] {
+                P => (shape[a] - i) % shape[a],
+                M => i,
+            };
+            let conjugate_planes: Vec<usize> = match kinds[2] {
+                M => (0..s2).collect(),
+                P => [0, shape[2] / 2]
+                    .into_iter()
+                    .filter(|&j| j == 0 || shape[2] % 2 == 0)
+                    .collect(),
+            };
+            for &j2 in &conjugate_planes {
+                for i0 in 0..s0 {
+                    for i1 in 0..s1 {
+                        let q = (neg(i0, 0), neg(i1, 1));
+                        if q < (i0, i1) {
+                            continue;
+                        }
+                        let mean = 0.5 * (expect[[i0, i1, j2]] + expect[[q.0, q.1, j2]].conj());
+                        expect[[i0, i1, j2]] = mean;
+                        expect[[q.0, q.1, j2]] = mean.conj();
+                    }
+                }
+            }
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let t = Transform::new(shape, kinds, threads);
+                let mut got = y.clone();
+                pool.install(|| t.hermitian_symmetrize(&mut got));
+                assert_eq!(got, expect, "{shape:?} {kinds:?} {threads} threads");
+            }
+        }
+    }
+}
+
 #[test]
 fn serial_transforms_do_not_allocate() {
     for kinds in [[P, P, P], [M, M, M], [M, P, M]] {

@@ -574,11 +574,60 @@ impl Transform {
             self.symmetrize_lanes(a);
             return;
         }
+        let [n0, n1, s2] = self.plan.spectral;
         let n2 = self.plan.shape[2];
-        let nyquist = n2.is_multiple_of(2).then_some(n2 / 2);
-        for j2 in std::iter::once(0).chain(nyquist) {
-            self.symmetrize_plane(a.index_axis_mut(Axis(2), j2));
+        let planes = [Some(0), n2.is_multiple_of(2).then_some(n2 / 2)];
+        let planes = planes.iter().flatten();
+        let slab = n1 * s2;
+        // The mean of value `i1` of slab `lo` and value −i1 of slab `hi` (the slab of −i0) on
+        // each self-conjugate plane: `lo`'s takes the mean, `hi`'s its conjugate.
+        let pair = |lo: &mut [Complex64], hi: &mut [Complex64]| {
+            for i1 in 0..n1 {
+                let q1 = self.negated(i1, 1);
+                for &j2 in planes.clone() {
+                    let (p, q) = (i1 * s2 + j2, q1 * s2 + j2);
+                    let mean = 0.5 * (lo[p] + hi[q].conj());
+                    lo[p] = mean;
+                    hi[q] = mean.conj();
+                }
+            }
+        };
+        // A slab that is its own partner (−i0 = i0): pairs within it, each once.
+        let own = |s: &mut [Complex64]| {
+            for i1 in 0..n1 {
+                let q1 = self.negated(i1, 1);
+                for &j2 in planes.clone().filter(|_| q1 >= i1) {
+                    let (p, q) = (i1 * s2 + j2, q1 * s2 + j2);
+                    let mean = 0.5 * (s[p] + s[q].conj());
+                    s[p] = mean;
+                    s[q] = mean.conj();
+                }
+            }
+        };
+        let data = a.as_slice_mut().expect("standard layout");
+        if self.plan.kinds[0] == AxisKind::Mirror {
+            data.par_chunks_mut(slab).for_each(own);
+            return;
         }
+        // Slab i0 pairs with n0 − i0: slabs 1..=half with n0 − 1 down to n0 − half, in
+        // parallel; slab 0, and n0/2 when n0 is even, with themselves.
+        let half = (n0 - 1) / 2;
+        let (first, rest) = data.split_at_mut(slab);
+        let (lows, rest) = rest.split_at_mut(half * slab);
+        let (middle, highs) = rest.split_at_mut(if n0 % 2 == 0 { slab } else { 0 });
+        rayon::join(
+            || {
+                own(first);
+                if !middle.is_empty() {
+                    own(middle);
+                }
+            },
+            || {
+                lows.par_chunks_mut(slab)
+                    .zip(highs.par_chunks_mut(slab).rev())
+                    .for_each(|(lo, hi)| pair(lo, hi));
+            },
+        );
     }
 
     /// Index of `−k` on axis `a` for spectral index `j`.
@@ -587,22 +636,6 @@ impl Transform {
         match self.plan.kinds[a] {
             AxisKind::Periodic => (n - j) % n,
             AxisKind::Mirror => j,
-        }
-    }
-
-    /// Hermitian projection of one self-conjugate plane (see [`Transform::hermitian_symmetrize`]).
-    fn symmetrize_plane(&self, mut plane: ArrayViewMut2<Complex64>) {
-        let [n0, n1, _] = self.plan.shape;
-        for i0 in 0..n0 {
-            for i1 in 0..n1 {
-                let q = (self.negated(i0, 0), self.negated(i1, 1));
-                if q < (i0, i1) {
-                    continue;
-                }
-                let mean = 0.5 * (plane[(i0, i1)] + plane[q].conj());
-                plane[(i0, i1)] = mean;
-                plane[q] = mean.conj();
-            }
         }
     }
 
