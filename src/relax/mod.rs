@@ -362,6 +362,7 @@ impl RelaxEngine {
         let area = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
             .par_chunks_mut(2 * task)
             .enumerate()
+            .with_max_len(1)
             .map(|(t, out)| {
                 let base = 2 * t * task;
                 let mut acc = AreaSums::default();
@@ -396,6 +397,7 @@ impl RelaxEngine {
             .zip(copy.par_chunks_mut(2 * task))
             .zip(lap.par_chunks_mut(2 * task))
             .enumerate()
+            .with_max_len(1)
             .map(|(t, ((hat, copy), lap))| {
                 let base = 2 * t * task;
                 let mut area = 0.0;
@@ -766,6 +768,7 @@ fn gradient_sweep(
         None => grad
             .par_chunks_mut(2 * task)
             .enumerate()
+            .with_max_len(1)
             .map(|(t, r)| run(t, r, None))
             .reduce(GradientSums::zero, GradientSums::add),
         Some((x_old, r_old, pair)) => grad
@@ -773,6 +776,7 @@ fn gradient_sweep(
             .zip(pair.s.par_chunks_mut(2 * task))
             .zip(pair.y.par_chunks_mut(2 * task))
             .enumerate()
+            .with_max_len(1)
             .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), reals(r_old), s, y))))
             .reduce(GradientSums::zero, GradientSums::add),
     }

@@ -395,6 +395,7 @@ impl SpectralEngine {
         let (task, total) = (2 * sym.task_len(), 2 * self.cur.hat.len());
         let [pp, pq, qq] = (0..total.div_ceil(task))
             .into_par_iter()
+            .with_max_len(1)
             .map(|t| {
                 let mut acc = [0.0; 3];
                 let mut terms = [[0.0; PIECE]; 3];
@@ -434,6 +435,7 @@ impl SpectralEngine {
             .zip(copy.par_chunks_mut(task))
             .zip(lap.par_chunks_mut(task))
             .enumerate()
+            .with_max_len(1)
             .map(|(t, ((hat, copy), lap))| {
                 let mut terms = [0.0; PIECE];
                 let mut area = 0.0;

@@ -352,6 +352,7 @@ fn inverse_inputs(
     copy.par_chunks_mut(task)
         .zip(lap.par_chunks_mut(task))
         .enumerate()
+        .with_max_len(1)
         .map(|(t, (copy, lap))| {
             let mut terms = [0.0; PIECE];
             let mut area = 0.0;
@@ -556,6 +557,7 @@ fn combine(
     };
     n.par_chunks_mut(task)
         .enumerate()
+        .with_max_len(1)
         .map(|(t, n)| {
             let z = [0.0; PIECE];
             let mut terms = CombineTerms {
