@@ -7,7 +7,8 @@
 //! MAGIC                    b"VESICLE-CHECKPOINT\n"
 //! header length            u64, little endian
 //! header                   JSON: {"version", "scene", "scalars": [names], "arrays": [{name, kind, shape}]}
-//! payload                  the scalars, then each array (complex as re, im pairs): f64, little endian
+//! payload                  the scalars, then each array: f64, little endian (complex as re, im
+//!                          pairs), or f32 for the kind "single" (the L-BFGS pairs, as re, im)
 //! checksum                 CRC-32 of header and payload, u32, little endian
 //! ```
 //!
@@ -115,7 +116,7 @@ impl Checkpoint<'_> {
                 let (kind, shape) = match a {
                     SavedArray::Real(a) => ("real", a.dim().into()),
                     SavedArray::Complex(a) => ("complex", a.dim().into()),
-                    SavedArray::Single(shape, _) => ("complex", *shape),
+                    SavedArray::Single(shape, _) => ("single", *shape),
                 };
                 ArrayHeader {
                     name: name.clone(),
@@ -150,9 +151,9 @@ impl Checkpoint<'_> {
                     body.put(&v.re.to_le_bytes())?;
                     body.put(&v.im.to_le_bytes())
                 })?,
-                SavedArray::Single(_, reals) => reals
-                    .iter()
-                    .try_for_each(|&v| body.put(&f64::from(v).to_le_bytes()))?,
+                SavedArray::Single(_, reals) => {
+                    reals.iter().try_for_each(|&v| body.put(&v.to_le_bytes()))?
+                }
             }
         }
         body.finish()
@@ -201,11 +202,11 @@ impl Checkpoint<'_> {
                 header.version
             )));
         }
-        let mut values = F64s(payload);
+        let mut values = Payload(payload);
         let mut scalars = Vec::with_capacity(header.scalars.len());
         for name in &header.scalars {
             let v = values
-                .next()
+                .f64()
                 .ok_or_else(|| bad("truncated payload".into()))?;
             scalars.push((name.clone(), v));
         }
@@ -240,9 +241,10 @@ impl Checkpoint<'_> {
         }
         for a in &header.arrays {
             let [n0, n1, n2] = a.shape;
+            // Bytes a value: a real f64, a complex pair of f64, a single pair of f32.
             let per = match a.kind.as_str() {
-                "real" => 1,
-                "complex" => 2,
+                "real" | "single" => 8,
+                "complex" => 16,
                 other => return Err(bad(format!("array `{}` of unknown kind {other}", a.name))),
             };
             let len = n0
@@ -250,23 +252,31 @@ impl Checkpoint<'_> {
                 .and_then(|x| x.checked_mul(n2))
                 .filter(|&x| x.checked_mul(per).is_some_and(|m| m <= values.remaining()))
                 .ok_or_else(|| bad(format!("array `{}` is larger than the file", a.name)))?;
-            let array = if per == 1 {
-                let data: Vec<f64> = (0..len).filter_map(|_| values.next()).collect();
-                let a = Array3::from_shape_vec((n0, n1, n2), data).expect("checked size");
-                SavedArray::Real(a.into())
-            } else {
-                let data: Vec<Complex64> = (0..len)
-                    .filter_map(|_| Some(Complex64::new(values.next()?, values.next()?)))
-                    .collect();
-                let a = Array3::from_shape_vec((n0, n1, n2), data).expect("checked size");
-                SavedArray::Complex(a.into())
+            let shape = (n0, n1, n2);
+            let array = match a.kind.as_str() {
+                "real" => {
+                    let data: Vec<f64> = (0..len).filter_map(|_| values.f64()).collect();
+                    let a = Array3::from_shape_vec(shape, data).expect("checked size");
+                    SavedArray::Real(a.into())
+                }
+                "complex" => {
+                    let data: Vec<Complex64> = (0..len)
+                        .filter_map(|_| Some(Complex64::new(values.f64()?, values.f64()?)))
+                        .collect();
+                    let a = Array3::from_shape_vec(shape, data).expect("checked size");
+                    SavedArray::Complex(a.into())
+                }
+                _ => {
+                    let data: Vec<f32> = (0..2 * len).filter_map(|_| values.f32()).collect();
+                    SavedArray::Single(a.shape, data.into())
+                }
             };
             engine.arrays.push((a.name.clone(), array));
         }
         if values.remaining() != 0 {
             return Err(bad(format!(
                 "{} bytes after the last array",
-                8 * values.remaining()
+                values.remaining()
             )));
         }
         Ok(Checkpoint {
@@ -365,23 +375,27 @@ fn pause_for_tests() {
 }
 
 /// Little-endian f64 values of a byte slice, in order.
-struct F64s<'a>(&'a [u8]);
+/// The payload's bytes, read front to back as little-endian numbers.
+struct Payload<'a>(&'a [u8]);
 
-impl F64s<'_> {
+impl Payload<'_> {
+    /// Bytes left.
     fn remaining(&self) -> usize {
-        self.0.len() / 8
+        self.0.len()
     }
-}
 
-impl Iterator for F64s<'_> {
-    type Item = f64;
-    fn next(&mut self) -> Option<f64> {
-        if self.0.len() < 8 {
-            return None;
-        }
-        let (v, rest) = self.0.split_at(8);
+    fn take<const N: usize>(&mut self) -> Option<[u8; N]> {
+        let (v, rest) = self.0.split_first_chunk::<N>()?;
         self.0 = rest;
-        Some(f64::from_le_bytes(v.try_into().expect("8 bytes")))
+        Some(*v)
+    }
+
+    fn f64(&mut self) -> Option<f64> {
+        self.take().map(f64::from_le_bytes)
+    }
+
+    fn f32(&mut self) -> Option<f32> {
+        self.take().map(f32::from_le_bytes)
     }
 }
 
@@ -449,18 +463,24 @@ mod tests {
     }
 
     /// A checkpoint larger than the write buffer (three chunks and a part: staged, hashed and
-    /// written chunk by chunk) reads back bit for bit, its checksum whole, and a single-precision
-    /// spectrum comes back as the complex array it was widened to, the same values exactly
-    /// (`Saved::single` rounds them back to the stored f32).
+    /// written chunk by chunk) reads back bit for bit, its checksum whole; a single-precision
+    /// spectrum (the L-BFGS pairs) is stored as f32 and comes back as the same values, which
+    /// `Saved::take_single` moves out (once); and a pair written as a complex array (the format
+    /// before the f32 kind) is rounded back to the same f32 values.
     #[test]
     fn a_checkpoint_of_several_chunks_round_trips() {
         let shape = [32, 64, 65];
         let n: usize = shape.iter().product();
         let reals: Vec<f32> = (0..2 * n).map(|i| (i as f32 * 0.37).sin() / 3.0).collect();
+        let widened = Array3::from_shape_fn((32, 64, 65), |(a, b, d)| {
+            let at = 2 * ((a * 64 + b) * 65 + d);
+            Complex64::new(f64::from(reals[at]), f64::from(reals[at + 1]))
+        });
         let mut c = sample();
         c.engine = c
             .engine
             .array("s_0", SavedArray::Single(shape, reals.clone().into()))
+            .array("s_1", SavedArray::Complex(widened.into()))
             .array(
                 "big",
                 SavedArray::Complex(
@@ -472,12 +492,12 @@ mod tests {
             );
         let bytes = c.to_bytes();
         assert!(bytes.len() > 3 * CHUNK, "{} bytes", bytes.len());
-        let back = Checkpoint::from_bytes(&bytes, Path::new("x")).unwrap();
+        let mut back = Checkpoint::from_bytes(&bytes, Path::new("x")).unwrap();
         assert_eq!(back.to_bytes(), bytes);
-        assert_eq!(back.engine.single("s_0", &shape).unwrap(), reals);
-        assert_eq!(back.engine.arrays[3], c.engine.arrays[3]);
-        let widened = back.engine.complex("s_0", &shape).unwrap();
-        assert_eq!(widened[[31, 63, 64]].im, f64::from(reals[2 * n - 1]));
+        assert_eq!(back.engine.arrays[2..], c.engine.arrays[2..]);
+        assert_eq!(back.engine.take_single("s_0", &shape).unwrap(), reals);
+        assert_eq!(back.engine.take_single("s_1", &shape).unwrap(), reals);
+        assert!(back.engine.take_single("s_0", &shape).is_err());
     }
 
     /// A checkpoint of another version is refused, naming both versions.

@@ -332,8 +332,7 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             let checkpoint = crate::checkpoint::Checkpoint::read(&dir)?;
             let scene = run::resumed_scene(checkpoint.scene.clone(), &set)?;
             let progress = !quiet && std::io::stderr().is_terminal();
-            let outcome =
-                with_threads(&scene, || run::resume(&dir, &checkpoint, &scene, progress))?;
+            let outcome = with_threads(&scene, || run::resume(&dir, checkpoint, &scene, progress))?;
             Ok(report(&outcome, &dir))
         }
         Command::Check { scene: args } => {

@@ -99,11 +99,12 @@ pub trait Engine {
     fn save(&self) -> Saved<'_>;
     /// Continue from `saved`, the state at time `t` of an engine built for the same scene, with
     /// the same area constraint installed. Afterwards the engine steps bit for bit as the saved
-    /// one would have.
+    /// one would have. Arrays the engine keeps as they are (the L-BFGS pairs) are moved out of
+    /// `saved`, not copied.
     ///
     /// # Errors
     /// A message naming what is missing or has the wrong shape.
-    fn restore(&mut self, saved: &Saved<'_>, t: f64) -> Result<(), String>;
+    fn restore(&mut self, saved: &mut Saved<'_>, t: f64) -> Result<(), String>;
 }
 
 /// An array of an engine's saved state: borrowed from the engine when it is saved (a checkpoint
@@ -186,25 +187,32 @@ impl<'a> Saved<'a> {
         }
     }
 
-    /// The spectrum `name` of `shape` in single precision as interleaved (re, im) reals: a
-    /// [`SavedArray::Single`], or a complex array (from a checkpoint) rounded to f32, which
-    /// gives back exactly the values that were widened.
+    /// The spectrum `name` of `shape` in single precision as interleaved (re, im) reals, taken
+    /// out of `self` (its values moved, not copied; a second call finds it missing): a
+    /// [`SavedArray::Single`], or a complex array (from a checkpoint written before the pairs were
+    /// stored as f32) rounded to f32, which gives back exactly the values that were widened.
     ///
     /// # Errors
     /// If it is missing, real or of another shape.
-    pub fn single(&self, name: &str, shape: &[usize]) -> Result<Vec<f32>, String> {
-        match self.find(name)? {
-            SavedArray::Single(s, v) if s[..] == *shape => Ok(v.to_vec()),
-            SavedArray::Single(s, _) => Err(wrong_shape(name, s, shape)),
-            SavedArray::Complex(_) => {
-                let values = self.complex(name, shape)?;
-                Ok(values
-                    .iter()
-                    .flat_map(|c| [c.re as f32, c.im as f32])
-                    .collect())
-            }
-            SavedArray::Real(_) => Err(format!("saved `{name}` is real, not complex")),
+    pub fn take_single(&mut self, name: &str, shape: &[usize]) -> Result<Vec<f32>, String> {
+        let at = self
+            .arrays
+            .iter()
+            .position(|(n, _)| n == name)
+            .ok_or_else(|| format!("the saved state lacks `{name}`"))?;
+        let got: &[usize] = match &self.arrays[at].1 {
+            SavedArray::Single(s, _) => s,
+            SavedArray::Complex(a) => a.shape(),
+            SavedArray::Real(_) => return Err(format!("saved `{name}` is real, not complex")),
+        };
+        if got != shape {
+            return Err(wrong_shape(name, got, shape));
         }
+        Ok(match self.arrays.remove(at).1 {
+            SavedArray::Single(_, v) => v.into_owned(),
+            SavedArray::Complex(a) => a.iter().flat_map(|c| [c.re as f32, c.im as f32]).collect(),
+            SavedArray::Real(_) => unreachable!("refused above"),
+        })
     }
 
     fn find(&self, name: &str) -> Result<&SavedArray<'a>, String> {

@@ -195,7 +195,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
 /// otherwise as [`run`].
 pub fn resume(
     dir: &Path,
-    checkpoint: &Checkpoint,
+    mut checkpoint: Checkpoint<'static>,
     scene: &Scene,
     progress: bool,
 ) -> Result<Outcome> {
@@ -212,17 +212,20 @@ pub fn resume(
         target,
     });
     engine
-        .restore(&checkpoint.engine, checkpoint.clock.t)
+        .restore(&mut checkpoint.engine, checkpoint.clock.t)
         .map_err(|m| Error::config("checkpoint", m))?;
+    let clock = checkpoint.clock;
+    // The engine holds the state now: the checkpoint's copy is not kept through the run.
+    drop(checkpoint);
     let mut simulation = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
-    simulation.clock = checkpoint.clock;
-    let (series, history) = TimeSeries::resume(&dir.join("timeseries.csv"), checkpoint.clock.step)?;
+    simulation.clock = clock;
+    let (series, history) = TimeSeries::resume(&dir.join("timeseries.csv"), clock.step)?;
     let recorder = Recorder::resuming(scene.record_every(), series, history);
     eprintln!(
         "{}\n  resuming at step {} t = {:.6e}",
         describe(scene, &problem, simulation.engine().name()),
-        checkpoint.clock.step,
-        checkpoint.clock.t
+        clock.step,
+        clock.t
     );
     let opts = RunOptions {
         out: dir.to_path_buf(),

@@ -487,7 +487,7 @@ impl Engine for FdEngine {
             .array("phi", SavedArray::Real(self.phi.view().into()))
     }
 
-    fn restore(&mut self, saved: &Saved<'_>, t: f64) -> Result<(), String> {
+    fn restore(&mut self, saved: &mut Saved<'_>, t: f64) -> Result<(), String> {
         let phi = saved.real("phi", self.phi.shape())?;
         self.phi.assign(&phi);
         self.sigma = saved.get("sigma")?;

@@ -875,7 +875,7 @@ impl Engine for RelaxEngine {
         saved
     }
 
-    fn restore(&mut self, saved: &Saved<'_>, t: f64) -> Result<(), String> {
+    fn restore(&mut self, saved: &mut Saved<'_>, t: f64) -> Result<(), String> {
         let shape = self.cur.hat.shape().to_vec();
         self.cur.hat.assign(&saved.complex("phi_hat", &shape)?);
         self.stalled = saved.get("stalled")? != 0.0;
@@ -889,8 +889,8 @@ impl Engine for RelaxEngine {
         self.reset_memory();
         for i in 0..n as usize {
             let pair = Pair {
-                s: saved.single(&format!("s_{i}"), &shape)?,
-                y: saved.single(&format!("y_{i}"), &shape)?,
+                s: saved.take_single(&format!("s_{i}"), &shape)?,
+                y: saved.take_single(&format!("y_{i}"), &shape)?,
             };
             self.pairs.push_back(pair);
         }

@@ -636,7 +636,7 @@ impl Engine for SpectralEngine {
         saved
     }
 
-    fn restore(&mut self, saved: &Saved<'_>, t: f64) -> Result<(), String> {
+    fn restore(&mut self, saved: &mut Saved<'_>, t: f64) -> Result<(), String> {
         let shape = self.cur.hat.shape().to_vec();
         self.cur.hat.assign(&saved.complex("phi_hat", &shape)?);
         self.sigma = saved.get("sigma")?;
