@@ -596,7 +596,10 @@ impl Transform {
         let own = |s: &mut [Complex64]| {
             for i1 in 0..n1 {
                 let q1 = self.negated(i1, 1);
-                for &j2 in planes.clone().filter(|_| q1 >= i1) {
+                if q1 < i1 {
+                    continue;
+                }
+                for &j2 in planes.clone() {
                     let (p, q) = (i1 * s2 + j2, q1 * s2 + j2);
                     let mean = 0.5 * (s[p] + s[q].conj());
                     s[p] = mean;
