@@ -421,6 +421,13 @@ mod tests {
                     })
                     .into(),
                 ),
+            )
+            .array(
+                "pair",
+                SavedArray::Single(
+                    [1, 2, 2],
+                    vec![0.5, -1.25, 3e-8, 7.0, -0.0, 1e30, 2.5, -4.0].into(),
+                ),
             );
         let mut clock = Clock::new(0.5);
         clock.step = 12;
@@ -433,7 +440,8 @@ mod tests {
         }
     }
 
-    /// Bytes → checkpoint → bytes is the identity (NaN scalars included, bit for bit).
+    /// Bytes → checkpoint → bytes is the identity (NaN scalars included, bit for bit), and the
+    /// arrays (real, complex, single) come back equal.
     #[test]
     fn round_trip_is_bit_exact() {
         let c = sample();
@@ -494,7 +502,7 @@ mod tests {
         assert!(bytes.len() > 3 * CHUNK, "{} bytes", bytes.len());
         let mut back = Checkpoint::from_bytes(&bytes, Path::new("x")).unwrap();
         assert_eq!(back.to_bytes(), bytes);
-        assert_eq!(back.engine.arrays[2..], c.engine.arrays[2..]);
+        assert_eq!(back.engine.arrays[3..], c.engine.arrays[3..]);
         assert_eq!(back.engine.take_single("s_0", &shape).unwrap(), reals);
         assert_eq!(back.engine.take_single("s_1", &shape).unwrap(), reals);
         assert!(back.engine.take_single("s_0", &shape).is_err());
