@@ -146,8 +146,7 @@ pub struct Evaluator {
     /// Spectral scratch: the input of the ∇²φ inverse transform, then FT[f] (the engines also
     /// use it between evaluations).
     pub spare: Array3<Complex64>,
-    /// Real scratch: the field a state is made from ([`Evaluator::state_of`]); with the
-    /// transforms apart ([`pointwise_apart`]), ∇²φ, then f.
+    /// Real scratch with the transforms apart ([`pointwise_apart`]): ∇²φ, then f.
     work: Array3<f64>,
     /// Real scratch with the transforms apart: f'Φ.
     work2: Array3<f64>,
@@ -176,8 +175,10 @@ impl Evaluator {
     /// [`Diverged`] if `phi` is not finite.
     pub fn state_of(&mut self, phi: &Array3<f64>, t: f64) -> Result<State, Diverged> {
         let mut s = self.blank();
-        self.work.assign(phi);
-        self.transform.forward(&mut self.work, &mut s.hat);
+        // The state's own real field is the forward transform's scratch (the evaluation
+        // rewrites it), so a 3D run never touches the pages of `work`.
+        s.phi.assign(phi);
+        self.transform.forward(&mut s.phi, &mut s.hat);
         self.evaluate(&mut s, t, None, Some(0.0))?;
         Ok(s)
     }
