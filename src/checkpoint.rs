@@ -374,7 +374,6 @@ fn pause_for_tests() {
     }
 }
 
-/// Little-endian f64 values of a byte slice, in order.
 /// The payload's bytes, read front to back as little-endian numbers.
 struct Payload<'a>(&'a [u8]);
 

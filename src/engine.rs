@@ -117,8 +117,8 @@ pub enum SavedArray<'a> {
     /// A spectrum.
     Complex(CowArray<'a, Complex64, Ix3>),
     /// A spectrum of this shape kept in single precision, as interleaved (re, im) reals (the
-    /// L-BFGS pairs): a checkpoint holds it widened exactly to a complex array, so it comes
-    /// back from a file as [`SavedArray::Complex`]; [`Saved::single`] reads either.
+    /// L-BFGS pairs), stored so in a checkpoint; [`Saved::take_single`] also reads a complex
+    /// array (a checkpoint written before the f32 kind).
     Single([usize; 3], Cow<'a, [f32]>),
 }
 
@@ -195,11 +195,7 @@ impl<'a> Saved<'a> {
     /// # Errors
     /// If it is missing, real or of another shape.
     pub fn take_single(&mut self, name: &str, shape: &[usize]) -> Result<Vec<f32>, String> {
-        let at = self
-            .arrays
-            .iter()
-            .position(|(n, _)| n == name)
-            .ok_or_else(|| format!("the saved state lacks `{name}`"))?;
+        let at = self.position(name)?;
         let got: &[usize] = match &self.arrays[at].1 {
             SavedArray::Single(s, _) => s,
             SavedArray::Complex(a) => a.shape(),
@@ -216,10 +212,14 @@ impl<'a> Saved<'a> {
     }
 
     fn find(&self, name: &str) -> Result<&SavedArray<'a>, String> {
+        Ok(&self.arrays[self.position(name)?].1)
+    }
+
+    /// Index of the array `name`.
+    fn position(&self, name: &str) -> Result<usize, String> {
         self.arrays
             .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, a)| a)
+            .position(|(n, _)| n == name)
             .ok_or_else(|| format!("the saved state lacks `{name}`"))
     }
 }

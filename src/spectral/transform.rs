@@ -585,25 +585,23 @@ impl Transform {
             for i1 in 0..n1 {
                 let q1 = self.negated(i1, 1);
                 for &j2 in planes.clone() {
-                    let (p, q) = (i1 * s2 + j2, q1 * s2 + j2);
-                    let mean = 0.5 * (lo[p] + hi[q].conj());
-                    lo[p] = mean;
-                    hi[q] = mean.conj();
+                    conjugate_mean(&mut lo[i1 * s2 + j2], &mut hi[q1 * s2 + j2]);
                 }
             }
         };
-        // A slab that is its own partner (−i0 = i0): pairs within it, each once.
+        // A slab that is its own partner (−i0 = i0): pairs within it, each once, and the
+        // self-conjugate values made real.
         let own = |s: &mut [Complex64]| {
             for i1 in 0..n1 {
                 let q1 = self.negated(i1, 1);
-                if q1 < i1 {
-                    continue;
-                }
                 for &j2 in planes.clone() {
                     let (p, q) = (i1 * s2 + j2, q1 * s2 + j2);
-                    let mean = 0.5 * (s[p] + s[q].conj());
-                    s[p] = mean;
-                    s[q] = mean.conj();
+                    if q == p {
+                        s[p].im = 0.0;
+                    } else if q > p {
+                        let (low, high) = s.split_at_mut(q);
+                        conjugate_mean(&mut low[p], &mut high[0]);
+                    }
                 }
             }
         };
@@ -663,13 +661,19 @@ impl Transform {
                 let (low, high) = data.split_at_mut(q * s2);
                 let lane_p = &mut low[p * s2..(p + 1) * s2];
                 for (x, y) in lane_p.iter_mut().zip(&mut high[..s2]) {
-                    let mean = 0.5 * (*x + y.conj());
-                    *x = mean;
-                    *y = mean.conj();
+                    conjugate_mean(x, y);
                 }
             }
         }
     }
+}
+
+/// X(k) ← (X(k) + conj X(−k))/2 into `x` and its conjugate into `y` = X(−k).
+#[inline]
+fn conjugate_mean(x: &mut Complex64, y: &mut Complex64) {
+    let mean = 0.5 * (*x + y.conj());
+    *x = mean;
+    *y = mean.conj();
 }
 
 impl Plan {
