@@ -198,13 +198,16 @@ impl GradientSums {
 /// The L-BFGS relaxation engine.
 pub struct RelaxEngine {
     ev: Evaluator,
+    /// The current state; its `nonlinear` holds ĝ of φ̂ between iterations.
     cur: State,
+    /// The line search's trial state. It owns no `nonlinear` of its own: during a line search
+    /// it takes the current state's (whose ĝ is no longer needed once r is formed), and the
+    /// accepted trial hands it back with its own ĝ, so one spectrum serves both.
     trial: State,
     metric: Metric,
-    /// Preconditioned projected gradient r of the current state.
+    /// Preconditioned projected gradient r of the current state (the accepted trial's r is
+    /// written over it in place).
     grad: Array3<Complex64>,
-    /// r of the trial state.
-    grad_trial: Array3<Complex64>,
     /// Search direction d' (without its multiple of q).
     dir: Array3<Complex64>,
     /// Pairs, oldest first.
@@ -237,13 +240,14 @@ impl RelaxEngine {
         let cur = ev.state_of(&phi, 0.0)?;
         let zeros = Array3::zeros(cur.hat.raw_dim());
         let memory = scene.lbfgs_memory.min(MAX_MEMORY);
+        let mut trial = ev.blank();
+        trial.nonlinear = Array3::zeros((0, 0, 0));
         let mut e = RelaxEngine {
-            trial: ev.blank(),
+            trial,
             metric,
             ev,
             cur,
             grad: zeros.clone(),
-            grad_trial: zeros.clone(),
             dir: zeros,
             pairs: VecDeque::with_capacity(memory),
             spare_pairs: Vec::with_capacity(memory + 1),
@@ -276,6 +280,18 @@ impl RelaxEngine {
 
     fn reset_memory(&mut self) {
         self.spare_pairs.extend(self.pairs.drain(..));
+    }
+
+    /// After a line search that accepted nothing: the trial hands back the spectrum it took,
+    /// and ĝ of the current state (evaluated at `t`) is formed in it again, so that a later
+    /// [`RelaxEngine::refresh_gradient`] reads it. The state's measures and sums are kept as
+    /// they were (a new evaluation could change them at round-off).
+    fn take_back_gradient(&mut self, t: f64) -> Result<(), Diverged> {
+        std::mem::swap(&mut self.cur.nonlinear, &mut self.trial.nonlinear);
+        let kept = (self.cur.measures, self.cur.multiplier_sums);
+        self.ev.evaluate(&mut self.cur, t, None, None)?;
+        (self.cur.measures, self.cur.multiplier_sums) = kept;
+        Ok(())
     }
 
     /// σ, r, the residual and the inner products of the current state (no pair is formed).
@@ -436,8 +452,8 @@ impl RelaxEngine {
             .map_err(|_| ())
     }
 
-    /// Accept the trial state: its σ, r, residual and inner products, and the pair
-    /// (s, y) = (x_new − x, r_new − r) kept if ⟨y, s⟩_M > 0 (the oldest dropped when the
+    /// Accept the trial state: its σ, r (over the current state's), residual and inner
+    /// products, and the pair (s, y) = (x_new − x, r_new − r) kept if ⟨y, s⟩_M > 0 (the oldest dropped when the
     /// memory is full), its Gram row and column from the same sweep.
     fn accept(&mut self) {
         let sigma = self.multiplier(self.trial.multiplier_sums);
@@ -448,9 +464,9 @@ impl RelaxEngine {
             self.metric,
             &self.trial,
             sigma,
-            self.grad_trial.as_slice_mut().expect("standard layout"),
+            self.grad.as_slice_mut().expect("standard layout"),
             &self.pairs,
-            Some((flat(&self.cur.hat), flat(&self.grad), &mut pair)),
+            Some((flat(&self.cur.hat), &mut pair)),
         );
         let n = self.pairs.len();
         // The new pair's sums: [3] = ⟨y_new, s_new⟩_M, [5] = ⟨y_new, y_new⟩_M.
@@ -478,7 +494,6 @@ impl RelaxEngine {
             self.ip = sums.inner_products(0, n);
         }
         std::mem::swap(&mut self.cur, &mut self.trial);
-        std::mem::swap(&mut self.grad, &mut self.grad_trial);
         self.sigma = sigma;
         self.residual = (sums.res / self.ev.grid.full_volume()).sqrt();
     }
@@ -703,14 +718,15 @@ fn pair_dots(sym: &Symbols, m: Metric, a: &Pair, b: &Pair) -> (f64, f64) {
     (dot_m(sym, m, &a.s, &b.y), dot_m(sym, m, &a.y, &b.y))
 }
 
-/// One task's share of a new pair in [`gradient_sweep`]: x_old, r_old (the whole spectra) and
-/// its part of s and y.
-type NewPairPart<'a> = (&'a [f64], &'a [f64], &'a mut [f32], &'a mut [f32]);
+/// One task's share of a new pair in [`gradient_sweep`]: x_old (the whole spectrum) and its
+/// part of s and y.
+type NewPairPart<'a> = (&'a [f64], &'a mut [f32], &'a mut [f32]);
 
 /// r = M⁻¹ĝ + σq of `state` into `grad` (r(0) = 0) with its sums: the residual's
 /// Σ_{k≠0} w |ĝ + σâ|² = Σ w M²|r|², ⟨r, r⟩_M, ⟨q, r⟩_M and every stored pair's
-/// [`pair_sums`]. With `new` = (x_old, r_old, pair) it also writes s = φ̂ − x_old and
-/// y = r − r_old into `pair` and takes its sums (last in `pairs`).
+/// [`pair_sums`]. With `new` = (x_old, pair), `grad` holds r_old on entry: the sweep also writes
+/// s = φ̂ − x_old and y = r − r_old into `pair` (each piece of r_old copied aside before r
+/// overwrites it) and takes its sums (last in `pairs`).
 fn gradient_sweep(
     sym: &Symbols,
     m: Metric,
@@ -718,12 +734,12 @@ fn gradient_sweep(
     sigma: f64,
     grad: &mut [Complex64],
     pairs: &VecDeque<Pair>,
-    new: Option<(&[Complex64], &[Complex64], &mut Pair)>,
+    new: Option<(&[Complex64], &mut Pair)>,
 ) -> GradientSums {
     let (x, g) = (reals(flat(&state.hat)), reals(flat(&state.nonlinear)));
     let task = sym.task_len();
     let n_pairs = pairs.len();
-    // One task: rows from `t · task / s2`; `new` = (x_old, r_old, s, y) of its values.
+    // One task: rows from `t · task / s2`; `new` = (x_old, s, y) of its values.
     let run = |t: usize, r: &mut [f64], mut new: Option<NewPairPart>| {
         let base = 2 * t * task;
         let mut acc = GradientSums::zero();
@@ -731,6 +747,7 @@ fn gradient_sweep(
         // q and each value's terms of the sums.
         let mut v = [[0.0; 2 * PIECE]; 4];
         let mut q = [0.0; 2 * PIECE];
+        let mut r_old = [0.0; 2 * PIECE];
         let mut terms = [[0.0; PIECE]; 3];
         for_each_piece(sym, t, r.len(), |p, at| {
             let (n, local, gl) = (
@@ -739,13 +756,16 @@ fn gradient_sweep(
                 base + at..base + at + p.reals(),
             );
             let (xs, gs, rs) = (&x[gl.clone()], &g[gl.clone()], &mut r[local.clone()]);
+            if new.is_some() {
+                r_old[..n].copy_from_slice(rs);
+            }
             let [wr, wq, ws, wy] = &mut v;
             let out = [&mut q[..n], &mut wr[..n], &mut wq[..n]];
             let [rr, res, qr] = gradient_values(m, p, (xs, gs), sigma, rs, out, &mut terms);
             (acc.rr, acc.res, acc.qr) = (acc.rr + rr, acc.res + res, acc.qr + qr);
-            if let Some((x_old, r_old, s, y)) = new.as_mut() {
+            if let Some((x_old, s, y)) = new.as_mut() {
                 let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
-                let old = (&x_old[gl.clone()], &r_old[gl.clone()]);
+                let old = (&x_old[gl.clone()], &r_old[..n]);
                 pair_values(m, p, (xs, rs), old, [s, y], [&mut ws[..n], &mut wy[..n]]);
             }
             let v = v.each_ref().map(|v| &v[..n]);
@@ -753,7 +773,7 @@ fn gradient_sweep(
                 let add = pair_sums(&p.s[gl.clone()], &p.y[gl.clone()], v);
                 sums.iter_mut().zip(add).for_each(|(a, b)| *a += b);
             }
-            if let Some((_, _, s, y)) = new.as_ref() {
+            if let Some((_, s, y)) = new.as_ref() {
                 let add = pair_sums(&s[local.clone()], &y[local.clone()], v);
                 acc.pairs[n_pairs]
                     .iter_mut()
@@ -771,13 +791,13 @@ fn gradient_sweep(
             .with_max_len(1)
             .map(|(t, r)| run(t, r, None))
             .reduce(GradientSums::zero, GradientSums::add),
-        Some((x_old, r_old, pair)) => grad
+        Some((x_old, pair)) => grad
             .par_chunks_mut(2 * task)
             .zip(pair.s.par_chunks_mut(2 * task))
             .zip(pair.y.par_chunks_mut(2 * task))
             .enumerate()
             .with_max_len(1)
-            .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), reals(r_old), s, y))))
+            .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), s, y))))
             .reduce(GradientSums::zero, GradientSums::add),
     }
 }
@@ -818,6 +838,7 @@ impl Engine for RelaxEngine {
         let f0 = self.cur.measures.energy;
         let mut alpha = 1.0;
         let mut rejected = 0;
+        std::mem::swap(&mut self.cur.nonlinear, &mut self.trial.nonlinear);
         loop {
             let accepted = self.try_step(alpha, t + dt).is_ok()
                 && self.trial.measures.energy <= f0 + ARMIJO * alpha * self.direction.slope;
@@ -829,6 +850,7 @@ impl Engine for RelaxEngine {
             if rejected >= MAX_BACKTRACKS {
                 self.stalled = true;
                 self.reset_memory();
+                self.take_back_gradient(t)?;
                 return Ok(StepReport {
                     dt,
                     rate: f64::NAN,
@@ -926,32 +948,13 @@ mod tests {
     /// partial piece of a task, would miss by O(1).
     #[test]
     fn piecewise_sums_equal_direct_inner_products() {
-        let cases = [
-            json!({"dim": 2, "n": [36, 34], "initial": {"shape": "ellipsoid", "axes": [12.0, 8.0]}}),
-            json!({"dim": 3, "n": [21, 20, 23], "initial": {"shape": "ellipsoid", "axes": [7.0, 5.0, 5.0]}}),
-            json!({"dim": 3, "n": [24, 22, 26], "symmetry": ["x", "z"],
-                   "initial": {"shape": "ellipsoid", "axes": [8.0, 5.0, 5.0]}}),
-        ];
-        for mut case in cases {
-            let fields = json!({"h": 1.0, "eps": 1.0, "method": "spectral",
-                "dynamics": "relaxational", "dt": 1.0, "max_steps": 12, "lbfgs_memory": 5});
-            case.as_object_mut()
-                .unwrap()
-                .extend(fields.as_object().unwrap().clone());
-            let scene = crate::config::from_value(case.clone()).expect("scene");
-            let p = crate::setup::build(&scene).expect("problem");
-            let mut e = RelaxEngine::new(&scene, p.grid, p.c0, p.phi).expect("engine");
-            let target = e.measures().area;
-            e.set_area(crate::engine::AreaConstraint {
-                method: AreaMethod::Projection,
-                alpha: 0.0,
-                target,
-            });
+        for mut e in cases().into_iter().map(engine_with_area) {
             for i in 0..12 {
                 e.step(i as f64, 1.0).expect("iteration");
             }
+            let case = e.ev.grid.shape;
             let n = e.pairs.len();
-            assert!(n >= 3, "{case}: {n} pairs");
+            assert!(n >= 3, "{case:?}: {n} pairs");
             let (sy, yy) = (e.sy.clone(), e.yy.clone());
             let (sym, m) = (&e.ev.symbols, e.metric);
             let r = reals(flat(&e.grad));
@@ -969,7 +972,7 @@ mod tests {
                     for (what, a, b) in [("sy", sy[at], e.sy[at]), ("yy", yy[at], e.yy[at])] {
                         assert!(
                             (a - b).abs() <= 1e-11 * largest,
-                            "{case}: {what}[{i}][{j}] {a} {b}"
+                            "{case:?}: {what}[{i}][{j}] {a} {b}"
                         );
                     }
                 }
@@ -980,17 +983,97 @@ mod tests {
             for (i, (d, s)) in direct.iter().zip(&summed).enumerate() {
                 assert!(
                     (d.0 - s.0).abs() <= 1e-11 * scale,
-                    "{case}: ⟨s_{i}, r⟩ {} {}",
+                    "{case:?}: ⟨s_{i}, r⟩ {} {}",
                     d.0,
                     s.0
                 );
                 assert!(
                     (d.1 - s.1).abs() <= 1e-11 * scale,
-                    "{case}: ⟨y_{i}, r⟩ {} {}",
+                    "{case:?}: ⟨y_{i}, r⟩ {} {}",
                     d.1,
                     s.1
                 );
             }
         }
+    }
+
+    /// The newest pair is the step and the change of r: s = φ̂_new − φ̂_old and
+    /// y = r_new − r_old to single precision (2⁻²⁴ of the largest value, the rounding of the
+    /// stored pair), although r_new is written over r_old in the same sweep. A sweep that read
+    /// r after overwriting it would store y = 0.
+    #[test]
+    fn the_newest_pair_is_the_step_and_the_change_of_r() {
+        for mut e in cases().into_iter().map(engine_with_area) {
+            for i in 0..6 {
+                let (x_old, r_old) = (e.cur.hat.clone(), e.grad.clone());
+                let kept = e.pairs.len();
+                e.step(i as f64, 1.0).expect("iteration");
+                assert!(e.pairs.len() > kept.min(4), "iteration {i}: no pair kept");
+                let newest = e.pairs.back().expect("a pair");
+                let s = (&e.cur.hat - &x_old).mapv(|v| [v.re, v.im]);
+                let y = (&e.grad - &r_old).mapv(|v| [v.re, v.im]);
+                for (what, exact, stored) in [("s", s, &newest.s), ("y", y, &newest.y)] {
+                    let exact: Vec<f64> = exact.iter().flatten().copied().collect();
+                    let largest = exact.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                    assert!(largest > 0.0, "iteration {i}: {what} = 0");
+                    for (a, b) in exact.iter().zip(stored.iter()) {
+                        let tol = largest * f64::from(f32::EPSILON);
+                        assert!((a - f64::from(*b)).abs() <= tol, "{what}: {a} {b}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A line search that accepts nothing hands the current state's ĝ back intact: the trial
+    /// evaluated meanwhile wrote its own ĝ into the spectrum it took, and the gradient and the
+    /// residual formed afterwards (by `set_area`) equal those before, to round-off (1e-12).
+    #[test]
+    fn a_failed_line_search_leaves_the_gradient_of_the_current_state() {
+        for mut e in cases().into_iter().map(engine_with_area) {
+            e.step(0.0, 1.0).expect("iteration");
+            let (r, residual) = (e.grad.clone(), e.residual);
+            let mut d = e.recursion(e.pairs.len());
+            e.write_direction(&mut d);
+            e.direction = d;
+            std::mem::swap(&mut e.cur.nonlinear, &mut e.trial.nonlinear);
+            e.try_step(0.5, 1.0).expect("trial");
+            e.take_back_gradient(1.0).expect("evaluation");
+            e.set_area(e.area);
+            let largest = r.iter().fold(0.0f64, |a, v| a.max(v.norm()));
+            let change = (&e.grad - &r).iter().fold(0.0f64, |a, v| a.max(v.norm()));
+            assert!(change <= 1e-12 * largest, "max|Δr| = {change:e}");
+            assert!((e.residual - residual).abs() <= 1e-12 * residual);
+        }
+    }
+
+    /// Boxes whose rows fill the pieces unevenly: 2D (rows of 18 values, 14 to a piece),
+    /// odd-sized 3D (rows of 12), mirror axes (rows of 13, the last axis a DCT).
+    fn cases() -> Vec<serde_json::Value> {
+        vec![
+            json!({"dim": 2, "n": [36, 34], "initial": {"shape": "ellipsoid", "axes": [12.0, 8.0]}}),
+            json!({"dim": 3, "n": [21, 20, 23], "initial": {"shape": "ellipsoid", "axes": [7.0, 5.0, 5.0]}}),
+            json!({"dim": 3, "n": [24, 22, 26], "symmetry": ["x", "z"],
+                   "initial": {"shape": "ellipsoid", "axes": [8.0, 5.0, 5.0]}}),
+        ]
+    }
+
+    /// An L-BFGS engine (memory 5) on `case`, holding its initial area.
+    fn engine_with_area(mut case: serde_json::Value) -> RelaxEngine {
+        let fields = json!({"h": 1.0, "eps": 1.0, "method": "spectral",
+            "dynamics": "relaxational", "dt": 1.0, "max_steps": 12, "lbfgs_memory": 5});
+        case.as_object_mut()
+            .unwrap()
+            .extend(fields.as_object().unwrap().clone());
+        let scene = crate::config::from_value(case).expect("scene");
+        let p = crate::setup::build(&scene).expect("problem");
+        let mut e = RelaxEngine::new(&scene, p.grid, p.c0, p.phi).expect("engine");
+        let target = e.measures().area;
+        e.set_area(crate::engine::AreaConstraint {
+            method: AreaMethod::Projection,
+            alpha: 0.0,
+            target,
+        });
+        e
     }
 }
