@@ -16,7 +16,7 @@ use vesicle::setup::{self, Problem};
 fn full_initial(v: Value) -> (Problem, Array3<f64>) {
     let s = scene(v);
     let p = setup::build(&s).expect("problem");
-    let full = p.grid.unfold(&p.phi);
+    let full = p.grid.unfold(&p.phi).into_owned();
     (p, full)
 }
 

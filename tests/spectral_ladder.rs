@@ -295,7 +295,7 @@ fn relaxational_residual_is_the_same_on_reduced_and_full_boxes() {
     let reduced = sim.record();
     let full = box_of(json!([]));
     let grid = vesicle::grid::Grid::new(&full.n, full.h, &[false; 3]);
-    let phi = problem.grid.unfold(sim.engine().phi());
+    let phi = problem.grid.unfold(sim.engine().phi()).into_owned();
     let mut e = vesicle::relax::RelaxEngine::new(&full, grid, problem.c0.clone(), phi).unwrap();
     e.set_area(AreaConstraint {
         method: vesicle::config::AreaMethod::Projection,

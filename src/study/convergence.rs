@@ -250,7 +250,7 @@ fn relaxed(s: &Scene) -> Result<Relaxed> {
     let (sim, wall) = settle(s, &problem, &StopRules::of(s))?;
     Ok(Relaxed {
         e: sim.engine().measures().reduced(s.dim, s.eps).energy,
-        phi: problem.grid.unfold(sim.engine().phi()),
+        phi: problem.grid.unfold(sim.engine().phi()).into_owned(),
         residual: sim.engine().residual(),
         steps: sim.clock.step,
         wall,
