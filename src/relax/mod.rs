@@ -240,6 +240,7 @@ impl RelaxEngine {
         let cur = ev.state_of(&phi, 0.0)?;
         let zeros = Array3::zeros(cur.hat.raw_dim());
         let memory = scene.lbfgs_memory.min(MAX_MEMORY);
+        // The trial's own explicit-term spectrum is never used (see `trial`): an empty array.
         let mut trial = ev.blank();
         trial.nonlinear = Array3::zeros((0, 0, 0));
         let mut e = RelaxEngine {
@@ -453,8 +454,8 @@ impl RelaxEngine {
     }
 
     /// Accept the trial state: its σ, r (over the current state's), residual and inner
-    /// products, and the pair (s, y) = (x_new − x, r_new − r) kept if ⟨y, s⟩_M > 0 (the oldest dropped when the
-    /// memory is full), its Gram row and column from the same sweep.
+    /// products, and the pair (s, y) = (x_new − x, r_new − r) kept if ⟨y, s⟩_M > 0 (the oldest
+    /// dropped when the memory is full), its Gram row and column from the same sweep.
     fn accept(&mut self) {
         let sigma = self.multiplier(self.trial.multiplier_sums);
         let reals = 2 * self.cur.hat.len();
