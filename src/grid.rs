@@ -160,17 +160,19 @@ impl Grid {
         if !self.kinds.contains(&AxisKind::Mirror) {
             return Cow::Borrowed(field);
         }
-        let source = |a: usize, i: usize| {
+        let full = self.full_shape();
+        // The computed index each full-box index reads, per axis.
+        let [s0, s1, s2]: [Vec<usize>; 3] = std::array::from_fn(|a| {
             let n = self.shape[a];
-            match self.kinds[a] {
-                AxisKind::Mirror if i < n => n - 1 - i,
-                AxisKind::Mirror => i - n,
-                AxisKind::Periodic => i,
-            }
-        };
-        let sources = [0, 1, 2].map(|a| (0..self.full_shape()[a]).map(|i| source(a, i)).collect());
-        let [s0, s1, s2]: [Vec<usize>; 3] = sources;
-        Cow::Owned(Array3::from_shape_fn(self.full_shape(), |(i, j, k)| {
+            (0..full[a])
+                .map(|i| match self.kinds[a] {
+                    AxisKind::Mirror if i < n => n - 1 - i,
+                    AxisKind::Mirror => i - n,
+                    AxisKind::Periodic => i,
+                })
+                .collect()
+        });
+        Cow::Owned(Array3::from_shape_fn(full, |(i, j, k)| {
             field[[s0[i], s1[j], s2[k]]]
         }))
     }

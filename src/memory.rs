@@ -18,15 +18,11 @@
 //! point of the full box: writing the final field unfolds it into one new full-box array while
 //! the engine is still alive. A full box writes its field as it is, with no copy.
 //!
-//! Measured 2026-12-03 (14 steps or iterations of a 96³ ellipsoid, then the final outputs and
-//! checkpoint; the mirrored figures on the eighth box less its 1 × 8 full-box f64; the L-BFGS
-//! rows from memories 2 and 8; the initial field transformed in the state's own real array, so
-//! that the evaluator's 2D-only scratch is never touched in 3D). The run's last checkpoint is
-//! inside them: it is written from the engine's own arrays (φ̂, SBDF2's previous step, the L-BFGS
-//! pairs, stored in single precision) through a 1 MiB buffer, with no copy of them beside the
-//! engine. Re-measured after the L-BFGS trial state came to borrow the current state's
-//! explicit-term spectrum with r written in place (two spectra fewer), and the final field of a
-//! full box came to be written without a copy (one f64 per point less for every engine).
+//! Measured 2026-12-03 at 44f1b66 (14 steps or iterations of a 96³ ellipsoid, then the final
+//! outputs and checkpoint; the mirrored figures on the eighth box less its 1 × 8 full-box f64;
+//! the L-BFGS rows from memories 2 and 8). The run's last checkpoint is inside them: it is
+//! written from the engine's own arrays (φ̂, SBDF2's previous step, the L-BFGS pairs, stored in
+//! single precision) through a 1 MiB buffer, with no copy of them beside the engine.
 
 use crate::config::{Dynamics, Method, Scene, Scheme, Symmetry};
 use crate::error::{Error, Result};
