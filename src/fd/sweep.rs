@@ -12,16 +12,17 @@
 //!
 //! Stage 1 writes the slab's planes of φ^{n+1} in place, stage 2 keeps Φ in a ring of three
 //! planes and q in the slab's planes of μ^{n+1}, which stage 3 completes. Each thread owns a
-//! contiguous slab of planes and recomputes, into its own buffers, the two planes of φ' on
-//! either side of the slab and the plane of Φ on either side (the halo), so the slabs share
-//! nothing but the read-only φⁿ, μⁿ and εC0.
+//! contiguous slab of planes. Stage 2 at a slab's ends needs φ' two planes beyond them, so
+//! stage 1 runs first on every slab's edges (its first two and last two planes), into buffers
+//! every slab reads; the pipeline then copies its own edges and computes stage 1 only on the
+//! planes between. Each slab recomputes the plane of Φ on either side of it into its own ring.
 //!
 //! The streamed axis is axis 0, or axis 1 for a 2D scene (n0 = 1): the planes are then rows.
 //! Planes outside the box are those of the periodic or mirror (even) extension: with the mirror
 //! ghost φ_{−1} = φ_0 every stage's field is even about the wall, so the extension evaluates the
 //! same stencil as [`crate::stencil`]'s ghosts.
 
-use super::lanes::{in_lanes, largest, total, Acc, Kernel, Lane};
+use super::lanes::{in_lanes, largest, total, Acc, Kernel, Lane, Lanes, LANES};
 use crate::grid::{AxisKind, Grid};
 use crate::model::{bulk, bulk_derivative};
 use crate::private::Private;
@@ -153,16 +154,53 @@ impl Sums {
     }
 }
 
-/// One thread's buffers: the halo planes of φ' (two below the slab, two above), the ring of
-/// three Φ planes, one row of a Laplacian, a row of ones (the uniform εC0's field), each
-/// [`Private`] to the thread, and the slab's sums.
+/// Stage 1's results on one plane: φ' is written; the lanes and tails of Σφ', max|φ'|,
+/// max|∇²_h μⁿ| ([`Acc::finish`]).
+type Advanced = (Lanes<3>, [f64; 3]);
+
+/// One thread's buffers: the ring of three Φ planes, one row of a Laplacian, a row of ones
+/// (the uniform εC0's field), each [`Private`] to the thread; stage 1's results on the slab's
+/// edge planes, and the slab's sums.
 #[derive(Debug)]
 struct Pipe {
-    halo: Private<f64>,
     big: Private<f64>,
     row: Private<f64>,
     ones: Private<f64>,
+    edge_sums: [Advanced; 4],
     sums: Sums,
+}
+
+/// The planes of the box cut into slabs of `per` consecutive planes (the last may be shorter).
+#[derive(Clone, Copy, Debug)]
+struct Slabs {
+    planes: usize,
+    per: usize,
+}
+
+impl Slabs {
+    /// Number of slabs.
+    fn count(&self) -> usize {
+        self.planes.div_ceil(self.per)
+    }
+
+    /// Planes z0..z1 of slab `i`.
+    fn bounds(&self, i: usize) -> (usize, usize) {
+        (i * self.per, ((i + 1) * self.per).min(self.planes))
+    }
+
+    /// Slab and slot (0, 1: its first two planes; 2, 3: its last two) of stored plane `p`, if
+    /// `p` is an edge of its slab. In a slab of fewer than four planes a plane has one slot.
+    fn edge(&self, p: usize) -> Option<(usize, usize)> {
+        let i = p / self.per;
+        let (z0, z1) = self.bounds(i);
+        if p - z0 < 2 {
+            Some((i, p - z0))
+        } else if z1 - p <= 2 {
+            Some((i, 4 - (z1 - p)))
+        } else {
+            None
+        }
+    }
 }
 
 /// The planned sweep: layout and per-thread buffers (allocated once).
@@ -170,6 +208,8 @@ struct Pipe {
 pub(super) struct Sweep {
     layout: Layout,
     pipes: Vec<Pipe>,
+    /// φ' on each slab's edge planes, four planes a slab (by [`Slabs::edge`]'s slot).
+    edges: Vec<Private<f64>>,
     /// The CPU runs AVX2 (x86-64 only).
     avx2: bool,
 }
@@ -179,15 +219,17 @@ impl Sweep {
     pub fn new(grid: &Grid, threads: usize) -> Self {
         let layout = Layout::of(grid);
         let plane = layout.plane();
-        let pipes = (0..threads.clamp(1, layout.planes))
+        let slabs = threads.clamp(1, layout.planes);
+        let pipes = (0..slabs)
             .map(|_| Pipe {
-                halo: Private::new(4 * plane, 0.0),
                 big: Private::new(3 * plane, 0.0),
                 row: Private::new(layout.len, 0.0),
                 ones: Private::new(layout.len, 1.0),
+                edge_sums: [([[0.0; LANES]; 3], [0.0; 3]); 4],
                 sums: Sums::default(),
             })
             .collect();
+        let edges = (0..slabs).map(|_| Private::new(4 * plane, 0.0)).collect();
         #[cfg(target_arch = "x86_64")]
         let avx2 = is_x86_feature_detected!("avx2");
         #[cfg(not(target_arch = "x86_64"))]
@@ -195,6 +237,7 @@ impl Sweep {
         Sweep {
             layout,
             pipes,
+            edges,
             avx2,
         }
     }
@@ -208,45 +251,125 @@ impl Sweep {
         mu_next: &mut [f64],
     ) -> Sums {
         let (l, avx2) = (self.layout, self.avx2);
-        let slab = l.planes.div_ceil(self.pipes.len()) * l.plane();
-        for p in &mut self.pipes {
-            p.sums = Sums::default();
-        }
-        if self.pipes.len() == 1 {
-            self.pipes[0].slab(&l, 0, f, k, self.avx2, phi_next, mu_next);
+        let slabs = Slabs {
+            planes: l.planes,
+            per: l.planes.div_ceil(self.pipes.len()),
+        };
+        let slab = slabs.per * l.plane();
+        let n = slabs.count();
+        if n == 1 {
+            let pipe = &mut self.pipes[0];
+            pipe.edges(&l, slabs, 0, f, k, avx2, &mut self.edges[0]);
+            pipe.slab(&l, slabs, 0, f, k, avx2, &self.edges, phi_next, mu_next);
         } else {
+            self.pipes[..n]
+                .par_iter_mut()
+                .zip(&mut self.edges[..n])
+                .enumerate()
+                .for_each(|(i, (pipe, edges))| pipe.edges(&l, slabs, i, f, k, avx2, edges));
+            let edges = &self.edges;
             phi_next
                 .par_chunks_mut(slab)
                 .zip(mu_next.par_chunks_mut(slab))
                 .zip(self.pipes.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, ((phi, mu), pipe))| {
-                    pipe.slab(&l, i * slab / l.plane(), f, k, avx2, phi, mu);
+                    pipe.slab(&l, slabs, i, f, k, avx2, edges, phi, mu);
                 });
         }
-        self.pipes
+        self.pipes[..n]
             .iter()
             .fold(Sums::default(), |a, p| a.add(p.sums))
     }
 }
 
 impl Pipe {
-    /// The slab of planes starting at `z0` whose φ^{n+1}, μ^{n+1} are `phi`, `mu`: the AVX2
-    /// build of [`Self::stages`] when the CPU has AVX2, else the baseline build.
+    /// Stage 1 on the edge planes of slab `i` into `edges`: the AVX2 build of
+    /// [`Self::edge_planes`] when the CPU has AVX2, else the baseline build.
+    #[allow(clippy::too_many_arguments)]
+    fn edges(
+        &mut self,
+        l: &Layout,
+        slabs: Slabs,
+        i: usize,
+        f: &Fields,
+        k: &Coefficients,
+        avx2: bool,
+        edges: &mut [f64],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if avx2 {
+            // SAFETY: `avx2` is true only when `is_x86_feature_detected!("avx2")` found the
+            // instructions on this CPU (`Sweep::new`).
+            unsafe { self.edge_planes_avx2(l, slabs, i, f, k, edges) };
+            return;
+        }
+        let _ = avx2;
+        self.edge_planes(l, slabs, i, f, k, edges);
+    }
+
+    /// [`Self::edge_planes`] compiled for AVX2 (no FMA contraction: the same bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn edge_planes_avx2(
+        &mut self,
+        l: &Layout,
+        slabs: Slabs,
+        i: usize,
+        f: &Fields,
+        k: &Coefficients,
+        edges: &mut [f64],
+    ) {
+        self.edge_planes(l, slabs, i, f, k, edges);
+    }
+
+    /// Stage 1 on each edge plane of slab `i`, written to its slot of `edges`, its sums kept
+    /// for the pipeline to add in plane order.
+    #[inline(always)]
+    fn edge_planes(
+        &mut self,
+        l: &Layout,
+        slabs: Slabs,
+        i: usize,
+        f: &Fields,
+        k: &Coefficients,
+        edges: &mut [f64],
+    ) {
+        let (z0, z1) = slabs.bounds(i);
+        let p = l.plane();
+        for z in z0..z1 {
+            if let Some((_, slot)) = slabs.edge(z) {
+                let out = &mut edges[slot * p..][..p];
+                self.edge_sums[slot] = advance(l, f, k, z as isize, out, &mut self.row);
+            }
+        }
+    }
+
+    /// The slab of planes starting at `z0`: the AVX2 build of [`Self::stages`] when the CPU has
+    /// AVX2, else the baseline build.
     #[allow(clippy::too_many_arguments)]
     fn slab(
         &mut self,
         l: &Layout,
-        z0: usize,
+        slabs: Slabs,
+        i: usize,
         f: &Fields,
         k: &Coefficients,
         avx2: bool,
+        edges: &[Private<f64>],
         phi: &mut [f64],
         mu: &mut [f64],
     ) {
-        let z0 = z0 as isize;
-        let z1 = z0 + (phi.len() / l.plane()) as isize;
-        let s = Slab { l, z0, z1, f, k };
+        let (z0, z1) = slabs.bounds(i);
+        let s = Slab {
+            l,
+            slabs,
+            z0: z0 as isize,
+            z1: z1 as isize,
+            f,
+            k,
+            edges,
+        };
         #[cfg(target_arch = "x86_64")]
         if avx2 {
             // SAFETY: `avx2` is true only when `is_x86_feature_detected!("avx2")` found the
@@ -269,64 +392,44 @@ impl Pipe {
     }
 
     /// The three stages over slab `s`, a plane apart: prologue up to stage 2 at z0, then per
-    /// plane z: stage 1 at z + 2, stage 2 at z + 1, stage 3 at z.
+    /// plane z: stage 1 at z + 2, stage 2 at z + 1, stage 3 at z. Stage 1 runs on the slab's
+    /// planes only (its neighbours' edges are read from the edge buffers).
     #[inline(always)]
     fn stages(&mut self, s: &Slab, phi: &mut [f64], mu: &mut [f64]) {
-        let (z0, z1, s) = (s.z0, s.z1, s);
+        let (z0, z1) = (s.z0, s.z1);
         let mut sums = Sums::default();
-        for z in z0 - 2..=z0 {
+        for z in z0..(z0 + 2).min(z1) {
             self.advance(s, z, phi, &mut sums);
         }
         self.potential(s, z0 - 1, phi, mu, &mut sums);
-        self.advance(s, z0 + 1, phi, &mut sums);
         self.potential(s, z0, phi, mu, &mut sums);
         for z in z0..z1 {
-            self.advance(s, z + 2, phi, &mut sums);
+            if z + 2 < z1 {
+                self.advance(s, z + 2, phi, &mut sums);
+            }
             self.potential(s, z + 1, phi, mu, &mut sums);
             self.correct(s, z, mu, &mut sums);
         }
         self.sums = sums;
     }
 
-    /// Stage 1 on plane `z`: φ' = φⁿ + Δt ∇²_h μⁿ (into the slab, or the halo).
+    /// Stage 1 on plane `z` of the slab, its sums added: an edge plane copied from its slot,
+    /// another computed.
     #[inline(always)]
     fn advance(&mut self, s: &Slab, z: isize, phi: &mut [f64], sums: &mut Sums) {
-        let (l, p) = (s.l, s.l.plane());
-        let mu = [
-            l.plane_of(s.f.mu, z - 1),
-            l.plane_of(s.f.mu, z),
-            l.plane_of(s.f.mu, z + 1),
-        ];
-        let old = l.plane_of(s.f.phi, z);
-        let own = s.owns(z);
-        let out = if own {
-            &mut phi[(z - s.z0) as usize * p..][..p]
-        } else {
-            &mut self.halo[s.halo_slot(z) * p..][..p]
-        };
-        let (kernel, mut acc) = (Advance { dt: s.k.dt }, Acc::zero());
-        for j in 0..l.rows {
-            laplacian_row(l, mu, j, s.k.inv_h2, &mut self.row);
-            let r = j * l.len..(j + 1) * l.len;
-            if own {
-                in_lanes(
-                    &kernel,
-                    [&old[r.clone()], &self.row],
-                    [&mut out[r]],
-                    &mut acc,
-                );
-            } else {
-                for ((o, &u), &m) in out[r.clone()].iter_mut().zip(&old[r]).zip(self.row.iter()) {
-                    *o = u + s.k.dt * m;
+        let p = s.l.plane();
+        let out = &mut phi[(z - s.z0) as usize * p..][..p];
+        let ([sum, max_phi, max_lap], [sum_t, max_phi_t, max_lap_t]) =
+            match s.slabs.edge(z as usize) {
+                Some((i, slot)) => {
+                    out.copy_from_slice(&s.edges[i][slot * p..][..p]);
+                    self.edge_sums[slot]
                 }
-            }
-        }
-        if own {
-            let ([sum, max_phi, max_lap], [sum_t, max_phi_t, max_lap_t]) = acc.finish();
-            sums.phi += total(sum, sum_t);
-            sums.max_phi = largest(max_phi, max_phi_t, sums.max_phi);
-            sums.max_lap_mu = largest(max_lap, max_lap_t, sums.max_lap_mu);
-        }
+                None => advance(s.l, s.f, s.k, z, out, &mut self.row),
+            };
+        sums.phi += total(sum, sum_t);
+        sums.max_phi = largest(max_phi, max_phi_t, sums.max_phi);
+        sums.max_lap_mu = largest(max_lap, max_lap_t, sums.max_lap_mu);
     }
 
     /// Stage 2 on plane `z`: Φ of φ' into the ring; in the slab also q = 2f'Φ − (3/√2)εσ∇²φ'
@@ -334,11 +437,7 @@ impl Pipe {
     #[inline(always)]
     fn potential(&mut self, s: &Slab, z: isize, phi: &[f64], mu: &mut [f64], sums: &mut Sums) {
         let (l, p) = (s.l, s.l.plane());
-        let phis = [
-            s.phi(z - 1, phi, &self.halo),
-            s.phi(z, phi, &self.halo),
-            s.phi(z + 1, phi, &self.halo),
-        ];
+        let phis = [s.phi(z - 1, phi), s.phi(z, phi), s.phi(z + 1, phi)];
         let big = &mut self.big[ring(z) * p..][..p];
         let (c0, scale) = match s.f.c0 {
             Some(c) => (l.plane_of(c, z), s.k.ramp),
@@ -398,6 +497,32 @@ impl Pipe {
     }
 }
 
+/// Stage 1 on plane `z` (a stored plane) into `out`: φ' = φⁿ + Δt ∇²_h μⁿ, with its sums;
+/// `row` is scratch for a row of ∇²_h μⁿ.
+#[inline(always)]
+fn advance(
+    l: &Layout,
+    f: &Fields,
+    k: &Coefficients,
+    z: isize,
+    out: &mut [f64],
+    row: &mut [f64],
+) -> Advanced {
+    let mu = [
+        l.plane_of(f.mu, z - 1),
+        l.plane_of(f.mu, z),
+        l.plane_of(f.mu, z + 1),
+    ];
+    let old = l.plane_of(f.phi, z);
+    let (kernel, mut acc) = (Advance { dt: k.dt }, Acc::zero());
+    for j in 0..l.rows {
+        laplacian_row(l, mu, j, k.inv_h2, row);
+        let r = j * l.len..(j + 1) * l.len;
+        in_lanes(&kernel, [&old[r.clone()], row], [&mut out[r]], &mut acc);
+    }
+    acc.finish()
+}
+
 /// Slot of plane `z` in a ring of three planes.
 fn ring(z: isize) -> usize {
     z.rem_euclid(3) as usize
@@ -406,35 +531,34 @@ fn ring(z: isize) -> usize {
 /// What a slab's stages share.
 struct Slab<'a> {
     l: &'a Layout,
+    slabs: Slabs,
     z0: isize,
     z1: isize,
     f: &'a Fields<'a>,
     k: &'a Coefficients,
+    /// Every slab's edge planes of φ'.
+    edges: &'a [Private<f64>],
 }
 
 impl Slab<'_> {
-    /// Plane `z` is the slab's own (else a halo plane).
+    /// Plane `z` is the slab's own (else a neighbour's).
     fn owns(&self, z: isize) -> bool {
         (self.z0..self.z1).contains(&z)
     }
 
-    /// Slot of halo plane `z` (z0 − 2, z0 − 1, z1, z1 + 1) in the halo buffer.
-    fn halo_slot(&self, z: isize) -> usize {
-        if z < self.z0 {
-            (z - self.z0 + 2) as usize
-        } else {
-            (z - self.z1 + 2) as usize
-        }
-    }
-
-    /// Plane `z` of φ' (z0 − 2 ≤ z < z1 + 2): from the slab or the halo.
-    fn phi<'b>(&self, z: isize, slab: &'b [f64], halo: &'b [f64]) -> &'b [f64] {
+    /// Plane `z` of φ' (z0 − 2 ≤ z < z1 + 2): from the slab's own planes `slab`, or from the
+    /// edge buffers (the plane of the periodic or mirror extension that `z` stands for is an
+    /// edge of its slab).
+    fn phi<'b>(&'b self, z: isize, slab: &'b [f64]) -> &'b [f64] {
         let p = self.l.plane();
         if self.owns(z) {
-            &slab[(z - self.z0) as usize * p..][..p]
-        } else {
-            &halo[self.halo_slot(z) * p..][..p]
+            return &slab[(z - self.z0) as usize * p..][..p];
         }
+        let (i, slot) = self
+            .slabs
+            .edge(self.l.stored(z))
+            .expect("a plane within two of a slab's end is an edge of its slab");
+        &self.edges[i][slot * p..][..p]
     }
 }
 
