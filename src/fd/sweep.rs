@@ -158,14 +158,13 @@ impl Sums {
 /// max|∇²_h μⁿ| ([`Acc::finish`]).
 type Advanced = (Lanes<3>, [f64; 3]);
 
-/// One thread's buffers: the ring of three Φ planes, one row of a Laplacian, a row of ones
-/// (the uniform εC0's field), each [`Private`] to the thread; stage 1's results on the slab's
+/// One thread's buffers: the ring of three Φ planes and one row of a Laplacian, each
+/// [`Private`] to the thread; stage 1's results on the slab's
 /// edge planes, and the slab's sums.
 #[derive(Debug)]
 struct Pipe {
     big: Private<f64>,
     row: Private<f64>,
-    ones: Private<f64>,
     edge_sums: [Advanced; 4],
     sums: Sums,
 }
@@ -224,7 +223,6 @@ impl Sweep {
             .map(|_| Pipe {
                 big: Private::new(3 * plane, 0.0),
                 row: Private::new(layout.len, 0.0),
-                ones: Private::new(layout.len, 1.0),
                 edge_sums: [([[0.0; LANES]; 3], [0.0; 3]); 4],
                 sums: Sums::default(),
             })
@@ -433,38 +431,52 @@ impl Pipe {
     }
 
     /// Stage 2 on plane `z`: Φ of φ' into the ring; in the slab also q = 2f'Φ − (3/√2)εσ∇²φ'
-    /// into μ^{n+1} and the sums of F and A.
+    /// into μ^{n+1} and the sums of F and A. f and f' take εC0 from the field, the uniform
+    /// value, or drop it where C0 = 0.
     #[inline(always)]
     fn potential(&mut self, s: &Slab, z: isize, phi: &[f64], mu: &mut [f64], sums: &mut Sums) {
+        match s.f.c0 {
+            Some(c) => {
+                let c0 = Some(s.l.plane_of(c, z));
+                self.potential_with(s, z, phi, mu, sums, FieldBulk(s.k.ramp), c0);
+            }
+            None if s.k.uniform == 0.0 => self.potential_with(s, z, phi, mu, sums, ZeroBulk, None),
+            None => {
+                let bulk = UniformBulk(s.k.uniform);
+                self.potential_with(s, z, phi, mu, sums, bulk, None);
+            }
+        }
+    }
+
+    /// [`Self::potential`] with f, f' from `bulk`, whose third input is the plane `c0` of the
+    /// unramped εC0 field, or φ' where there is none.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn potential_with(
+        &mut self,
+        s: &Slab,
+        z: isize,
+        phi: &[f64],
+        mu: &mut [f64],
+        sums: &mut Sums,
+        bulk: impl Bulk,
+        c0: Option<&[f64]>,
+    ) {
         let (l, p) = (s.l, s.l.plane());
         let phis = [s.phi(z - 1, phi), s.phi(z, phi), s.phi(z + 1, phi)];
         let big = &mut self.big[ring(z) * p..][..p];
-        let (c0, scale) = match s.f.c0 {
-            Some(c) => (l.plane_of(c, z), s.k.ramp),
-            None => (&self.ones[..], s.k.uniform),
-        };
+        let third = c0.unwrap_or(phis[1]);
         let own = s.owns(z);
-        let (kernel, mut acc) = (Potential { k: s.k, scale }, Acc::zero());
+        let (kernel, mut acc) = (Potential { k: s.k, bulk }, Acc::zero());
         for j in 0..l.rows {
             laplacian_row(l, phis, j, s.k.inv_h2, &mut self.row);
             let r = j * l.len..(j + 1) * l.len;
-            let c0 = if s.f.c0.is_some() { &c0[r.clone()] } else { c0 };
-            let point = Point {
-                phi: &phis[1][r.clone()],
-                lap: &self.row,
-                c0,
-                scale,
-            };
+            let ins = [&phis[1][r.clone()], &self.row[..], &third[r.clone()]];
             if own {
                 let q = &mut mu[(z - s.z0) as usize * p..][..p][r.clone()];
-                in_lanes(
-                    &kernel,
-                    [point.phi, point.lap, point.c0],
-                    [&mut big[r], q],
-                    &mut acc,
-                );
+                in_lanes(&kernel, ins, [&mut big[r], q], &mut acc);
             } else {
-                bulk_row(&point, s.k, &mut big[r]);
+                bulk_row(&kernel, ins, &mut big[r]);
             }
         }
         if own {
@@ -635,40 +647,72 @@ impl Kernel<2, 1, 3> for Advance {
     }
 }
 
-/// One row of φ' for stage 2: φ', its ∇²_h, and εC0 = `scale` × `c0` (a row of the unramped
-/// field with the ramp as scale, or ones with the uniform εC0 as scale).
-struct Point<'a> {
-    phi: &'a [f64],
-    lap: &'a [f64],
-    c0: &'a [f64],
-    scale: f64,
+/// f(φ) and f'(φ) at a point of stage 2, from φ' and the kernel's third input.
+trait Bulk: Copy {
+    /// (f(φ), f'(φ)) lane by lane.
+    fn pair<T: Lane>(&self, phi: T, third: T) -> (T, T);
 }
 
-/// Φ_h = f(φ) − ε² ∇²_h φ on a row.
-#[inline(always)]
-fn bulk_row(p: &Point, k: &Coefficients, big: &mut [f64]) {
-    let n = big.len();
-    let (phi, lap, c0) = (&p.phi[..n], &p.lap[..n], &p.c0[..n]);
-    for (((b, &u), &l), &c) in big.iter_mut().zip(phi).zip(lap).zip(c0) {
-        *b = bulk(u, p.scale * c) - k.e2 * l;
+/// εC0 = ramp × the unramped field (the third input).
+#[derive(Clone, Copy)]
+struct FieldBulk(f64);
+
+impl Bulk for FieldBulk {
+    #[inline(always)]
+    fn pair<T: Lane>(&self, phi: T, c0: T) -> (T, T) {
+        let c = T::splat(self.0) * c0;
+        (phi.zip(c, bulk), phi.zip(c, bulk_derivative))
     }
 }
 
-/// Stage 2 at a point of φ' (inputs φ', L = ∇²_h φ', the unramped εC0 or 1): Φ and q; sums
-/// Φ² and φ' L.
-struct Potential<'a> {
-    k: &'a Coefficients,
-    /// The factor of the εC0 input.
-    scale: f64,
+/// The same εC0 ≠ 0 everywhere (the third input unread).
+#[derive(Clone, Copy)]
+struct UniformBulk(f64);
+
+impl Bulk for UniformBulk {
+    #[inline(always)]
+    fn pair<T: Lane>(&self, phi: T, _: T) -> (T, T) {
+        let c = T::splat(self.0);
+        (phi.zip(c, bulk), phi.zip(c, bulk_derivative))
+    }
 }
 
-impl Kernel<3, 2, 2> for Potential<'_> {
+/// C0 = 0: f = φ(φ² − 1), f' = 3φ² − 1, the values of [`bulk`] and [`bulk_derivative`] at
+/// εC0 = 0 without their C0 terms (the third input unread).
+#[derive(Clone, Copy)]
+struct ZeroBulk;
+
+impl Bulk for ZeroBulk {
     #[inline(always)]
-    fn point<T: Lane>(&self, acc: &mut [T; 2], [phi, lap, c0]: [T; 3], _: [T; 2]) -> [T; 2] {
-        let c = T::splat(self.scale) * c0;
-        let big = phi.zip(c, bulk) - T::splat(self.k.e2) * lap;
-        let q =
-            T::splat(2.0) * (phi.zip(c, bulk_derivative) * big) - T::splat(self.k.tension) * lap;
+    fn pair<T: Lane>(&self, phi: T, _: T) -> (T, T) {
+        let one = T::splat(1.0);
+        (phi * (phi * phi - one), T::splat(3.0) * phi * phi - one)
+    }
+}
+
+/// Φ_h = f(φ) − ε² ∇²_h φ on a row outside the slab (inputs as [`Potential`]'s, no sums).
+#[inline(always)]
+fn bulk_row<B: Bulk>(kernel: &Potential<B>, [phi, lap, third]: [&[f64]; 3], big: &mut [f64]) {
+    let n = big.len();
+    let (phi, lap, third) = (&phi[..n], &lap[..n], &third[..n]);
+    for (((b, &u), &l), &c) in big.iter_mut().zip(phi).zip(lap).zip(third) {
+        *b = kernel.bulk.pair(u, c).0 - kernel.k.e2 * l;
+    }
+}
+
+/// Stage 2 at a point of φ' (inputs φ', L = ∇²_h φ' and `bulk`'s third): Φ and q; sums Φ²
+/// and φ' L.
+struct Potential<'a, B> {
+    k: &'a Coefficients,
+    bulk: B,
+}
+
+impl<B: Bulk> Kernel<3, 2, 2> for Potential<'_, B> {
+    #[inline(always)]
+    fn point<T: Lane>(&self, acc: &mut [T; 2], [phi, lap, third]: [T; 3], _: [T; 2]) -> [T; 2] {
+        let (f, df) = self.bulk.pair(phi, third);
+        let big = f - T::splat(self.k.e2) * lap;
+        let q = T::splat(2.0) * (df * big) - T::splat(self.k.tension) * lap;
         acc[0] = acc[0] + big * big;
         acc[1] = acc[1] + phi * lap;
         [big, q]
