@@ -183,6 +183,18 @@ pub fn bulk_derivative(phi: f64, ec0: f64) -> f64 {
     3.0 * phi * phi - 1.0 + 2.0 * ec0 * phi
 }
 
+/// f(φ) at C0 = 0 without the C0 term: φ(φ² − 1), the value of [`bulk`]`(φ, 0)`.
+#[inline(always)]
+pub fn bulk_at_zero_c0(phi: f64) -> f64 {
+    phi * (phi * phi - 1.0)
+}
+
+/// f'(φ) at C0 = 0 without the C0 term: 3φ² − 1, the value of [`bulk_derivative`]`(φ, 0)`.
+#[inline(always)]
+pub fn bulk_derivative_at_zero_c0(phi: f64) -> f64 {
+    3.0 * phi * phi - 1.0
+}
+
 /// The integrals that define a state: F_sc, A, V (full-box values).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Measures {
@@ -243,7 +255,10 @@ pub fn diverged(max_abs_phi: f64, energy: f64) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::{SpontaneousCurvature, C0};
+    use super::{
+        bulk, bulk_at_zero_c0, bulk_derivative, bulk_derivative_at_zero_c0, SpontaneousCurvature,
+        C0,
+    };
     use crate::config::C0Spec;
     use crate::grid::Grid;
     use serde_json::json;
@@ -265,6 +280,21 @@ mod tests {
 
     /// The cap: inside at its pole, outside at the opposite pole, the mean on the rim at the
     /// arc length given by the formula.
+    /// Dropping the C0 terms at C0 = 0 changes no value: f and f' equal those of the full
+    /// formulas at εC0 = 0 exactly, across the profile and beyond it.
+    #[test]
+    fn bulk_without_c0_terms_is_bulk_at_zero_c0() {
+        for i in -400..=400 {
+            let phi = i as f64 / 137.0;
+            assert_eq!(bulk_at_zero_c0(phi), bulk(phi, 0.0), "f at φ = {phi}");
+            assert_eq!(
+                bulk_derivative_at_zero_c0(phi),
+                bulk_derivative(phi, 0.0),
+                "f' at φ = {phi}"
+            );
+        }
+    }
+
     #[test]
     fn cap_follows_its_formula() {
         let spec = json!({"kind": "cap", "inside": 1.0, "outside": -1.0, "angle": 90.0,

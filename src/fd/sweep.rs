@@ -24,7 +24,7 @@
 
 use super::lanes::{in_lanes, largest, total, Acc, Kernel, Lane, Lanes, LANES};
 use crate::grid::{AxisKind, Grid};
-use crate::model::{bulk, bulk_derivative};
+use crate::model::{bulk, bulk_at_zero_c0, bulk_derivative, bulk_derivative_at_zero_c0};
 use crate::private::Private;
 use crate::stencil::{above, below};
 use rayon::prelude::*;
@@ -677,16 +677,17 @@ impl Bulk for UniformBulk {
     }
 }
 
-/// C0 = 0: f = φ(φ² − 1), f' = 3φ² − 1, the values of [`bulk`] and [`bulk_derivative`] at
-/// εC0 = 0 without their C0 terms (the third input unread).
+/// C0 = 0: f and f' without their C0 terms (the third input unread).
 #[derive(Clone, Copy)]
 struct ZeroBulk;
 
 impl Bulk for ZeroBulk {
     #[inline(always)]
     fn pair<T: Lane>(&self, phi: T, _: T) -> (T, T) {
-        let one = T::splat(1.0);
-        (phi * (phi * phi - one), T::splat(3.0) * phi * phi - one)
+        (
+            phi.zip(phi, |u, _| bulk_at_zero_c0(u)),
+            phi.zip(phi, |u, _| bulk_derivative_at_zero_c0(u)),
+        )
     }
 }
 

@@ -19,7 +19,10 @@ use super::transform::Transform;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
 use crate::grid::Grid;
-use crate::model::{self, bulk, bulk_derivative, Measures, AREA_PREFACTOR, C0};
+use crate::model::{
+    self, bulk, bulk_at_zero_c0, bulk_derivative, bulk_derivative_at_zero_c0, Measures,
+    AREA_PREFACTOR, C0,
+};
 use crate::numerics::PAR_CHUNK;
 use ndarray::Array3;
 use rayon::prelude::*;
@@ -473,7 +476,7 @@ fn pointwise_range(
 
 wide_fn! {
 /// One run of [`pointwise_range`]'s element-wise loop: `lap ← f(φ)`, `fphi ← f'(φ) Φ` and
-/// `big ← Φ`.
+/// `big ← Φ` (f and f' without their C0 terms when C0 = 0).
 fn pointwise_run(
     eps: f64,
     phi: &[f64],
@@ -483,22 +486,27 @@ fn pointwise_run(
     big: &mut [f64],
 ) {
     let ((uniform, field), e2) = (c0, eps * eps);
-    let body = |p: f64, ec0: f64, lap: &mut f64, fphi: &mut f64, big: &mut f64| {
-        let f = bulk(p, ec0);
+    let body = |f: f64, df: f64, lap: &mut f64, fphi: &mut f64, big: &mut f64| {
         *big = f - e2 * *lap;
         *lap = f;
-        *fphi = bulk_derivative(p, ec0) * *big;
+        *fphi = df * *big;
     };
     let out = lap.iter_mut().zip(fphi.iter_mut()).zip(big.iter_mut());
     match field {
         Some((r, ec0)) => {
             for (((l, f), b), (&p, &e)) in out.zip(phi.iter().zip(ec0)) {
-                body(p, r * e, l, f, b);
+                let c = r * e;
+                body(bulk(p, c), bulk_derivative(p, c), l, f, b);
+            }
+        }
+        None if uniform == 0.0 => {
+            for (((l, f), b), &p) in out.zip(phi) {
+                body(bulk_at_zero_c0(p), bulk_derivative_at_zero_c0(p), l, f, b);
             }
         }
         None => {
             for (((l, f), b), &p) in out.zip(phi) {
-                body(p, uniform, l, f, b);
+                body(bulk(p, uniform), bulk_derivative(p, uniform), l, f, b);
             }
         }
     }
