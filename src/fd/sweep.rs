@@ -255,16 +255,18 @@ impl Sweep {
         };
         let slab = slabs.per * l.plane();
         let n = slabs.count();
+        let at = |i, edges| Slab::new(&l, slabs, i, f, k, edges);
         if n == 1 {
             let pipe = &mut self.pipes[0];
-            pipe.edges(&l, slabs, 0, f, k, avx2, &mut self.edges[0]);
-            pipe.slab(&l, slabs, 0, f, k, avx2, &self.edges, phi_next, mu_next);
+            pipe.run(&at(0, &[]), avx2, Phase::Edges(&mut self.edges[0]));
+            let s = at(0, &self.edges);
+            pipe.run(&s, avx2, Phase::Pipeline(phi_next, mu_next));
         } else {
             self.pipes[..n]
                 .par_iter_mut()
                 .zip(&mut self.edges[..n])
                 .enumerate()
-                .for_each(|(i, (pipe, edges))| pipe.edges(&l, slabs, i, f, k, avx2, edges));
+                .for_each(|(i, (pipe, edges))| pipe.run(&at(i, &[]), avx2, Phase::Edges(edges)));
             let edges = &self.edges;
             phi_next
                 .par_chunks_mut(slab)
@@ -272,7 +274,7 @@ impl Sweep {
                 .zip(self.pipes.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, ((phi, mu), pipe))| {
-                    pipe.slab(&l, slabs, i, f, k, avx2, edges, phi, mu);
+                    pipe.run(&at(i, edges), avx2, Phase::Pipeline(phi, mu));
                 });
         }
         self.pipes[..n]
@@ -281,112 +283,58 @@ impl Sweep {
     }
 }
 
+/// What a slab's thread runs: stage 1 on the slab's edge planes into its edge buffer, or the
+/// pipeline into its planes of φ^{n+1} and μ^{n+1}.
+enum Phase<'a> {
+    Edges(&'a mut [f64]),
+    Pipeline(&'a mut [f64], &'a mut [f64]),
+}
+
 impl Pipe {
-    /// Stage 1 on the edge planes of slab `i` into `edges`: the AVX2 build of
-    /// [`Self::edge_planes`] when the CPU has AVX2, else the baseline build.
-    #[allow(clippy::too_many_arguments)]
-    fn edges(
-        &mut self,
-        l: &Layout,
-        slabs: Slabs,
-        i: usize,
-        f: &Fields,
-        k: &Coefficients,
-        avx2: bool,
-        edges: &mut [f64],
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if avx2 {
-            // SAFETY: `avx2` is true only when `is_x86_feature_detected!("avx2")` found the
-            // instructions on this CPU (`Sweep::new`).
-            unsafe { self.edge_planes_avx2(l, slabs, i, f, k, edges) };
-            return;
-        }
-        let _ = avx2;
-        self.edge_planes(l, slabs, i, f, k, edges);
-    }
-
-    /// [`Self::edge_planes`] compiled for AVX2 (no FMA contraction: the same bits).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn edge_planes_avx2(
-        &mut self,
-        l: &Layout,
-        slabs: Slabs,
-        i: usize,
-        f: &Fields,
-        k: &Coefficients,
-        edges: &mut [f64],
-    ) {
-        self.edge_planes(l, slabs, i, f, k, edges);
-    }
-
-    /// Stage 1 on each edge plane of slab `i`, written to its slot of `edges`, its sums kept
-    /// for the pipeline to add in plane order.
-    #[inline(always)]
-    fn edge_planes(
-        &mut self,
-        l: &Layout,
-        slabs: Slabs,
-        i: usize,
-        f: &Fields,
-        k: &Coefficients,
-        edges: &mut [f64],
-    ) {
-        let (z0, z1) = slabs.bounds(i);
-        let p = l.plane();
-        for z in z0..z1 {
-            if let Some((_, slot)) = slabs.edge(z) {
-                let out = &mut edges[slot * p..][..p];
-                self.edge_sums[slot] = advance(l, f, k, z as isize, out, &mut self.row);
-            }
-        }
-    }
-
-    /// The slab of planes starting at `z0`: the AVX2 build of [`Self::stages`] when the CPU has
-    /// AVX2, else the baseline build.
-    #[allow(clippy::too_many_arguments)]
-    fn slab(
-        &mut self,
-        l: &Layout,
-        slabs: Slabs,
-        i: usize,
-        f: &Fields,
-        k: &Coefficients,
-        avx2: bool,
-        edges: &[Private<f64>],
-        phi: &mut [f64],
-        mu: &mut [f64],
-    ) {
-        let (z0, z1) = slabs.bounds(i);
-        let s = Slab {
-            l,
-            slabs,
-            z0: z0 as isize,
-            z1: z1 as isize,
-            f,
-            k,
-            edges,
-        };
+    /// `phase` of slab `s`: the AVX2 build of [`Self::phase`] when the CPU has AVX2 (`avx2`),
+    /// else the baseline build.
+    fn run(&mut self, s: &Slab, avx2: bool, phase: Phase) {
         #[cfg(target_arch = "x86_64")]
         if avx2 {
             // SAFETY: `avx2` is true only when `is_x86_feature_detected!("avx2")` found the
             // instructions on this CPU (`Sweep::new`). Measured on the full-box bench, one
             // thread, interleaved runs: 2.3–3.0 ms against 3.0–4.5 ms (SSE2 build) at 64³,
             // 21–25 ms against 27–28 ms at 128³.
-            unsafe { self.stages_avx2(&s, phi, mu) };
+            unsafe { self.phase_avx2(s, phase) };
             return;
         }
         let _ = avx2;
-        self.stages(&s, phi, mu);
+        self.phase(s, phase);
     }
 
-    /// [`Self::stages`] compiled for AVX2 (the same operations, no FMA contraction: the results
+    /// [`Self::phase`] compiled for AVX2 (the same operations, no FMA contraction: the results
     /// are those of the baseline build bit for bit).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn stages_avx2(&mut self, s: &Slab, phi: &mut [f64], mu: &mut [f64]) {
-        self.stages(s, phi, mu);
+    fn phase_avx2(&mut self, s: &Slab, phase: Phase) {
+        self.phase(s, phase);
+    }
+
+    /// [`Self::edge_planes`] or [`Self::stages`].
+    #[inline(always)]
+    fn phase(&mut self, s: &Slab, phase: Phase) {
+        match phase {
+            Phase::Edges(edges) => self.edge_planes(s, edges),
+            Phase::Pipeline(phi, mu) => self.stages(s, phi, mu),
+        }
+    }
+
+    /// Stage 1 on each edge plane of slab `s`, written to its slot of `edges`, its sums kept
+    /// for the pipeline to add in plane order.
+    #[inline(always)]
+    fn edge_planes(&mut self, s: &Slab, edges: &mut [f64]) {
+        let p = s.l.plane();
+        for z in s.z0..s.z1 {
+            if let Some((_, slot)) = s.slabs.edge(z as usize) {
+                let out = &mut edges[slot * p..][..p];
+                self.edge_sums[slot] = advance(s.l, s.f, s.k, z, out, &mut self.row);
+            }
+        }
     }
 
     /// The three stages over slab `s`, a plane apart: prologue up to stage 2 at z0, then per
@@ -548,11 +496,32 @@ struct Slab<'a> {
     z1: isize,
     f: &'a Fields<'a>,
     k: &'a Coefficients,
-    /// Every slab's edge planes of φ'.
+    /// Every slab's edge planes of φ' (none while they are computed).
     edges: &'a [Private<f64>],
 }
 
-impl Slab<'_> {
+impl<'a> Slab<'a> {
+    /// Slab `i` of `slabs`.
+    fn new(
+        l: &'a Layout,
+        slabs: Slabs,
+        i: usize,
+        f: &'a Fields<'a>,
+        k: &'a Coefficients,
+        edges: &'a [Private<f64>],
+    ) -> Self {
+        let (z0, z1) = slabs.bounds(i);
+        Slab {
+            l,
+            slabs,
+            z0: z0 as isize,
+            z1: z1 as isize,
+            f,
+            k,
+            edges,
+        }
+    }
+
     /// Plane `z` is the slab's own (else a neighbour's).
     fn owns(&self, z: isize) -> bool {
         (self.z0..self.z1).contains(&z)
