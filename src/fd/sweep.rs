@@ -159,8 +159,7 @@ impl Sums {
 type Advanced = (Lanes<3>, [f64; 3]);
 
 /// One thread's buffers: the ring of three Φ planes and one row of a Laplacian, each
-/// [`Private`] to the thread; stage 1's results on the slab's
-/// edge planes, and the slab's sums.
+/// [`Private`] to the thread; stage 1's results on the slab's edge planes, and the slab's sums.
 #[derive(Debug)]
 struct Pipe {
     big: Private<f64>,
