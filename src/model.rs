@@ -278,8 +278,6 @@ mod tests {
         (grid, f)
     }
 
-    /// The cap: inside at its pole, outside at the opposite pole, the mean on the rim at the
-    /// arc length given by the formula.
     /// Dropping the C0 terms at C0 = 0 changes no value: f and f' equal those of the full
     /// formulas at εC0 = 0 exactly, across the profile and beyond it.
     #[test]
@@ -295,6 +293,8 @@ mod tests {
         }
     }
 
+    /// The cap: inside at its pole, outside at the opposite pole, the mean on the rim at the
+    /// arc length given by the formula.
     #[test]
     fn cap_follows_its_formula() {
         let spec = json!({"kind": "cap", "inside": 1.0, "outside": -1.0, "angle": 90.0,

@@ -217,8 +217,8 @@ impl Sweep {
     pub fn new(grid: &Grid, threads: usize) -> Self {
         let layout = Layout::of(grid);
         let plane = layout.plane();
-        let slabs = threads.clamp(1, layout.planes);
-        let pipes = (0..slabs)
+        let count = threads.clamp(1, layout.planes);
+        let pipes = (0..count)
             .map(|_| Pipe {
                 big: Private::new(3 * plane, 0.0),
                 row: Private::new(layout.len, 0.0),
@@ -226,7 +226,7 @@ impl Sweep {
                 sums: Sums::default(),
             })
             .collect();
-        let edges = (0..slabs).map(|_| Private::new(4 * plane, 0.0)).collect();
+        let edges = (0..count).map(|_| Private::new(4 * plane, 0.0)).collect();
         #[cfg(target_arch = "x86_64")]
         let avx2 = is_x86_feature_detected!("avx2");
         #[cfg(not(target_arch = "x86_64"))]
