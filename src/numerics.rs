@@ -5,7 +5,7 @@
 /// in rayon's scheduling than they gain). The spectral sweeps split their chunks down to one a
 /// task (`with_max_len(1)`): a thread that finishes its share early steals single chunks
 /// instead of waiting for a larger one to end, which in rayon means falling asleep on a futex
-/// and being woken (README, "Performance").
+/// and being woken (`benches/PERFORMANCE.md`).
 pub const PAR_CHUNK: usize = 8192;
 
 /// Largest relative rise of F_eff a step may make (round-off of the sums) where the scheme

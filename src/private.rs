@@ -10,7 +10,7 @@ const GUARD_BYTES: usize = 128;
 /// that no line it touches holds another thread's data. Per-thread buffers allocated one after
 /// another otherwise share a line where one ends and the next begins, and two threads writing
 /// them pass the line back and forth: the FD step on 2 threads ran in 0.6 to 1.5 ms at 64³
-/// from one process to the next (README, "Performance").
+/// from one process to the next (`benches/PERFORMANCE.md`).
 #[derive(Debug)]
 pub struct Private<T> {
     buf: Vec<T>,

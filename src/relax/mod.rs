@@ -41,7 +41,7 @@
 //! pairs (a relative change of ~6e-8 in each pair, none in the state, the gradient, the
 //! multiplier or the line search, which stay f64). The memory only approximates the inverse
 //! Hessian, with errors far above 6e-8, and the stationary state is fixed by the f64 gradient
-//! alone. Measured on the 48³ prolate (README, "Performance"): 237 iterations to
+//! alone. Measured on the 48³ prolate (`benches/PERFORMANCE.md`): 237 iterations to
 //! the residual 1e-6 against 236 with f64 pairs, and an iteration 13% (1 thread) and 7%
 //! (2 threads) faster.
 //!
