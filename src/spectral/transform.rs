@@ -30,6 +30,7 @@ use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftPlanner};
 
 use super::columns::ColumnFft;
+use super::kernels::wide_fn;
 use crate::grid::AxisKind;
 use crate::private::Private;
 
@@ -137,15 +138,9 @@ impl LaneKernel {
             Direction::Forward => &self.forward,
             Direction::Inverse => &self.inverse,
         };
-        let twiddle = |lanes: &mut [Complex64], post: fn(&mut [Complex64], &[Complex64])| {
-            if !self.twiddle.is_empty() {
-                for lane in lanes.chunks_exact_mut(self.stride) {
-                    post(&mut lane[..self.len], &self.twiddle);
-                }
-            }
-        };
-        if dir == Direction::Inverse {
-            twiddle(lanes, dct_pre_twiddle);
+        let mirror = !self.twiddle.is_empty();
+        if mirror && dir == Direction::Inverse {
+            dct_twiddles::<false>(lanes, self.stride, self.len, &self.twiddle);
         }
         if self.stride == self.len {
             fft.process_with_scratch(lanes, scratch);
@@ -154,8 +149,8 @@ impl LaneKernel {
                 fft.process_with_scratch(&mut lane[..self.len], scratch);
             }
         }
-        if dir == Direction::Forward {
-            twiddle(lanes, dct_post_twiddle);
+        if mirror && dir == Direction::Forward {
+            dct_twiddles::<true>(lanes, self.stride, self.len, &self.twiddle);
         }
     }
 }
@@ -168,41 +163,91 @@ fn makhoul_positions(m: usize) -> Vec<usize> {
         .collect()
 }
 
-/// From `V = FFT(v)` of the reordered lane to the DCT-II, in place: `X_0 = V_0` and, with
-/// `w_k = e^{−iπk/(2m)} = c_k − i s_k` (so `w_{m−k} = −i w̄_k`), `a = V_k`, `b = V_{m−k}`,
+/// From `V = FFT(v)` of the reordered lane to the DCT-II: with `w_k = e^{−iπk/(2m)} =
+/// c_k − i s_k` (so `w_{m−k} = −i w̄_k`), `a = V_k`, `b = V_{m−k}`,
 ///
 /// ```text
 /// X_k     = (w_k a + w̄_k b)/2         = (c_k (a + b) − i s_k (a − b))/2,
-/// X_{m−k} = (w_{m−k} b + w̄_{m−k} a)/2 = (s_k (a + b) + i c_k (a − b))/2.
+/// X_{m−k} = (w_{m−k} b + w̄_{m−k} a)/2 = (s_k (a + b) + i c_k (a − b))/2,
 /// ```
 ///
-/// The map is C-linear, so it holds for complex lanes (the DCT of the real and imaginary parts).
-fn dct_post_twiddle(lane: &mut [Complex64], w: &[Complex64]) {
-    let m = lane.len();
-    for k in 1..=m / 2 {
-        let (c, s) = (w[k].re, -w[k].im);
-        let (sum, diff) = (lane[k] + lane[m - k], lane[k] - lane[m - k]);
-        lane[k] = 0.5 * (c * sum - times_i(s * diff));
-        lane[m - k] = 0.5 * (s * sum + times_i(c * diff));
-    }
+/// and `X_0 = V_0`. The map is C-linear, so it holds for complex lanes (the DCT of the real and
+/// imaginary parts).
+#[inline(always)]
+fn dct_post_pair(w: Complex64, a: Complex64, b: Complex64) -> (Complex64, Complex64) {
+    let (c, s) = (w.re, -w.im);
+    let (sum, diff) = (a + b, a - b);
+    (
+        0.5 * (c * sum - times_i(s * diff)),
+        0.5 * (s * sum + times_i(c * diff)),
+    )
 }
 
-/// Inverse of [`dct_post_twiddle`] up to the FFT normalisation, in place: `V_0 = X_0` and, with
-/// `a = X_k`, `b = X_{m−k}`,
+/// Inverse of [`dct_post_pair`] up to the FFT normalisation: with `a = X_k`, `b = X_{m−k}`,
 ///
 /// ```text
 /// V_k     = w̄_k (a − i b)         = P + iQ,
-/// V_{m−k} = w̄_{m−k} (b − i a)     = P − iQ,     P = c_k a + s_k b,  Q = s_k a − c_k b.
+/// V_{m−k} = w̄_{m−k} (b − i a)     = P − iQ,     P = c_k a + s_k b,  Q = s_k a − c_k b,
 /// ```
-fn dct_pre_twiddle(lane: &mut [Complex64], w: &[Complex64]) {
+///
+/// and `V_0 = X_0`.
+#[inline(always)]
+fn dct_pre_pair(w: Complex64, a: Complex64, b: Complex64) -> (Complex64, Complex64) {
+    let (c, s) = (w.re, -w.im);
+    let (p, q) = (c * a + s * b, s * a - c * b);
+    (p + times_i(q), p - times_i(q))
+}
+
+/// A DCT twiddle in place on one lane of m values: `pair` on (k, m − k) for k = `from`..=(m−1)/2,
+/// then, for even m, on the middle value k = m/2 paired with itself (its second output: the
+/// value at m − k, written last).
+#[inline(always)]
+fn twiddle_lane(
+    lane: &mut [Complex64],
+    w: &[Complex64],
+    from: usize,
+    pair: impl Fn(Complex64, Complex64, Complex64) -> (Complex64, Complex64),
+) {
     let m = lane.len();
-    for k in 1..=m / 2 {
-        let (c, s) = (w[k].re, -w[k].im);
-        let (a, b) = (lane[k], lane[m - k]);
-        let (p, q) = (c * a + s * b, s * a - c * b);
-        lane[k] = p + times_i(q);
-        lane[m - k] = p - times_i(q);
+    for k in from..=m.saturating_sub(1) / 2 {
+        (lane[k], lane[m - k]) = pair(w[k], lane[k], lane[m - k]);
     }
+    if m > 0 && m.is_multiple_of(2) {
+        let v = lane[m / 2];
+        lane[m / 2] = pair(w[m / 2], v, v).1;
+    }
+}
+
+/// The DCT twiddle on every lane of `lanes` (`len` values each, `stride` apart): [`dct_post_pair`]
+/// after the forward FFT (`POST`), [`dct_pre_pair`] before the inverse. With AVX the pairs go
+/// two at a time ([`avx::twiddle_pairs`]: the same operations, so the same values).
+fn dct_twiddles<const POST: bool>(
+    lanes: &mut [Complex64],
+    stride: usize,
+    len: usize,
+    w: &[Complex64],
+) {
+    let pair = if POST { dct_post_pair } else { dct_pre_pair };
+    let wide = has_avx();
+    for lane in lanes.chunks_exact_mut(stride) {
+        let lane = &mut lane[..len];
+        let from = match wide {
+            // SAFETY: the CPU has AVX; `w` holds a twiddle for every position of the lane.
+            #[cfg(target_arch = "x86_64")]
+            true => unsafe { avx::twiddle_pairs::<POST>(lane, w) },
+            _ => 1,
+        };
+        twiddle_lane(lane, w, from, pair);
+    }
+}
+
+/// Whether the CPU has AVX (cached by the standard library).
+#[inline(always)]
+fn has_avx() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return is_x86_feature_detected!("avx");
+    #[cfg(not(target_arch = "x86_64"))]
+    false
 }
 
 /// i z.
@@ -823,6 +868,7 @@ impl LastAxis {
     }
 }
 
+wide_fn! {
 /// Pack real rows `2l`, `2l+1` of `x` into lane `l` as `x_{2l} + i x_{2l+1}` (reordered by `pos`).
 fn pack_real_rows(x: &[f64], lanes: &mut [Complex64], pos: &[usize]) {
     let n = pos.len();
@@ -839,7 +885,9 @@ fn pack_real_rows(x: &[f64], lanes: &mut [Complex64], pos: &[usize]) {
         }
     }
 }
+}
 
+wide_fn! {
 /// Unpack lanes of length `n` into complex rows of `y`: lane `l` gives row `2l` its real part
 /// and row `2l+1` its imaginary part (stored as real values, imaginary parts zero).
 fn unpack_to_complex_rows(lanes: &[Complex64], y: &mut [Complex64], n: usize) {
@@ -853,7 +901,9 @@ fn unpack_to_complex_rows(lanes: &[Complex64], y: &mut [Complex64], n: usize) {
             .for_each(|(v, z)| *v = Complex64::new(z.im, 0.0));
     }
 }
+}
 
+wide_fn! {
 /// Pack the real parts of complex rows `2l`, `2l+1` of `y` (length `n`) into lane `l`.
 fn pack_complex_rows(y: &[Complex64], lanes: &mut [Complex64], n: usize) {
     for (lane, pair) in lanes.chunks_exact_mut(n).zip(y.chunks(2 * n)) {
@@ -869,7 +919,9 @@ fn pack_complex_rows(y: &[Complex64], lanes: &mut [Complex64], n: usize) {
         }
     }
 }
+}
 
+wide_fn! {
 /// Unpack lane `l` (reordered by `pos`) into real rows `2l` (real part) and `2l+1` (imaginary
 /// part) of `x`, times `scale`.
 fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale: f64) {
@@ -883,6 +935,7 @@ fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale:
             .zip(pos)
             .for_each(|(v, &p)| *v = scale * lane[p].im);
     }
+}
 }
 
 /// Transform a piece `[outer, len, width]` of the spectrum along its middle axis: down the
@@ -925,6 +978,7 @@ fn strided_piece(
     }
 }
 
+wide_fn! {
 /// Copy the columns of `block` into lanes `stride` apart: lane `l`, position `pos[i]` ← row `i`
 /// of column `l` (or of the real parts of columns `2l`, `2l+1` packed as `re + i·re'`).
 fn gather(
@@ -950,15 +1004,18 @@ fn gather(
         }
     }
 }
+}
 
+wide_fn! {
 /// Inverse of [`gather`]: write the lanes back into the columns of `block`.
 fn scatter(
     lanes: &[Complex64],
     stride: usize,
-    mut block: ArrayViewMut2<Complex64>,
+    block: ArrayViewMut2<Complex64>,
     pos: &[usize],
     packing: Packing,
 ) {
+    let mut block = block;
     for (row, &p) in block.rows_mut().into_iter().zip(pos) {
         let row = row.into_slice().expect("rows are contiguous");
         match packing {
@@ -978,6 +1035,7 @@ fn scatter(
             }
         }
     }
+}
 }
 
 /// [`gather`] of complex columns in their own order (an FFT lane, positions `0..len`): lane `l`,
@@ -1039,6 +1097,54 @@ fn scatter_in_order(lanes: &[Complex64], stride: usize, mut block: ArrayViewMut2
 mod avx {
     use rustfft::num_complex::Complex64;
     use std::arch::x86_64::*;
+
+    /// The DCT twiddle ([`super::dct_post_pair`] when `POST`, else [`super::dct_pre_pair`]) on
+    /// the pairs (k, m − k) of one lane of m values, two values of k at a time for k = 1, 2, …
+    /// while k + 1 ≤ (m − 1)/2; returns the first k not done. Each value is computed by the
+    /// scalar formula's operations in its order (no fused multiply-add), so the results are the
+    /// same bit for bit.
+    ///
+    /// # Safety
+    /// The CPU has AVX; `w` has at least m values.
+    #[target_feature(enable = "avx")]
+    pub unsafe fn twiddle_pairs<const POST: bool>(
+        lane: &mut [Complex64],
+        w: &[Complex64],
+    ) -> usize {
+        let m = lane.len();
+        let pairs = m.saturating_sub(1) / 2;
+        assert!(w.len() >= m);
+        let (x, w) = (lane.as_mut_ptr() as *mut f64, w.as_ptr() as *const f64);
+        // i z of two values: (re, im) → (−im, re).
+        let sign = _mm256_setr_pd(-0.0, 0.0, -0.0, 0.0);
+        let times_i = |z: __m256d| _mm256_xor_pd(_mm256_permute_pd(z, 0b0101), sign);
+        let half = _mm256_set1_pd(0.5);
+        let mut k = 1;
+        while k < pairs {
+            // w_k, w_{k+1} = (c, −s): c = (c_k, c_k, c_{k+1}, c_{k+1}), s likewise.
+            let wk = _mm256_loadu_pd(w.add(2 * k));
+            let c = _mm256_movedup_pd(wk);
+            let s = _mm256_xor_pd(_mm256_permute_pd(wk, 0b1111), _mm256_set1_pd(-0.0));
+            let a = _mm256_loadu_pd(x.add(2 * k));
+            // b_{k+1}, b_k at m − k − 1, m − k: swapped to b_k, b_{k+1}.
+            let high = x.add(2 * (m - k - 1));
+            let b = _mm256_permute2f128_pd(_mm256_loadu_pd(high), _mm256_loadu_pd(high), 0x01);
+            let (low, up) = if POST {
+                let (sum, diff) = (_mm256_add_pd(a, b), _mm256_sub_pd(a, b));
+                let low = _mm256_sub_pd(_mm256_mul_pd(c, sum), times_i(_mm256_mul_pd(s, diff)));
+                let up = _mm256_add_pd(_mm256_mul_pd(s, sum), times_i(_mm256_mul_pd(c, diff)));
+                (_mm256_mul_pd(half, low), _mm256_mul_pd(half, up))
+            } else {
+                let p = _mm256_add_pd(_mm256_mul_pd(c, a), _mm256_mul_pd(s, b));
+                let q = times_i(_mm256_sub_pd(_mm256_mul_pd(s, a), _mm256_mul_pd(c, b)));
+                (_mm256_add_pd(p, q), _mm256_sub_pd(p, q))
+            };
+            _mm256_storeu_pd(x.add(2 * k), low);
+            _mm256_storeu_pd(high, _mm256_permute2f128_pd(up, up, 0x01));
+            k += 2;
+        }
+        k
+    }
 
     /// `dst[j · dst_stride + i] = src[i · src_stride + j]` for `i < n`, `j < m` (`(n, m)` =
     /// `shape`): complex values transposed two rows and two columns at a time. With
@@ -1104,6 +1210,38 @@ mod avx {
 mod tests {
     use super::*;
     use ndarray::Array2;
+
+    /// The DCT twiddles of a batch of lanes (two pairs at a time with AVX where the CPU has it)
+    /// equal the scalar formulas applied pair by pair, bit for bit, for every lane length from 0
+    /// to 70 (odd and even, with and without a pair left over) and padded lanes.
+    #[test]
+    fn batched_dct_twiddles_equal_the_scalar_formulas() {
+        for m in 0..=70 {
+            let stride = m + LANE_PAD;
+            let lanes: Vec<Complex64> = (0..3 * stride)
+                .map(|i| Complex64::new((i as f64 * 0.37).sin(), (i as f64 * 0.91).cos() * 3.0))
+                .collect();
+            let w: Vec<Complex64> = (0..m)
+                .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * m) as f64))
+                .collect();
+            for post in [true, false] {
+                let (mut batched, mut scalar) = (lanes.clone(), lanes.clone());
+                if post {
+                    dct_twiddles::<true>(&mut batched, stride, m, &w);
+                } else {
+                    dct_twiddles::<false>(&mut batched, stride, m, &w);
+                }
+                for lane in scalar.chunks_exact_mut(stride) {
+                    let pair = if post { dct_post_pair } else { dct_pre_pair };
+                    twiddle_lane(&mut lane[..m], &w, 1, pair);
+                }
+                let bits = |v: &[Complex64]| -> Vec<(u64, u64)> {
+                    v.iter().map(|z| (z.re.to_bits(), z.im.to_bits())).collect()
+                };
+                assert_eq!(bits(&batched), bits(&scalar), "m = {m}, post = {post}");
+            }
+        }
+    }
 
     /// The in-order gather and scatter move each value to its place (odd and even row and column
     /// counts, a block that is a column range of wider rows), and scatter undoes gather.
