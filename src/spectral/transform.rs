@@ -997,8 +997,14 @@ fn gather(
                 }
             }
             Packing::RealPairs => {
-                for (lane, pair) in lanes.chunks_exact_mut(stride).zip(row.chunks(2)) {
-                    lane[p] = Complex64::new(pair[0].re, pair.get(1).map_or(0.0, |v| v.re));
+                let (pairs, last) = row.as_chunks::<2>();
+                let mut lanes = lanes.chunks_exact_mut(stride);
+                // The row's side first: a zip ends on it without taking the next lane.
+                for ([u, v], lane) in pairs.iter().zip(&mut lanes) {
+                    lane[p] = Complex64::new(u.re, v.re);
+                }
+                if let ([u], Some(lane)) = (last, lanes.next()) {
+                    lane[p] = Complex64::new(u.re, 0.0);
                 }
             }
         }
@@ -1025,12 +1031,14 @@ fn scatter(
                 }
             }
             Packing::RealPairs => {
-                for (lane, pair) in lanes.chunks_exact(stride).zip(row.chunks_mut(2)) {
-                    let z = lane[p];
-                    pair[0] = Complex64::new(z.re, 0.0);
-                    if let Some(v) = pair.get_mut(1) {
-                        *v = Complex64::new(z.im, 0.0);
-                    }
+                let (pairs, last) = row.as_chunks_mut::<2>();
+                let mut lanes = lanes.chunks_exact(stride);
+                // The row's side first, as in `gather`.
+                for ([u, v], lane) in pairs.iter_mut().zip(&mut lanes) {
+                    (*u, *v) = (Complex64::new(lane[p].re, 0.0), Complex64::new(lane[p].im, 0.0));
+                }
+                if let ([u], Some(lane)) = (last, lanes.next()) {
+                    *u = Complex64::new(lane[p].re, 0.0);
                 }
             }
         }
