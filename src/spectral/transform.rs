@@ -102,12 +102,7 @@ impl LaneKernel {
             .max(inverse.get_inplace_scratch_len());
         let (pos, twiddle) = match kind {
             AxisKind::Periodic => ((0..len).collect(), Vec::new()),
-            AxisKind::Mirror => (
-                makhoul_positions(len),
-                (0..len)
-                    .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * len) as f64))
-                    .collect(),
-            ),
+            AxisKind::Mirror => (makhoul_positions(len), dct_twiddle_table(len)),
         };
         LaneKernel {
             len,
@@ -160,6 +155,13 @@ impl LaneKernel {
 fn makhoul_positions(m: usize) -> Vec<usize> {
     (0..m)
         .map(|i| if i % 2 == 0 { i / 2 } else { m - 1 - i / 2 })
+        .collect()
+}
+
+/// The DCT twiddles `w_k = e^{−iπk/(2m)}`, k = 0..m, of a lane of m values.
+fn dct_twiddle_table(m: usize) -> Vec<Complex64> {
+    (0..m)
+        .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * m) as f64))
         .collect()
 }
 
@@ -1054,7 +1056,7 @@ fn gather_in_order(block: ArrayView2<Complex64>, lanes: &mut [Complex64], stride
     assert!(stride >= rows && lanes.len() >= stride * cols);
     assert!(cols == 1 || block.strides()[1] == 1);
     #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx") {
+    if has_avx() {
         // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
         unsafe {
             avx::transpose_pairs::<false>(
@@ -1080,7 +1082,7 @@ fn scatter_in_order(lanes: &[Complex64], stride: usize, mut block: ArrayViewMut2
     assert!(stride >= rows && lanes.len() >= stride * cols);
     assert!(cols == 1 || block.strides()[1] == 1);
     #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx") {
+    if has_avx() {
         let row_stride = block.strides()[0] as usize;
         // SAFETY: the CPU has AVX; rows are contiguous and `lanes` holds every column (asserted).
         unsafe {
@@ -1229,9 +1231,7 @@ mod tests {
             let lanes: Vec<Complex64> = (0..3 * stride)
                 .map(|i| Complex64::new((i as f64 * 0.37).sin(), (i as f64 * 0.91).cos() * 3.0))
                 .collect();
-            let w: Vec<Complex64> = (0..m)
-                .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * m) as f64))
-                .collect();
+            let w = dct_twiddle_table(m);
             for post in [true, false] {
                 let (mut batched, mut scalar) = (lanes.clone(), lanes.clone());
                 if post {
