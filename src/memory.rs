@@ -6,23 +6,27 @@
 //! `/usr/bin/time -v` (maximum resident set size) on 96³ runs, one thread, minus the
 //! [`BASE_BYTES`] a tiny run takes:
 //!
-//! | engine | periodic last axis | mirrored last axis |
-//! |---|---|---|
-//! | FD explicit Euler | 5.5 | 8.4 |
-//! | spectral SBDF1 | 7.9 | 16.1 |
-//! | spectral SBDF2 | 9.9 | 20.0 |
-//! | relaxational (L-BFGS, m pairs) | 9.9 + 1.03 m | 20.3 + 2.0 m |
+//! | engine | periodic last axis | mirrored last axis | every axis mirrored |
+//! |---|---|---|---|
+//! | FD explicit Euler | 5.5 | 8.4 | 8.4 |
+//! | spectral SBDF1 | 7.9 | 16.1 | 10.9 |
+//! | spectral SBDF2 | 9.9 | 20.0 | 12.7 |
+//! | relaxational (L-BFGS, m pairs) | 9.9 + 1.03 m | 20.3 + 2.0 m | 12.7 + 0.98 m |
 //!
 //! A mirrored last axis makes every spectrum a full complex array (2 f64 per point) instead of
-//! the real-to-complex half spectrum (about 1). A reduced box also pays [`FULL_BOX_F64`] f64 per
-//! point of the full box: writing the final field unfolds it into one new full-box array while
-//! the engine is still alive. A full box writes its field as it is, with no copy.
+//! the real-to-complex half spectrum (about 1), unless every axis is mirrored: that spectrum is
+//! real and stored packed, 1 f64 per point ([`crate::spectral::transform::Transform::packed`]).
+//! A reduced box also pays [`FULL_BOX_F64`] f64 per point of the full box: writing the final
+//! field unfolds it into one new full-box array while the engine is still alive. A full box
+//! writes its field as it is, with no copy.
 //!
 //! Measured 2026-12-03 at 44f1b66 (14 steps or iterations of a 96³ ellipsoid, then the final
 //! outputs and checkpoint; the mirrored figures on the eighth box less its 1 × 8 full-box f64;
-//! the L-BFGS rows from memories 2 and 8). The run's last checkpoint is inside them: it is
-//! written from the engine's own arrays (φ̂, SBDF2's previous step, the L-BFGS pairs, stored in
-//! single precision) through a 1 MiB buffer, with no copy of them beside the engine.
+//! the L-BFGS rows from memories 2 and 8); the last column the same way at the build that packed
+//! those spectra, when the build before still gave the middle column's figures (16.0, 20.0, and
+//! 24.1 and 35.7 with memories 2 and 8). The run's last checkpoint is inside them: it is written
+//! from the engine's own arrays (φ̂, SBDF2's previous step, the L-BFGS pairs, stored in single
+//! precision) through a 1 MiB buffer, with no copy of them beside the engine.
 
 use crate::config::{Dynamics, Method, Scene, Scheme, Symmetry};
 use crate::error::{Error, Result};
@@ -44,18 +48,23 @@ pub struct Estimate {
     pub f64_per_point: f64,
 }
 
-/// f64 per computed point of the scene's engine, with a periodic (`mirror_last = false`) or
-/// mirrored last axis.
-pub fn engine_f64_per_point(scene: &Scene, mirror_last: bool) -> f64 {
-    let pick = |periodic: f64, mirrored: f64| if mirror_last { mirrored } else { periodic };
+/// f64 per computed point of the scene's engine, with the mirror flags `mirror` (one per scene
+/// axis): a column of the table above.
+pub fn engine_f64_per_point(scene: &Scene, mirror: &[bool]) -> f64 {
+    let (last, all) = (mirror.last() == Some(&true), mirror.iter().all(|&m| m));
+    let pick = |periodic: f64, mirrored: f64, packed: f64| match (last, all) {
+        (false, _) => periodic,
+        (true, false) => mirrored,
+        (true, true) => packed,
+    };
     match (scene.method, scene.dynamics, scene.scheme) {
-        (Method::Fd, _, _) => pick(5.5, 8.4),
+        (Method::Fd, _, _) => pick(5.5, 8.4, 8.4),
         (Method::Spectral, Dynamics::Relaxational, _) => {
             let m = scene.lbfgs_memory as f64;
-            pick(9.9 + 1.03 * m, 20.3 + 2.0 * m)
+            pick(9.9 + 1.03 * m, 20.3 + 2.0 * m, 12.7 + 0.98 * m)
         }
-        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf1) => pick(7.9, 16.1),
-        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf2) => pick(9.9, 20.0),
+        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf1) => pick(7.9, 16.1, 10.9),
+        (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf2) => pick(9.9, 20.0, 12.7),
     }
 }
 
@@ -64,8 +73,7 @@ fn estimate_with(scene: &Scene, mirror: &[bool]) -> Estimate {
     let full: f64 = scene.n.iter().map(|&m| m as f64).product();
     let mirrored = mirror.iter().filter(|m| **m).count();
     let points = full / f64::from(1u32 << mirrored);
-    let mirror_last = mirror.last().copied().unwrap_or(false);
-    let per_point = engine_f64_per_point(scene, mirror_last);
+    let per_point = engine_f64_per_point(scene, mirror);
     let full_box = if mirrored > 0 {
         FULL_BOX_F64 * full
     } else {
@@ -229,7 +237,10 @@ mod tests {
         assert!((e.f64_per_point - 7.9).abs() < 1e-12);
         let e = estimate(&scene(json!({"symmetry": ["x", "y", "z"]})));
         assert_eq!(e.points, n / 8.0);
-        assert!((e.f64_per_point - (16.1 + 8.0)).abs() < 1e-12);
+        assert!((e.f64_per_point - (10.9 + 8.0)).abs() < 1e-12);
+        let e = estimate(&scene(json!({"symmetry": ["y", "z"]})));
+        assert_eq!(e.points, n / 4.0);
+        assert!((e.f64_per_point - (16.1 + 4.0)).abs() < 1e-12);
         let e = estimate(&scene(
             json!({"dynamics": "relaxational", "lbfgs_memory": 10}),
         ));

@@ -117,6 +117,12 @@ fn forward_of(t: &mut Transform, x: &Array3<f64>) -> Array3<Complex64> {
     out
 }
 
+/// The forward transform in the index layout ([`Transform::unpacked`]).
+fn indexed_forward_of(t: &mut Transform, x: &Array3<f64>) -> Array3<Complex64> {
+    let y = forward_of(t, x);
+    t.unpacked(y.view())
+}
+
 fn inverse_of(t: &mut Transform, spectrum: &Array3<Complex64>) -> Array3<f64> {
     let mut scratch = spectrum.clone();
     let mut out = Array3::zeros(t.shape());
@@ -147,8 +153,8 @@ fn forward_matches_naive_sums() {
             let x = random_field(*shape, (10 * s + k) as u64);
             for threads in [1, 2, 3] {
                 let mut t = Transform::new(*shape, *kinds, threads);
-                let reference = naive_forward(&x, *kinds, t.spectral_shape());
-                let err = max_diff_c(&forward_of(&mut t, &x), &reference);
+                let reference = naive_forward(&x, *kinds, t.index_shape());
+                let err = max_diff_c(&indexed_forward_of(&mut t, &x), &reference);
                 assert!(err < 1e-12, "{shape:?} {kinds:?} threads {threads}: {err}");
             }
         }
@@ -201,12 +207,30 @@ fn large_round_trip_in_parallel() {
     }
 }
 
+/// Boxes whose every axis longer than 1 is a mirror axis, and only those, store their real
+/// spectra packed: ⌈n2/2⌉ values a row, two reals each, the padding of an odd row exactly 0,
+/// and packing the index layout gives the stored spectrum back exactly.
 #[test]
-fn all_mirror_spectrum_is_real() {
-    for (shape, kinds) in [([6, 5, 7], [M, M, M]), ([1, 8, 9], [P, M, M])] {
-        let x = random_field(shape, 11);
-        let spectrum = forward_of(&mut Transform::new(shape, kinds, 1), &x);
-        assert!(spectrum.iter().all(|z| z.im == 0.0), "{kinds:?}");
+fn all_mirror_spectra_are_packed() {
+    for shape in [[6, 5, 7], [1, 8, 9], [4, 3, 8], [1, 1, 5]] {
+        for kinds in ALL_KINDS {
+            let mut t = Transform::new(shape, kinds, 1);
+            let all_mirror = (0..3).all(|a| shape[a] == 1 || kinds[a] == M);
+            assert_eq!(t.packed(), all_mirror, "{shape:?} {kinds:?}");
+            if !all_mirror {
+                continue;
+            }
+            let [n0, n1, n2] = shape;
+            assert_eq!(t.spectral_shape(), [n0, n1, n2.div_ceil(2)]);
+            assert_eq!(t.index_shape(), shape);
+            let y = forward_of(&mut t, &random_field(shape, 11));
+            if n2 % 2 == 1 {
+                assert!(y.slice(ndarray::s![.., .., -1]).iter().all(|z| z.im == 0.0));
+            }
+            let indexed = t.unpacked(y.view());
+            assert!(indexed.iter().all(|z| z.im == 0.0));
+            assert_eq!(t.packed_from(indexed.view()), y, "{shape:?} {kinds:?}");
+        }
     }
 }
 
@@ -217,7 +241,10 @@ fn parseval_weights_give_sums_of_squares_and_inner_products() {
             let mut t = Transform::new(*shape, kinds, 1);
             let u = random_field(*shape, 200 + s as u64);
             let v = random_field(*shape, 300 + s as u64);
-            let (fu, fv) = (forward_of(&mut t, &u), forward_of(&mut t, &v));
+            let (fu, fv) = (
+                indexed_forward_of(&mut t, &u),
+                indexed_forward_of(&mut t, &v),
+            );
             let w = t.parseval_weights();
             let spectral_sum = |f: &dyn Fn(Complex64, Complex64) -> f64| {
                 fu.indexed_iter()
@@ -252,7 +279,7 @@ fn mirror_transform_equals_unfolded_periodic_transform() {
             let reduced = random_field(shape, 17);
             let full = grid.unfold(&reduced);
             let fs = grid.full_shape();
-            let x = forward_of(&mut Transform::new(shape, *kinds, 1), &reduced);
+            let x = indexed_forward_of(&mut Transform::new(shape, *kinds, 1), &reduced);
             let f = forward_of(&mut Transform::new(fs, [P; 3], 1), &full);
             let phase = |a: usize, k: usize| match kinds[a] {
                 P => Complex64::new(1.0, 0.0),
@@ -274,11 +301,12 @@ fn mirror_transform_equals_unfolded_periodic_transform() {
 fn check_laplacian(grid: &Grid, u: impl Fn([f64; 3]) -> f64, lap: impl Fn([f64; 3]) -> f64) {
     let mut t = Transform::new(grid.shape, grid.kinds, 2);
     let k = t.wavenumbers(grid.h);
-    let mut spectrum = forward_of(&mut t, &grid.field_from(u));
+    let mut spectrum = indexed_forward_of(&mut t, &grid.field_from(u));
     for ((a, b, c), z) in spectrum.indexed_iter_mut() {
         *z *= -(k[0][a].powi(2) + k[1][b].powi(2) + k[2][c].powi(2));
     }
-    let err = max_diff(&inverse_of(&mut t, &spectrum), &grid.field_from(lap));
+    let stored = t.packed_from(spectrum.view());
+    let err = max_diff(&inverse_of(&mut t, &stored), &grid.field_from(lap));
     assert!(err < 1e-10, "{:?}: {err}", grid.kinds);
 }
 
@@ -388,11 +416,20 @@ fn hermitian_symmetrize_is_the_pairwise_mean_on_any_thread_count() {
             });
             let mut expect = y.clone();
             let [s0, s1, s2] = t0.spectral_shape();
+            if t0.packed() {
+                // Reals only: an odd row's padding is zeroed, nothing else changes.
+                if shape[2] % 2 == 1 {
+                    expect
+                        .slice_mut(ndarray::s![.., .., -1])
+                        .map_inplace(|z| z.im = 0.0);
+                }
+            }
             let neg = |i: usize, a: usize| match kinds[a] {
                 P => (shape[a] - i) % shape[a],
                 M => i,
             };
             let conjugate_planes: Vec<usize> = match kinds[2] {
+                _ if t0.packed() => Vec::new(),
                 M => (0..s2).collect(),
                 P => [0, shape[2] / 2]
                     .into_iter()

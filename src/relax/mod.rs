@@ -59,7 +59,10 @@ use crate::spectral::evaluator::{
     write_inverse_value, Evaluator, ExplicitTerm, Metric, State, Symbols,
 };
 use crate::spectral::kernels::{pair_sums, sum, wide_fn};
-use crate::spectral::pieces::{for_each_piece, re_dot, reals, reals_mut, Piece, PIECE};
+use crate::spectral::pieces::{
+    for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE,
+};
+use crate::spectral::saved;
 use ndarray::Array3;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex64;
@@ -379,14 +382,14 @@ impl RelaxEngine {
         let (sym, m) = (&self.ev.symbols, self.metric);
         let pairs = &self.pairs;
         let (r, x) = (reals(flat(&self.grad)), reals(flat(&self.cur.hat)));
-        let task = sym.task_len();
+        let task = sym.task_reals();
         let coefficients = *d;
         let area = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
-            .par_chunks_mut(2 * task)
+            .par_chunks_mut(task)
             .enumerate()
             .with_max_len(1)
             .map(|(t, out)| {
-                let base = 2 * t * task;
+                let base = t * task;
                 let mut acc = AreaSums::default();
                 let mut terms = [[0.0; PIECE]; 6];
                 for_each_piece(sym, t, out.len(), |p, at| {
@@ -395,7 +398,9 @@ impl RelaxEngine {
                         base + at..base + at + p.reals(),
                     );
                     direction_piece(o, &r[g.clone()], pairs, &coefficients, g.clone());
-                    acc = acc.add(area_values(sym, m, p, &x[g], o, &mut terms));
+                    let x = &x[g];
+                    acc = acc
+                        .add(per_width!(sym, W => area_values::<W>(sym, m, p, x, o, &mut terms)));
                 });
                 acc
             })
@@ -411,17 +416,17 @@ impl RelaxEngine {
     fn write_trial(&mut self, alpha: f64, beta: f64) -> f64 {
         let (sym, m) = (&self.ev.symbols, self.metric);
         let (x, d) = (reals(flat(&self.cur.hat)), reals(flat(&self.dir)));
-        let task = sym.task_len();
+        let task = sym.task_reals();
         let hat = reals_mut(self.trial.hat.as_slice_mut().expect("standard layout"));
         let copy = reals_mut(self.trial.nonlinear.as_slice_mut().expect("layout"));
         let lap = reals_mut(self.ev.spare.as_slice_mut().expect("standard layout"));
-        hat.par_chunks_mut(2 * task)
-            .zip(copy.par_chunks_mut(2 * task))
-            .zip(lap.par_chunks_mut(2 * task))
+        hat.par_chunks_mut(task)
+            .zip(copy.par_chunks_mut(task))
+            .zip(lap.par_chunks_mut(task))
             .enumerate()
             .with_max_len(1)
             .map(|(t, ((hat, copy), lap))| {
-                let base = 2 * t * task;
+                let base = t * task;
                 let mut area = 0.0;
                 let mut terms = [0.0; PIECE];
                 for_each_piece(sym, t, hat.len(), |p, at| {
@@ -432,7 +437,10 @@ impl RelaxEngine {
                         &mut lap[local],
                     ];
                     let spectra = (&x[g.clone()], &d[g]);
-                    area += trial_values(sym, m, p, out, spectra, (alpha, beta), &mut terms);
+                    let step = (alpha, beta);
+                    area += per_width!(sym, W => {
+                        trial_values::<W>(sym, m, p, out, spectra, step, &mut terms)
+                    });
                 });
                 area
             })
@@ -562,11 +570,11 @@ fn direction_piece(
 }
 
 wide_fn! {
-/// The area sums of one piece ([`AreaSums`]) value by value, x = φ̂ and d = d' as interleaved
-/// reals: with the area weight a = (3/(2√2)) ε |k|² w and q/φ̂ = c_σ|k|²/M,
+/// The area sums of one piece ([`AreaSums`]) mode by mode, x = φ̂ and d = d' as reals: with
+/// the area weight a = (3/(2√2)) ε |k|² w and q/φ̂ = c_σ|k|²/M,
 /// xx = Σ a |x|², xq = Σ a (q/φ̂) |x|², qq = Σ a (q/φ̂)² |x|², xd = Σ a Re(x d*),
-/// qd = Σ a (q/φ̂) Re(x d*), dd = Σ a |d|² (`t` scratch for each value's terms).
-fn area_values(
+/// qd = Σ a (q/φ̂) Re(x d*), dd = Σ a |d|² (`t` scratch for each mode's terms).
+fn area_values<const W: usize>(
     sym: &Symbols,
     metric: Metric,
     p: &Piece,
@@ -578,8 +586,8 @@ fn area_values(
     let [txx, txq, tqq, txd, tqd, tdd] = t;
     let terms = (txx.iter_mut().zip(txq.iter_mut()).zip(tqq.iter_mut()))
         .zip(txd.iter_mut().zip(tqd.iter_mut()).zip(tdd.iter_mut()));
-    let values = p.pairs(x).iter().zip(p.pairs(d)).zip(p.symbols());
-    for ((((xx, xq), qq), ((xd, qd), dd)), ((&x, &d), (k, w))) in terms.zip(values) {
+    let values = p.modes::<W, _>(x).iter().zip(p.modes::<W, _>(d));
+    for ((((xx, xq), qq), ((xd, qd), dd)), ((&x, &d), (k, w))) in terms.zip(values.zip(p.symbols())) {
         let aw = sym.area_prefactor * k * w;
         let (_, qf) = inverse_metric(metric, k, metric.at(k));
         let (aq, aqq) = (aw * qf, aw * qf * qf);
@@ -601,10 +609,10 @@ fn area_values(
 }
 
 wide_fn! {
-/// One piece of [`RelaxEngine::write_trial`], value by value: φ̂ + α d' + β q into `hat`, and
+/// One piece of [`RelaxEngine::write_trial`], mode by mode: φ̂ + α d' + β q into `hat`, and
 /// the inverse transforms' inputs ([`write_inverse_value`]) into `copy` and `lap`, from the
 /// piece's reals of φ̂ and d' (`(x, d)`); returns its area (`terms` scratch).
-fn trial_values(
+fn trial_values<const W: usize>(
     sym: &Symbols,
     metric: Metric,
     p: &Piece,
@@ -614,12 +622,12 @@ fn trial_values(
     terms: &mut [f64; PIECE],
 ) -> f64 {
     let ((x, d), (alpha, beta), len) = (spectra, step, p.len);
-    let [hat, copy, lap] = out.map(|o| p.pairs_mut(o).iter_mut());
+    let [hat, copy, lap] = out.map(|o| p.modes_mut::<W, _>(o).iter_mut());
     let outputs = hat.zip(copy.zip(lap)).zip(&mut terms[..len]);
-    let inputs = p.pairs(x).iter().zip(p.pairs(d)).zip(p.symbols());
+    let inputs = p.modes::<W, _>(x).iter().zip(p.modes::<W, _>(d)).zip(p.symbols());
     for (((hat, (copy, lap)), term), ((x, d), (k, w))) in outputs.zip(inputs) {
         let (_, qf) = inverse_metric(metric, k, metric.at(k));
-        *hat = [0, 1].map(|c| x[c] + d[c] * alpha + x[c] * qf * beta);
+        *hat = mode(|c| x[c] + d[c] * alpha + x[c] * qf * beta);
         *term = write_inverse_value(*hat, k, sym.area_prefactor * k * w, copy, lap);
     }
     sum(&terms[..len])
@@ -637,11 +645,11 @@ fn inverse_metric(metric: Metric, k: f64, m: f64) -> (f64, f64) {
 }
 
 wide_fn! {
-/// A piece of [`gradient_sweep`], value by value: q = (q/φ̂) φ̂ and r = M⁻¹ĝ + σq from the
+/// A piece of [`gradient_sweep`], mode by mode: q = (q/φ̂) φ̂ and r = M⁻¹ĝ + σq from the
 /// piece's reals of φ̂ and ĝ (`(x, g)`), r into `r`, q and the weighted copies w M r, w M q into
 /// `out` = [q, wr, wq]; returns [Σ wM |r|², Σ wM² |r|², Σ wM Re(r q*)] (`t` scratch for each
-/// value's terms).
-fn gradient_values(
+/// mode's terms).
+fn gradient_values<const W: usize>(
     metric: Metric,
     p: &Piece,
     spectra: (&[f64], &[f64]),
@@ -652,17 +660,17 @@ fn gradient_values(
 ) -> [f64; 3] {
     let ((xs, gs), len) = (spectra, p.len);
     let [q, wr, wq] = out;
-    let [r, q, wr, wq] = [r, q, wr, wq].map(|o| p.pairs_mut(o).iter_mut());
+    let [r, q, wr, wq] = [r, q, wr, wq].map(|o| p.modes_mut::<W, _>(o).iter_mut());
     let [trr, tres, tqr] = t;
     let terms = trr.iter_mut().zip(tres.iter_mut()).zip(tqr.iter_mut());
     let outputs = r.zip(q).zip(wr.zip(wq)).zip(terms);
-    let inputs = p.pairs(xs).iter().zip(p.pairs(gs)).zip(p.symbols());
+    let inputs = p.modes::<W, _>(xs).iter().zip(p.modes::<W, _>(gs)).zip(p.symbols());
     for ((((r, q), (wr, wq)), ((rr, res), qr)), ((x, g), (k, w))) in outputs.zip(inputs) {
         let m = metric.at(k);
         let (inv_m, qf) = inverse_metric(metric, k, m);
         let wm = w * m;
-        *q = [0, 1].map(|c| qf * x[c]);
-        *r = [0, 1].map(|c| g[c] * inv_m + x[c] * (sigma * qf));
+        *q = mode(|c| qf * x[c]);
+        *r = mode(|c| g[c] * inv_m + x[c] * (sigma * qf));
         (*wr, *wq) = (r.map(|v| wm * v), q.map(|v| wm * v));
         let r2 = re_dot(*r, *r);
         (*rr, *res) = (wm * r2, w * m * m * r2);
@@ -673,10 +681,10 @@ fn gradient_values(
 }
 
 wide_fn! {
-/// A piece of the new pair in [`gradient_sweep`]: s = φ̂ − x_old, y = r − r_old rounded to
+/// A piece of the new pair in [`gradient_sweep`], mode by mode: s = φ̂ − x_old, y = r − r_old rounded to
 /// single precision from the piece's reals of (φ̂, r) and (x_old, r_old), and w M s, w M y of
 /// the rounded values, so that the pair's sums are those of the pair as stored.
-fn pair_values(
+fn pair_values<const W: usize>(
     metric: Metric,
     p: &Piece,
     new: (&[f64], &[f64]),
@@ -685,16 +693,16 @@ fn pair_values(
     weighted: [&mut [f64]; 2],
 ) {
     let ((xs, rs), (x_old, r_old), [s, y], [ws, wy]) = (new, old, pair, weighted);
-    let [xs, rs, x_old, r_old] = [xs, rs, x_old, r_old].map(|v| p.pairs(v));
-    let [s, y] = [s, y].map(|v| p.pairs_mut(v).iter_mut());
-    let [ws, wy] = [ws, wy].map(|v| p.pairs_mut(v).iter_mut());
+    let [xs, rs, x_old, r_old] = [xs, rs, x_old, r_old].map(|v| p.modes::<W, _>(v));
+    let [s, y] = [s, y].map(|v| p.modes_mut::<W, _>(v).iter_mut());
+    let [ws, wy] = [ws, wy].map(|v| p.modes_mut::<W, _>(v).iter_mut());
     let outputs = s.zip(y).zip(ws.zip(wy));
     let values = xs.iter().zip(x_old).zip(rs.iter().zip(r_old));
     let inputs = values.zip(p.symbols());
     for (((s, y), (ws, wy)), (((x, xo), (r, ro)), (k, w))) in outputs.zip(inputs) {
         let wm = w * metric.at(k);
-        *s = [0, 1].map(|c| (x[c] - xo[c]) as f32);
-        *y = [0, 1].map(|c| (r[c] - ro[c]) as f32);
+        *s = std::array::from_fn(|c| (x[c] - xo[c]) as f32);
+        *y = std::array::from_fn(|c| (r[c] - ro[c]) as f32);
         (*ws, *wy) = (s.map(|v| wm * f64::from(v)), y.map(|v| wm * f64::from(v)));
     }
 }
@@ -709,12 +717,12 @@ fn dot_m<A: Copy + Into<f64>, B: Copy + Into<f64>>(
     u: &[A],
     v: &[B],
 ) -> f64 {
-    let s2 = sym.row_len();
-    let values = u.chunks_exact(2).zip(v.chunks_exact(2)).enumerate();
-    values.fold(0.0, |acc, (i, (a, b))| {
+    let (s2, width) = (sym.row_len(), sym.width);
+    let modes = u.chunks_exact(width).zip(v.chunks_exact(width)).enumerate();
+    modes.fold(0.0, |acc, (i, (a, b))| {
         let (kb, wb) = sym.row(i / s2);
         let k = kb + sym.k2[2][i % s2];
-        let re = a[0].into() * b[0].into() + a[1].into() * b[1].into();
+        let re: f64 = a.iter().zip(b).map(|(&a, &b)| a.into() * b.into()).sum();
         acc + wb * sym.weight[2][i % s2] * m.at(k) * re
     })
 }
@@ -743,11 +751,11 @@ fn gradient_sweep(
     new: Option<(&[Complex64], &mut Pair)>,
 ) -> GradientSums {
     let (x, g) = (reals(flat(&state.hat)), reals(flat(&state.nonlinear)));
-    let task = sym.task_len();
+    let task = sym.task_reals();
     let n_pairs = pairs.len();
-    // One task: rows from `t · task / s2`; `new` = (x_old, s, y) of its values.
+    // One task: the reals from `t · task`; `new` = (x_old, s, y) of its values.
     let run = |t: usize, r: &mut [f64], mut new: Option<NewPairPart>| {
-        let base = 2 * t * task;
+        let base = t * task;
         let mut acc = GradientSums::zero();
         // The piece's w M r, w M q, w M s_new, w M y_new (the last two 0 without a new pair),
         // q and each value's terms of the sums.
@@ -767,12 +775,15 @@ fn gradient_sweep(
             }
             let [wr, wq, ws, wy] = &mut v;
             let out = [&mut q[..n], &mut wr[..n], &mut wq[..n]];
-            let [rr, res, qr] = gradient_values(m, p, (xs, gs), sigma, rs, out, &mut terms);
+            let [rr, res, qr] = per_width!(sym, W => {
+                gradient_values::<W>(m, p, (xs, gs), sigma, rs, out, &mut terms)
+            });
             (acc.rr, acc.res, acc.qr) = (acc.rr + rr, acc.res + res, acc.qr + qr);
             if let Some((x_old, s, y)) = new.as_mut() {
                 let (s, y) = (&mut s[local.clone()], &mut y[local.clone()]);
                 let old = (&x_old[gl.clone()], &r_old[..n]);
-                pair_values(m, p, (xs, rs), old, [s, y], [&mut ws[..n], &mut wy[..n]]);
+                let weighted = [&mut ws[..n], &mut wy[..n]];
+                per_width!(sym, W => pair_values::<W>(m, p, (xs, rs), old, [s, y], weighted));
             }
             let v = v.each_ref().map(|v| &v[..n]);
             for (p, sums) in pairs.iter().zip(&mut acc.pairs) {
@@ -792,15 +803,15 @@ fn gradient_sweep(
     let grad = reals_mut(grad);
     match new {
         None => grad
-            .par_chunks_mut(2 * task)
+            .par_chunks_mut(task)
             .enumerate()
             .with_max_len(1)
             .map(|(t, r)| run(t, r, None))
             .reduce(GradientSums::zero, GradientSums::add),
         Some((x_old, pair)) => grad
-            .par_chunks_mut(2 * task)
-            .zip(pair.s.par_chunks_mut(2 * task))
-            .zip(pair.y.par_chunks_mut(2 * task))
+            .par_chunks_mut(task)
+            .zip(pair.s.par_chunks_mut(task))
+            .zip(pair.y.par_chunks_mut(task))
             .enumerate()
             .with_max_len(1)
             .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), s, y))))
@@ -904,8 +915,10 @@ impl Engine for RelaxEngine {
     }
 
     fn restore(&mut self, saved: &mut Saved<'_>, t: f64) -> Result<(), String> {
-        let shape = self.cur.hat.shape().to_vec();
-        self.cur.hat.assign(&saved.complex("phi_hat", &shape)?);
+        let transform = &self.ev.transform;
+        self.cur
+            .hat
+            .assign(&saved::spectrum(saved, "phi_hat", transform)?);
         self.stalled = saved.get("stalled")? != 0.0;
         let n = saved.get("pairs")?;
         if !(0.0..=self.memory as f64).contains(&n) || n.fract() != 0.0 {
@@ -916,9 +929,10 @@ impl Engine for RelaxEngine {
         }
         self.reset_memory();
         for i in 0..n as usize {
+            let transform = &self.ev.transform;
             let pair = Pair {
-                s: saved.take_single(&format!("s_{i}"), &shape)?,
-                y: saved.take_single(&format!("y_{i}"), &shape)?,
+                s: saved::take_single(saved, &format!("s_{i}"), transform)?,
+                y: saved::take_single(saved, &format!("y_{i}"), transform)?,
             };
             self.pairs.push_back(pair);
         }

@@ -20,7 +20,8 @@
 
 use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm, State};
 use super::kernels::{sum, wide_fn};
-use super::pieces::{for_each_piece, re_dot, reals, reals_mut, Piece, PIECE};
+use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
+use super::saved::spectrum;
 use crate::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
 use crate::engine::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::grid::Grid;
@@ -107,13 +108,16 @@ struct ValueFactors {
 }
 
 impl ValueFactors {
-    /// (P̂, Q̂) at one value from the (re, im) of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (`PREV` false: the last
-    /// two unread).
+    /// (P̂, Q̂) at one mode from φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ there (`PREV` false: the last two
+    /// unread).
     #[inline(always)]
-    fn apply<const PREV: bool>(&self, [x, n, x0, n0]: [&[f64; 2]; 4]) -> ([f64; 2], [f64; 2]) {
-        let mut p = [0.0; 2];
-        let mut q = [0.0; 2];
-        for c in 0..2 {
+    fn apply<const PREV: bool, const W: usize>(
+        &self,
+        [x, n, x0, n0]: [&[f64; W]; 4],
+    ) -> ([f64; W], [f64; W]) {
+        let mut p = [0.0; W];
+        let mut q = [0.0; W];
+        for c in 0..W {
             p[c] = x[c] * self.h1 + n[c] * self.n1;
             q[c] = x[c] * self.q1;
             if PREV {
@@ -125,15 +129,15 @@ impl ValueFactors {
     }
 }
 
-/// The values of a piece of `len` values as (re, im) pairs of the reals `inputs` = [φ̂ⁿ, N̂ⁿ,
-/// φ̂ⁿ⁻¹, N̂ⁿ⁻¹], zipped with the piece's |k|² and w. Without a previous step the last two
-/// inputs may be any reals of the piece (the SBDF1 sweeps do not read them).
+/// The modes of a piece in the reals `inputs` = [φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹], zipped with the
+/// piece's |k|² and w. Without a previous step the last two inputs may be any reals of the piece
+/// (the SBDF1 sweeps do not read them).
 #[inline(always)]
-fn values<'a>(
+fn values<'a, const W: usize>(
     p: &'a Piece,
     inputs: [&'a [f64]; 4],
-) -> impl Iterator<Item = ([&'a [f64; 2]; 4], (f64, f64))> + 'a {
-    let [x, n, x0, n0] = inputs.map(|v| p.pairs(v).iter());
+) -> impl Iterator<Item = ([&'a [f64; W]; 4], (f64, f64))> + 'a {
+    let [x, n, x0, n0] = inputs.map(|v| p.modes::<W, _>(v).iter());
     x.zip(n)
         .zip(x0.zip(n0))
         .zip(p.symbols())
@@ -141,11 +145,11 @@ fn values<'a>(
 }
 
 wide_fn! {
-/// One piece of [`SpectralEngine::area_quadratic`], value by value from the piece's reals
+/// One piece of [`SpectralEngine::area_quadratic`], mode by mode from the piece's reals
 /// `inputs` ([`values`]): with P̂, Q̂ of [`ValueFactors`] and the area weight
-/// a = (3/(2√2)) ε |k|² w, returns (A_PP, A_PQ, A_QQ) = Σ a (|P̂|², Re P̂Q̂*, |Q̂|²). Each value's
+/// a = (3/(2√2)) ε |k|² w, returns (A_PP, A_PQ, A_QQ) = Σ a (|P̂|², Re P̂Q̂*, |Q̂|²). Each mode's
 /// factors are formed and used at once (`t` scratch for its three terms).
-fn quadratic_values<const PREV: bool>(
+fn quadratic_values<const PREV: bool, const W: usize>(
     u: &Update,
     p: &Piece,
     area_prefactor: f64,
@@ -155,8 +159,8 @@ fn quadratic_values<const PREV: bool>(
     let len = p.len;
     let [tpp, tpq, tqq] = t;
     let terms = tpp[..len].iter_mut().zip(&mut tpq[..len]).zip(&mut tqq[..len]);
-    for (((pp, pq), qq), (v, (k, w))) in terms.zip(values(p, inputs)) {
-        let (pv, qv) = u.at::<PREV>(k).apply::<PREV>(v);
+    for (((pp, pq), qq), (v, (k, w))) in terms.zip(values::<W>(p, inputs)) {
+        let (pv, qv) = u.at::<PREV>(k).apply::<PREV, W>(v);
         let aw = area_prefactor * k * w;
         *pp = aw * re_dot(pv, pv);
         *pq = aw * re_dot(pv, qv);
@@ -167,10 +171,10 @@ fn quadratic_values<const PREV: bool>(
 }
 
 wide_fn! {
-/// One piece of [`SpectralEngine::write_update`], value by value: φ̂^{n+1} = P̂ + σQ̂ into
+/// One piece of [`SpectralEngine::write_update`], mode by mode: φ̂^{n+1} = P̂ + σQ̂ into
 /// `hat`, and the inverse transforms' inputs ([`write_inverse_value`]) into `copy` and `lap`;
-/// returns the piece's area (`t` scratch for each value's term).
-fn write_values<const PREV: bool>(
+/// returns the piece's area (`t` scratch for each mode's term).
+fn write_values<const PREV: bool, const W: usize>(
     u: &Update,
     p: &Piece,
     area_prefactor: f64,
@@ -179,11 +183,11 @@ fn write_values<const PREV: bool>(
     out: [&mut [f64]; 3],
     t: &mut [f64; PIECE],
 ) -> f64 {
-    let [hat, copy, lap] = out.map(|o| p.pairs_mut(o).iter_mut());
+    let [hat, copy, lap] = out.map(|o| p.modes_mut::<W, _>(o).iter_mut());
     let outputs = hat.zip(copy.zip(lap)).zip(&mut t[..p.len]);
-    for (((hat, (copy, lap)), term), (v, (k, w))) in outputs.zip(values(p, inputs)) {
-        let (pv, qv) = u.at::<PREV>(k).apply::<PREV>(v);
-        *hat = [pv[0] + sigma * qv[0], pv[1] + sigma * qv[1]];
+    for (((hat, (copy, lap)), term), (v, (k, w))) in outputs.zip(values::<W>(p, inputs)) {
+        let (pv, qv) = u.at::<PREV>(k).apply::<PREV, W>(v);
+        *hat = mode(|c| pv[c] + sigma * qv[c]);
         *term = write_inverse_value(*hat, k, area_prefactor * k * w, copy, lap);
     }
     sum(&t[..p.len])
@@ -392,7 +396,7 @@ impl SpectralEngine {
         let u = self.update(dt);
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
-        let (task, total) = (2 * sym.task_len(), 2 * self.cur.hat.len());
+        let (task, total) = (sym.task_reals(), 2 * self.cur.hat.len());
         let [pp, pq, qq] = (0..total.div_ceil(task))
             .into_par_iter()
             .with_max_len(1)
@@ -402,7 +406,8 @@ impl SpectralEngine {
                 let (a, len) = (sym.area_prefactor, task.min(total - t * task));
                 for_each_piece(sym, t, len, |p, at| {
                     let x = inputs.reals(t * task + at..t * task + at + p.reals());
-                    let s = quadratic_values::<PREV>(&u, p, a, x, &mut terms);
+                    let s =
+                        per_width!(sym, W => quadratic_values::<PREV, W>(&u, p, a, x, &mut terms));
                     acc = [acc[0] + s[0], acc[1] + s[1], acc[2] + s[2]];
                 });
                 acc
@@ -427,7 +432,7 @@ impl SpectralEngine {
         let u = self.update(dt);
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
-        let task = 2 * sym.task_len();
+        let task = sym.task_reals();
         let hat = reals_mut(self.next.hat.as_slice_mut().expect("standard layout"));
         let copy = reals_mut(self.next.nonlinear.as_slice_mut().expect("standard layout"));
         let lap = reals_mut(self.ev.spare.as_slice_mut().expect("standard layout"));
@@ -444,7 +449,9 @@ impl SpectralEngine {
                     let x = inputs.reals(t * task + r.start..t * task + r.end);
                     let out = [&mut hat[r.clone()], &mut copy[r.clone()], &mut lap[r]];
                     let a = sym.area_prefactor;
-                    area += write_values::<PREV>(&u, p, a, sigma, x, out, &mut terms);
+                    area += per_width!(sym, W => {
+                        write_values::<PREV, W>(&u, p, a, sigma, x, out, &mut terms)
+                    });
                 });
                 area
             })
@@ -637,17 +644,17 @@ impl Engine for SpectralEngine {
     }
 
     fn restore(&mut self, saved: &mut Saved<'_>, t: f64) -> Result<(), String> {
-        let shape = self.cur.hat.shape().to_vec();
-        self.cur.hat.assign(&saved.complex("phi_hat", &shape)?);
+        let transform = &self.ev.transform;
+        self.cur.hat.assign(&spectrum(saved, "phi_hat", transform)?);
         self.sigma = saved.get("sigma")?;
         self.volume0 = saved.get("volume0")?;
         self.dt_prev = saved.get("dt_prev")?;
         let dt_next = saved.get("dt_next")?;
         self.dt_next = (!dt_next.is_nan()).then_some(dt_next);
-        self.prev = match (self.scheme, saved.complex("prev_phi_hat", &shape)) {
+        self.prev = match (self.scheme, spectrum(saved, "prev_phi_hat", transform)) {
             (Scheme::Sbdf2, Ok(hat)) => Some((
-                hat.to_owned(),
-                saved.complex("prev_nonlinear", &shape)?.to_owned(),
+                hat.into_owned(),
+                spectrum(saved, "prev_nonlinear", transform)?.into_owned(),
             )),
             _ => None,
         };

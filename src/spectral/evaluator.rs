@@ -14,7 +14,7 @@
 //! ([`Evaluator::finish`]).
 
 use super::kernels::{pointwise_sums, sum, wide_fn};
-use super::pieces::{for_each_piece, re_dot, reals, reals_mut, Piece, PIECE};
+use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
 use crate::config::Laplacian;
 use crate::engine::Diverged;
@@ -79,7 +79,7 @@ pub struct State {
     pub multiplier_sums: (f64, f64),
 }
 
-/// Per-axis tables of the spectrum. At spectral index (i0, i1, i2)
+/// Per-axis tables of the spectrum's modes ([`crate::spectral::pieces`]). At mode (i0, i1, i2)
 ///
 /// ```text
 /// |k|² = k2[0][i0] + k2[1][i1] + k2[2][i2],     w = weight[0][i0] · weight[1][i1] · weight[2][i2],
@@ -89,6 +89,8 @@ pub struct State {
 /// that ∫ u v dx = Σ_k w Re(û v̂*) over the full box, and A = Σ_k (3/(2√2)) ε |k|² w |φ̂|².
 /// Passes walk the spectrum row by row (a row is the last axis): a row's first two terms are
 /// taken once ([`Symbols::row`]) and the loop along the row reads the two short last-axis tables.
+/// A packed spectrum's row holds a mode per real, so its last-axis tables are the index's, with
+/// an odd length padded by a mode of w = 0 and |k|² = 0 (its real is 0 and stays 0).
 pub struct Symbols {
     /// |k|² per axis (or the FD symbol, see [`axis_symbol`]).
     pub k2: [Vec<f64>; 3],
@@ -96,6 +98,8 @@ pub struct Symbols {
     pub weight: [Vec<f64>; 3],
     /// (3/(2√2)) ε.
     pub area_prefactor: f64,
+    /// Reals per mode: 2 (complex values), or 1 ([packed](Transform::packed) spectra).
+    pub width: usize,
 }
 
 impl Symbols {
@@ -106,24 +110,35 @@ impl Symbols {
                 .map(|&k| axis_symbol(k, grid.h, laplacian))
                 .collect::<Vec<f64>>()
         });
+        let mut k2 = k2;
         let mut weight = t.parseval_weights();
         let dv = grid.cell_volume() * grid.mirror_factor();
         weight[0].iter_mut().for_each(|w| *w *= dv);
+        if t.packed() && !k2[2].len().is_multiple_of(2) {
+            k2[2].push(0.0);
+            weight[2].push(0.0);
+        }
         Symbols {
             k2,
             weight,
             area_prefactor: AREA_PREFACTOR * eps,
+            width: if t.packed() { 1 } else { 2 },
         }
     }
 
-    /// Length of a spectral row (the last axis).
+    /// Modes in a spectral row (the last axis).
     pub fn row_len(&self) -> usize {
         self.k2[2].len()
     }
 
-    /// Spectral values per parallel task: a whole number of rows.
+    /// Modes per parallel task: a whole number of rows.
     pub fn task_len(&self) -> usize {
         (PAR_CHUNK / self.row_len()).max(1) * self.row_len()
+    }
+
+    /// Reals per parallel task ([`Symbols::task_len`] modes).
+    pub fn task_reals(&self) -> usize {
+        self.width * self.task_len()
     }
 
     /// Axes 0 and 1's share of |k|² and of w on spectral row `r` (`i0 = r / s1`, `i1 = r % s1`).
@@ -351,7 +366,7 @@ fn inverse_inputs(
     copy: &mut [Complex64],
     lap: &mut [Complex64],
 ) -> f64 {
-    let task = 2 * sym.task_len();
+    let task = sym.task_reals();
     let (hat, copy, lap) = (reals(hat), reals_mut(copy), reals_mut(lap));
     copy.par_chunks_mut(task)
         .zip(lap.par_chunks_mut(task))
@@ -367,7 +382,7 @@ fn inverse_inputs(
                     &mut copy[r.clone()],
                     &mut lap[r],
                 );
-                area += inverse_inputs_piece(sym, p, h, copy, lap, &mut terms);
+                area += per_width!(sym, W => inverse_inputs_piece::<W>(sym, p, h, copy, lap, &mut terms));
             });
             area
         })
@@ -375,9 +390,9 @@ fn inverse_inputs(
 }
 
 wide_fn! {
-/// One piece of [`inverse_inputs`], value by value ([`write_inverse_value`]; `terms` scratch for
-/// each value's area): returns its area.
-fn inverse_inputs_piece(
+/// One piece of [`inverse_inputs`], mode by mode ([`write_inverse_value`]; `terms` scratch for
+/// each mode's area): returns its area.
+fn inverse_inputs_piece<const W: usize>(
     sym: &Symbols,
     p: &Piece,
     h: &[f64],
@@ -386,29 +401,30 @@ fn inverse_inputs_piece(
     terms: &mut [f64; PIECE],
 ) -> f64 {
     let len = p.len;
-    let [copy, lap] = [copy, lap].map(|o| p.pairs_mut(o).iter_mut());
+    let [copy, lap] = [copy, lap].map(|o| p.modes_mut::<W, _>(o).iter_mut());
     let outputs = copy.zip(lap).zip(&mut terms[..len]);
-    for (((copy, lap), term), (h, (k, w))) in outputs.zip(p.pairs(h).iter().zip(p.symbols())) {
+    let inputs = p.modes::<W, _>(h).iter().zip(p.symbols());
+    for (((copy, lap), term), (h, (k, w))) in outputs.zip(inputs) {
         *term = write_inverse_value(*h, k, sym.area_prefactor * k * w, copy, lap);
     }
     sum(&terms[..len])
 }
 }
 
-/// The inputs of an evaluation's inverse transforms at one value φ̂ = `h` (re, im) with |k|² = `k`
-/// and area weight `aw` = (3/(2√2)) ε |k|² w: `copy = φ̂` and `lap = −|k|²φ̂`; returns its area
+/// The inputs of an evaluation's inverse transforms at one mode φ̂ = `h` with |k|² = `k` and
+/// area weight `aw` = (3/(2√2)) ε |k|² w: `copy = φ̂` and `lap = −|k|²φ̂`; returns its area
 /// term a |φ̂|². Every sweep that makes a new φ̂ (the evaluation's first, the time step's update,
 /// the L-BFGS trial) ends with it.
 #[inline(always)]
-pub(crate) fn write_inverse_value(
-    h: [f64; 2],
+pub(crate) fn write_inverse_value<const W: usize>(
+    h: [f64; W],
     k: f64,
     aw: f64,
-    copy: &mut [f64; 2],
-    lap: &mut [f64; 2],
+    copy: &mut [f64; W],
+    lap: &mut [f64; W],
 ) -> f64 {
     *copy = h;
-    *lap = [-(h[0] * k), -(h[1] * k)];
+    *lap = h.map(|v| -(v * k));
     aw * re_dot(h, h)
 }
 
@@ -556,7 +572,7 @@ fn combine(
     g: &[Complex64],
     n: &mut [Complex64],
 ) -> CombineSums {
-    let task = 2 * sym.task_len();
+    let task = sym.task_reals();
     let (h, g, n) = (reals(h), reals(g), reals_mut(n));
     let how = Combine {
         e2: eps * eps,
@@ -579,7 +595,8 @@ fn combine(
                 let r = at..at + p.reals();
                 let (g, h) = (&g[t * task..][r.clone()], &h[t * task..][r.clone()]);
                 let n = &mut n[r];
-                sums = sums.add(combine_piece(&how, p, g, h, n, &mut terms));
+                let piece = per_width!(sym, W => combine_piece::<W>(&how, p, g, h, n, &mut terms));
+                sums = sums.add(piece);
             });
             sums
         })
@@ -596,8 +613,8 @@ struct Combine {
 }
 
 wide_fn! {
-/// One piece of [`combine`], value by value (`t` scratch for each value's terms).
-fn combine_piece(
+/// One piece of [`combine`], mode by mode (`t` scratch for each mode's terms).
+fn combine_piece<const W: usize>(
     how: &Combine,
     p: &Piece,
     g: &[f64],
@@ -606,7 +623,8 @@ fn combine_piece(
     t: &mut CombineTerms,
 ) -> CombineSums {
     let (e2, tension, len) = (how.e2, how.tension, p.len);
-    let values = p.pairs_mut(n).iter_mut().zip(p.pairs(g).iter().zip(p.pairs(h)));
+    let (g, h) = (p.modes::<W, _>(g), p.modes::<W, _>(h));
+    let values = p.modes_mut::<W, _>(n).iter_mut().zip(g.iter().zip(h));
     let symbols = p.symbols();
     let terms = t.residual[..len].iter_mut().zip(t.qq[..len].iter_mut().zip(&mut t.gq[..len]));
     // The residual's weight: w, 0 at k = 0 and when the residual is not wanted.
@@ -618,8 +636,8 @@ fn combine_piece(
                 let (fnl, fg) = (-2.0 * k, -2.0 * e2 * k * k);
                 let (gk, hk) = (2.0 * e2 * k, 2.0 * e2 * e2 * k * k + tension * k);
                 let nl = *o;
-                let mu = [0, 1].map(|c| nl[c] * 2.0 + g[c] * gk + h[c] * hk);
-                *o = [0, 1].map(|c| nl[c] * fnl + g[c] * fg);
+                let mu = mode::<W>(|c| nl[c] * 2.0 + g[c] * gk + h[c] * hk);
+                *o = mode(|c| nl[c] * fnl + g[c] * fg);
                 *res = residual_weight(k, w) * re_dot(mu, mu);
             }
         }
@@ -627,9 +645,9 @@ fn combine_piece(
             for (((o, (g, h)), (k, w)), (res, (qq, gq))) in values.zip(symbols).zip(terms) {
                 let (gk, hk, tk) = (2.0 * e2 * k, 2.0 * e2 * e2 * k * k, tension * k);
                 let qh = m.c_sigma * k / m.at(k);
-                let gradient = [0, 1].map(|c| o[c] * 2.0 + g[c] * gk + h[c] * hk);
+                let gradient = mode::<W>(|c| o[c] * 2.0 + g[c] * gk + h[c] * hk);
                 *o = gradient;
-                let mu = [0, 1].map(|c| gradient[c] + h[c] * tk);
+                let mu = mode::<W>(|c| gradient[c] + h[c] * tk);
                 *res = residual_weight(k, w) * re_dot(mu, mu);
                 *qq = w * m.c_sigma * k * qh * re_dot(*h, *h);
                 *gq = w * qh * re_dot(gradient, *h);

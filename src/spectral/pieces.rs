@@ -1,10 +1,16 @@
 //! Walking a spectrum in pieces: the sweeps over a spectrum take |k|² and w a piece at a time
-//! into two short tables, then run loops over the piece's values as (re, im) pairs of
-//! interleaved reals, forming each value's factors (what follows from |k|² and w) where they are
-//! used, which the compiler vectorises; each value's terms of a sum go to a short scratch table,
-//! summed with the kernels of [`super::kernels`].
+//! into two short tables, then run loops over the piece's modes, forming each mode's factors
+//! (what follows from |k|² and w) where they are used, which the compiler vectorises; each
+//! mode's terms of a sum go to a short scratch table, summed with the kernels of
+//! [`super::kernels`].
 //!
-//! A piece is as many whole spectral rows as fit in [`PIECE`] values, or a part of one longer
+//! A *mode* is one wavenumber's coefficient: a complex value, two interleaved reals (re, im),
+//! or, in a packed spectrum ([`super::transform::Transform::packed`]), one real. Every operator
+//! the sweeps apply is real and even in k, so the same formulas serve both: a sweep's kernel is
+//! generic over the reals per mode `W` (2 or 1), chosen by [`per_width!`], and takes each mode
+//! as `[f64; W]`.
+//!
+//! A piece is as many whole spectral rows as fit in [`PIECE`] modes, or a part of one longer
 //! row: at 48³ or 64³ (rows of 25 or 33 values) a piece is seven or ten rows, so a sweep that
 //! reads many arrays (the L-BFGS pairs) reads a 4 KiB page of each per visit.
 
@@ -12,23 +18,26 @@ use super::evaluator::Symbols;
 use super::kernels::wide_fn;
 use rustfft::num_complex::Complex64;
 
-/// Values per piece.
+/// Modes per piece.
 pub const PIECE: usize = 256;
 
-/// |k|² and the weight w of each value of a piece (see [`Symbols`]).
+/// |k|² and the weight w of each mode of a piece (see [`Symbols`]).
 pub struct Piece {
-    /// Values in the piece (its reals are `2 len`).
+    /// Modes in the piece (its reals are `width · len`).
     pub len: usize,
-    /// |k|² per value.
+    /// Reals per mode ([`Symbols::width`]).
+    width: usize,
+    /// |k|² per mode.
     pub k: [f64; PIECE],
-    /// w per value.
+    /// w per mode.
     pub w: [f64; PIECE],
 }
 
 impl Piece {
-    fn new() -> Self {
+    fn new(width: usize) -> Self {
         Piece {
             len: 0,
+            width,
             k: [0.0; PIECE],
             w: [0.0; PIECE],
         }
@@ -36,22 +45,24 @@ impl Piece {
 
     /// The piece's reals.
     pub fn reals(&self) -> usize {
-        2 * self.len
+        self.width * self.len
     }
 
-    /// The piece's values as (re, im) pairs, from reals `v` starting at its first.
+    /// The piece's modes, `W` reals each, from reals `v` starting at its first.
     #[inline(always)]
-    pub fn pairs<'a, T>(&self, v: &'a [T]) -> &'a [[T; 2]] {
-        v[..self.reals()].as_chunks::<2>().0
+    pub fn modes<'a, const W: usize, T>(&self, v: &'a [T]) -> &'a [[T; W]] {
+        debug_assert_eq!(W, self.width);
+        v[..W * self.len].as_chunks::<W>().0
     }
 
-    /// [`Piece::pairs`], writable.
+    /// [`Piece::modes`], writable.
     #[inline(always)]
-    pub fn pairs_mut<'a, T>(&self, v: &'a mut [T]) -> &'a mut [[T; 2]] {
-        v[..self.reals()].as_chunks_mut::<2>().0
+    pub fn modes_mut<'a, const W: usize, T>(&self, v: &'a mut [T]) -> &'a mut [[T; W]] {
+        debug_assert_eq!(W, self.width);
+        v[..W * self.len].as_chunks_mut::<W>().0
     }
 
-    /// (|k|², w) of each value.
+    /// (|k|², w) of each mode.
     #[inline(always)]
     pub fn symbols(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         let (k, w) = (&self.k[..self.len], &self.w[..self.len]);
@@ -59,10 +70,35 @@ impl Piece {
     }
 }
 
-/// Re(a b*) of two values given as (re, im); |a|² when b = a.
+/// Evaluates `call` with the const `W` set to the reals per mode of `sym` ([`Symbols::width`]):
+/// `per_width!(sym, W => kernel::<W>(…))`.
+macro_rules! per_width {
+    ($sym:expr, $w:ident => $call:expr) => {
+        if $sym.width == 1 {
+            const $w: usize = 1;
+            $call
+        } else {
+            const $w: usize = 2;
+            $call
+        }
+    };
+}
+pub(crate) use per_width;
+
+/// Re(a b*) of two modes (|a|² when b = a): a₀b₀ + a₁b₁ for complex values, ab for reals.
 #[inline(always)]
-pub fn re_dot(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
+pub fn re_dot<const W: usize>(a: [f64; W], b: [f64; W]) -> f64 {
+    let mut d = a[0] * b[0];
+    for c in 1..W {
+        d += a[c] * b[c];
+    }
+    d
+}
+
+/// The mode whose reals are `f(0), …, f(W − 1)`.
+#[inline(always)]
+pub fn mode<const W: usize>(f: impl FnMut(usize) -> f64) -> [f64; W] {
+    std::array::from_fn(f)
 }
 
 wide_fn! {
@@ -85,26 +121,26 @@ fn fill_piece(piece: &mut Piece, sym: &Symbols, at: (usize, usize, usize), offse
 }
 
 /// Calls `f(piece, at)` for every piece of parallel task `t` (whole rows, [`Symbols::task_len`]
-/// values a task) holding `reals` reals, `at` the piece's first real within the task. Inlined,
+/// modes a task) holding `reals` reals, `at` the piece's first real within the task. Inlined,
 /// with one call of `f`, so that a sweep run through [`super::kernels::wide`] is compiled whole
 /// for its instructions.
 #[inline(always)]
 pub fn for_each_piece(sym: &Symbols, t: usize, reals: usize, mut f: impl FnMut(&Piece, usize)) {
-    let s2 = sym.row_len();
-    let (first, rows) = (t * sym.task_len() / s2, reals / (2 * s2));
+    let (s2, width) = (sym.row_len(), sym.width);
+    let (first, rows) = (t * sym.task_len() / s2, reals / (width * s2));
     let (rows_per_piece, parts) = if s2 <= PIECE {
         (PIECE / s2, 1)
     } else {
         (1, s2.div_ceil(PIECE))
     };
-    let mut piece = Piece::new();
+    let mut piece = Piece::new(width);
     for r0 in (0..rows).step_by(rows_per_piece) {
         for part in 0..parts {
             let (start, len) = (part * PIECE, PIECE.min(s2 - part * PIECE));
             for i in 0..rows_per_piece.min(rows - r0) {
                 fill_piece(&mut piece, sym, (first + r0 + i, start, len), i * len);
             }
-            f(&piece, 2 * (r0 * s2 + start));
+            f(&piece, width * (r0 * s2 + start));
         }
     }
 }
@@ -126,22 +162,29 @@ mod tests {
     use crate::grid::Grid;
     use crate::spectral::transform::Transform;
 
-    /// Every value of every task is visited once, in order, with its own |k|² and w: on rows
+    /// Every mode of every task is visited once, in order, with its own |k|² and w: on rows
     /// shorter than a piece (several rows a piece, the last piece short) and longer ones (a row
-    /// in parts).
+    /// in parts), of complex spectra and of packed ones (a real a mode, odd rows padded).
     #[test]
-    fn pieces_cover_each_value_once_with_its_symbols() {
-        for shape in [[40, 20, 48], [3, 2, 1200]] {
-            let grid = Grid::new(&shape, 1.0, &[false; 3]);
-            let t = Transform::new(shape, grid.kinds, 1);
+    fn pieces_cover_each_mode_once_with_its_symbols() {
+        // The last: a mirrored 12 × 16 × 82 box, 6 × 8 × 41 computed.
+        let cases = [
+            ([40, 20, 48], false),
+            ([3, 2, 1200], false),
+            ([12, 16, 82], true),
+        ];
+        for (shape, mirror) in cases {
+            let grid = Grid::new(&shape, 1.0, &[mirror; 3]);
+            let t = Transform::new(grid.shape, grid.kinds, 1);
             let sym = Symbols::new(&t, &grid, 1.0, Laplacian::Spectral);
-            let (s2, task) = (sym.row_len(), sym.task_len());
-            let total: usize = t.spectral_shape().iter().product();
+            assert_eq!(t.packed(), mirror);
+            let (s2, task, width) = (sym.row_len(), sym.task_len(), sym.width);
+            let total: usize = t.spectral_shape().iter().product::<usize>() * 2 / width;
             let mut next = 0;
             for first in (0..total).step_by(task) {
-                let reals = 2 * task.min(total - first);
+                let reals = width * task.min(total - first);
                 for_each_piece(&sym, first / task, reals, |p, at| {
-                    assert_eq!(first + at / 2, next, "pieces in order, none skipped");
+                    assert_eq!(first + at / width, next, "pieces in order, none skipped");
                     assert!(p.len <= PIECE);
                     for l in 0..p.len {
                         let i = next + l;

@@ -1,7 +1,7 @@
 //! Planned three-dimensional real transforms: FFT on periodic axes, DCT-II on mirror axes.
 //!
-//! A real field `x` of shape `[n0, n1, n2]` maps to a complex spectrum `X` of shape
-//! [`Transform::spectral_shape`]. Every axis contributes one factor of the separable kernel
+//! A real field `x` of shape `[n0, n1, n2]` maps to a spectrum `X` indexed by `[j0, j1, j2]`
+//! over [`Transform::index_shape`]. Every axis contributes one factor of the separable kernel
 //!
 //! * periodic axis of length `n`: `e^{−2πi j i / n}` (DFT); on the last axis the real-to-complex
 //!   half spectrum `j = 0..=n/2` is kept;
@@ -11,19 +11,28 @@
 //! The inverse is the exact inverse of the forward map (`1/n` per periodic axis, the DCT-III
 //! scaled by `1/m`, i.e. `x_i = (X_0 + 2 Σ_{j≥1} X_j cos(π j (2i+1)/(2m))) / m`, per mirror axis).
 //!
+//! **Storage.** The spectrum is held as complex values of shape [`Transform::spectral_shape`]:
+//! the index layout itself, except when every axis longer than 1 is a mirror axis. Then the
+//! spectrum is real, and it is *packed*: two consecutive reals of a row in one complex value,
+//! `Y[j0, j1, p] = X[j0, j1, 2p] + i X[j0, j1, 2p+1]` (the last imaginary part 0 when `n2` is
+//! odd), so that no sweep moves zeros. Every other operator of the program is a real, even
+//! function of k, which acts on a packed spectrum real by real ([`crate::spectral::pieces`]).
+//!
 //! Implementation: the last (contiguous) axis is transformed lane by lane with `realfft` (periodic)
 //! or, for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
-//! gathered a block of columns at a time into contiguous lanes, transformed with one batched
-//! `rustfft` call and scattered back. A DCT-II of length `m` is computed with one complex FFT of
-//! length `m` (Makhoul's even/odd reordering plus a twiddle); it is C-linear, so a complex lane
-//! holding two real lanes (or the real and imaginary parts of one complex lane) costs one FFT.
+//! transformed down the columns in place ([`super::columns`]) when their length is a product of
+//! 2s, 3s and 5s, and otherwise gathered a block of columns at a time into contiguous lanes,
+//! transformed with one batched `rustfft` call and scattered back. A DCT-II of length `m` is
+//! computed with one complex FFT of length `m` (Makhoul's even/odd reordering plus a twiddle); it
+//! is C-linear, so a complex lane holding two real lanes (or the real and imaginary parts of one
+//! complex lane) costs one FFT: a packed spectrum's columns are such lanes as they stand.
 //! All buffers live in the struct: a transform call allocates nothing.
 
 use std::f64::consts::PI;
 use std::fmt;
 use std::sync::Arc;
 
-use ndarray::{s, Array3, ArrayView2, ArrayViewMut2, ArrayViewMut3, Axis};
+use ndarray::{s, Array3, ArrayView2, ArrayView3, ArrayViewMut2, ArrayViewMut3, Axis};
 use rayon::prelude::*;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::num_complex::Complex64;
@@ -50,25 +59,6 @@ const LANE_PAD: usize = 4;
 enum Direction {
     Forward,
     Inverse,
-}
-
-/// How the columns of a strided stage map onto complex lanes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Packing {
-    /// One complex column per lane.
-    Complex,
-    /// The real parts of two adjacent columns form one lane (`re + i·re'`); imaginary parts are
-    /// zero and stay zero. Used when every transformed axis is a mirror axis.
-    RealPairs,
-}
-
-impl Packing {
-    fn columns_per_lane(self) -> usize {
-        match self {
-            Packing::Complex => 1,
-            Packing::RealPairs => 2,
-        }
-    }
 }
 
 /// A batched 1D kernel along one axis: a complex FFT (periodic) or a DCT-II/DCT-III computed with
@@ -265,13 +255,15 @@ enum LastAxis {
         r2c: Arc<dyn RealToComplex<f64>>,
         c2r: Arc<dyn ComplexToReal<f64>>,
     },
-    /// DCT-II (mirror axis), two real lanes per complex lane.
-    Mirror(LaneKernel),
+    /// DCT-II (mirror axis), two real rows per complex lane; their spectra written `packed`
+    /// (see the module documentation) or as complex values with zero imaginary parts.
+    Mirror { kernel: LaneKernel, packed: bool },
 }
 
 /// How a strided axis (0 or 1) is transformed.
 enum Strided {
-    /// Down the columns in place: a periodic axis whose length [`ColumnFft::new`] plans.
+    /// Down the columns in place: an axis whose length [`ColumnFft::new`] plans (periodic: an
+    /// FFT; mirror: a DCT, [`ColumnFft::new_dct`]).
     Columns(ColumnFft),
     /// Gathered into lanes, transformed by a batched kernel and scattered back.
     Lanes(LaneKernel),
@@ -285,8 +277,12 @@ impl Strided {
         shape: [usize; 3],
         kinds: [AxisKind; 3],
     ) -> Self {
-        let columns = (kinds[a] == AxisKind::Periodic).then(|| ColumnFft::new(shape[a]));
-        match columns.flatten() {
+        let n = shape[a];
+        let columns = match kinds[a] {
+            AxisKind::Periodic => ColumnFft::new(n),
+            AxisKind::Mirror => ColumnFft::new_dct(&makhoul_positions(n), dct_twiddle_table(n)),
+        };
+        match columns {
             Some(columns) => Strided::Columns(columns),
             None => Strided::Lanes(LaneKernel::new(planner, shape[a], kinds[a], true)),
         }
@@ -307,7 +303,8 @@ struct Plan {
     last: LastAxis,
     /// Kernels of axes 0 and 1; `None` for an axis of length 1 (identity).
     strided: [Option<Strided>; 2],
-    packing: Packing,
+    /// Whether the spectrum is real and packed (see the module documentation).
+    packed: bool,
 }
 
 /// A planned 3D real transform (FFT on periodic axes, DCT-II on mirror axes) with all scratch
@@ -340,6 +337,8 @@ impl Transform {
     pub fn new(shape: [usize; 3], kinds: [AxisKind; 3], threads: usize) -> Self {
         assert!(shape.iter().all(|&n| n > 0), "axes must not be empty");
         let mut planner = FftPlanner::new();
+        let packed = kinds[2] == AxisKind::Mirror
+            && (0..2).all(|a| shape[a] == 1 || kinds[a] == AxisKind::Mirror);
         let last = match kinds[2] {
             AxisKind::Periodic => {
                 let mut real = RealFftPlanner::new();
@@ -348,20 +347,18 @@ impl Transform {
                     c2r: real.plan_fft_inverse(shape[2]),
                 }
             }
-            AxisKind::Mirror => LastAxis::Mirror(LaneKernel::new(
-                &mut planner,
-                shape[2],
-                AxisKind::Mirror,
-                false,
-            )),
+            AxisKind::Mirror => LastAxis::Mirror {
+                kernel: LaneKernel::new(&mut planner, shape[2], AxisKind::Mirror, false),
+                packed,
+            },
         };
         let strided =
             [0, 1].map(|a| (shape[a] > 1).then(|| Strided::new(&mut planner, a, shape, kinds)));
-        let real_only = kinds[2] == AxisKind::Mirror
-            && (0..2).all(|a| shape[a] == 1 || kinds[a] == AxisKind::Mirror);
         let mut spectral = shape;
         if kinds[2] == AxisKind::Periodic {
             spectral[2] = shape[2] / 2 + 1;
+        } else if packed {
+            spectral[2] = shape[2].div_ceil(2);
         }
         let plan = Plan {
             shape,
@@ -369,11 +366,7 @@ impl Transform {
             spectral,
             last,
             strided,
-            packing: if real_only {
-                Packing::RealPairs
-            } else {
-                Packing::Complex
-            },
+            packed,
         };
         let works = (0..threads.max(1)).map(|_| plan.new_work()).collect();
         let slab = shape[1] * shape[2];
@@ -387,10 +380,81 @@ impl Transform {
         }
     }
 
-    /// Shape `[s0, s1, s2]` of the spectrum: `s_a = n_a`, except `s2 = n2/2 + 1` when axis 2
-    /// is periodic (real-to-complex half spectrum).
+    /// Shape `[s0, s1, s2]` of the spectrum as stored: `s_a = n_a`, except `s2 = n2/2 + 1` when
+    /// axis 2 is periodic (real-to-complex half spectrum) and `s2 = ⌈n2/2⌉` when the spectrum is
+    /// [packed](Transform::packed).
     pub fn spectral_shape(&self) -> [usize; 3] {
         self.plan.spectral
+    }
+
+    /// Shape of the spectral index range `[j0, j1, j2]`: the stored shape, or `[n0, n1, n2]`
+    /// for a packed spectrum.
+    pub fn index_shape(&self) -> [usize; 3] {
+        if self.plan.packed {
+            self.plan.shape
+        } else {
+            self.plan.spectral
+        }
+    }
+
+    /// Whether the spectrum is real and stored packed, two consecutive reals of a row in one
+    /// complex value (every axis longer than 1 a mirror axis; see the module documentation).
+    pub fn packed(&self) -> bool {
+        self.plan.packed
+    }
+
+    /// A stored spectrum in the index layout ([`Transform::index_shape`]; a packed one's reals
+    /// as complex values with zero imaginary parts).
+    ///
+    /// # Panics
+    /// If `y` does not have the spectral shape.
+    pub fn unpacked(&self, y: ArrayView3<Complex64>) -> Array3<Complex64> {
+        assert_eq!(y.shape(), self.plan.spectral, "spectrum shape");
+        if !self.plan.packed {
+            return y.to_owned();
+        }
+        Array3::from_shape_fn(self.plan.shape, |(i, j, k)| {
+            let v = y[(i, j, k / 2)];
+            Complex64::new(if k % 2 == 0 { v.re } else { v.im }, 0.0)
+        })
+    }
+
+    /// Inverse of [`Transform::unpacked`]: a spectrum in the index layout stored as this
+    /// transform stores it (a packed spectrum keeps only the real parts).
+    ///
+    /// # Panics
+    /// If `x` does not have the index shape or is not in standard layout.
+    pub fn packed_from(&self, x: ArrayView3<Complex64>) -> Array3<Complex64> {
+        assert_eq!(x.shape(), self.index_shape(), "spectrum shape");
+        let x = x.as_slice().expect("standard layout");
+        let packed = self.packed_reals::<f64>(bytemuck::cast_slice(x));
+        let values = bytemuck::cast_slice(&packed).to_vec();
+        Array3::from_shape_vec(self.plan.spectral, values).expect("the spectral shape")
+    }
+
+    /// [`Transform::packed_from`] on a spectrum given as interleaved (re, im) reals.
+    ///
+    /// # Panics
+    /// If `reals` does not hold a spectrum of the index shape.
+    pub fn packed_reals<T: Copy + Default>(&self, reals: &[T]) -> Vec<T> {
+        let index = self.index_shape();
+        assert_eq!(
+            reals.len(),
+            2 * index.iter().product::<usize>(),
+            "spectrum length"
+        );
+        if !self.plan.packed {
+            return reals.to_vec();
+        }
+        let (n2, s2) = (index[2], self.plan.spectral[2]);
+        let mut out = vec![T::default(); 2 * s2 * index[0] * index[1]];
+        for (row, packed) in reals.chunks_exact(2 * n2).zip(out.chunks_exact_mut(2 * s2)) {
+            packed
+                .iter_mut()
+                .zip(row.iter().step_by(2))
+                .for_each(|(p, &r)| *p = r);
+        }
+        out
     }
 
     /// Real-space shape `[n0, n1, n2]` this transform was planned for.
@@ -399,8 +463,8 @@ impl Transform {
     }
 
     /// Forward transform `X_j = Σ_i x_i Π_a K_a(j_a, i_a)` with `K = e^{−2πi j i/n}` on periodic
-    /// axes and `K = cos(π j (2i+1)/(2m))` on mirror axes.
-    /// When every axis longer than 1 is a mirror axis the spectrum is real (imaginary parts 0).
+    /// axes and `K = cos(π j (2i+1)/(2m))` on mirror axes. When every axis longer than 1 is a
+    /// mirror axis the spectrum is real, and written [packed](Transform::packed).
     ///
     /// `input` is used as scratch, as in [`Transform::inverse`]: its contents are garbage
     /// afterwards (the real-to-complex stage transforms each row in place instead of a copy).
@@ -433,12 +497,13 @@ impl Transform {
             plan.strided_pass(1, Direction::Forward, y, works);
         }
         plan.strided_pass(0, Direction::Forward, y, works);
+        plan.clear_padding(y);
     }
 
     /// Inverse transform: the exact inverse of [`Transform::forward`] (normalised by
     /// `1/(n0 n1 n2)`), returning the real part. Before the real-to-complex inverse the
     /// imaginary parts of the self-conjugate columns (`j2 = 0`, and `j2 = n2/2` for even `n2`)
-    /// are zeroed; on a mirror last axis only real parts are used.
+    /// are zeroed; on a mirror last axis only real parts are used (of a packed spectrum, both).
     ///
     /// `input` is used as scratch: its contents are garbage afterwards.
     ///
@@ -551,16 +616,20 @@ impl Transform {
         };
         plan.strided_pass(0, Direction::Forward, ya, works);
         plan.strided_pass(0, Direction::Forward, yb, works);
+        plan.clear_padding(ya);
+        plan.clear_padding(yb);
         Some(total)
     }
 
-    /// Signed wavenumber of every spectral index, per axis, for grid spacing `h`:
+    /// Signed wavenumber of every spectral index ([`Transform::index_shape`]), per axis, for
+    /// grid spacing `h`:
     /// periodic `k_j = 2π m_j/(n h)` with `m_j = j` for `j <= n/2` and `j − n` otherwise
     /// (`m_j = j` on a real-to-complex last axis); mirror `k_j = π j/(m h)`.
     pub fn wavenumbers(&self, h: f64) -> [Vec<f64>; 3] {
+        let range = self.index_shape();
         [0, 1, 2].map(|a| {
             let n = self.plan.shape[a];
-            (0..self.plan.spectral[a])
+            (0..range[a])
                 .map(|j| match self.plan.kinds[a] {
                     AxisKind::Mirror => PI * j as f64 / (n as f64 * h),
                     AxisKind::Periodic => {
@@ -576,15 +645,17 @@ impl Transform {
         })
     }
 
-    /// Per-axis weights with `Σ_x u v = Σ_k w0[k0] w1[k1] w2[k2] Re(U_k conj V_k)` for real
+    /// Per-axis weights over the spectral indices ([`Transform::index_shape`]) with
+    /// `Σ_x u v = Σ_k w0[k0] w1[k1] w2[k2] Re(U_k conj V_k)` for real
     /// fields `u, v` (in particular `Σ_x x² = Σ_k w |X_k|²`): `1/n` on a complex periodic axis;
     /// on a real-to-complex last axis `1/n` for `j = 0` and for `j = n/2` when `n` is even, `2/n`
     /// otherwise; on a mirror axis `1/m` for `j = 0` and `2/m` otherwise.
     pub fn parseval_weights(&self) -> [Vec<f64>; 3] {
+        let range = self.index_shape();
         [0, 1, 2].map(|a| {
             let n = self.plan.shape[a];
             let inv = 1.0 / n as f64;
-            (0..self.plan.spectral[a])
+            (0..range[a])
                 .map(|j| {
                     let doubled = match self.plan.kinds[a] {
                         AxisKind::Mirror => j > 0,
@@ -608,6 +679,8 @@ impl Transform {
     /// * Periodic last axis (real-to-complex half spectrum): the planes `j2 = 0` and `j2 = n2/2`
     ///   (even `n2`) are self-conjugate; the other planes hold independent coefficients.
     /// * Mirror last axis: every plane is self-conjugate (the DCT along axis 2 is real).
+    /// * A packed spectrum holds reals only: only an odd row's padding (the imaginary part of
+    ///   its last value) is set to 0.
     ///
     /// The inverse transform drops the part this removes, so a spectrum carried from step to step
     /// must be projected, or the dropped part grows unseen where the explicit tension term is
@@ -617,6 +690,11 @@ impl Transform {
     /// If `a` does not have the spectral shape.
     pub fn hermitian_symmetrize(&self, a: &mut Array3<Complex64>) {
         assert_eq!(a.shape(), self.plan.spectral, "spectrum shape");
+        if self.plan.packed {
+            self.plan
+                .clear_padding(a.as_slice_mut().expect("standard layout"));
+            return;
+        }
         if self.plan.kinds[2] == AxisKind::Mirror {
             self.symmetrize_lanes(a);
             return;
@@ -724,6 +802,16 @@ fn conjugate_mean(x: &mut Complex64, y: &mut Complex64) {
 }
 
 impl Plan {
+    /// Zero the padding of a packed spectrum with odd rows (the imaginary part of each row's
+    /// last value): the strided stages transform it with its column, and leave round-off there
+    /// that no sweep should carry.
+    fn clear_padding(&self, y: &mut [Complex64]) {
+        if self.packed && !self.shape[2].is_multiple_of(2) {
+            let s2 = self.spectral[2];
+            y.chunks_exact_mut(s2).for_each(|row| row[s2 - 1].im = 0.0);
+        }
+    }
+
     /// Scratch for one parallel chunk, sized for every stage.
     fn new_work(&self) -> Work {
         let (mut lanes, mut scratch) = (0, 0);
@@ -742,7 +830,7 @@ impl Plan {
                     .max(r2c.get_scratch_len())
                     .max(c2r.get_scratch_len());
             }
-            LastAxis::Mirror(k) => {
+            LastAxis::Mirror { kernel: k, .. } => {
                 lanes = lanes.max(k.batch * k.len);
                 scratch = scratch.max(k.scratch_len);
             }
@@ -762,7 +850,7 @@ impl Plan {
             self.last.forward_rows(xs, ys, n2, work);
             if let Some(kernel) = &self.strided[1] {
                 let slab = ArrayViewMut3::from_shape([1, n1, s2], ys).expect("slab shape");
-                strided_piece(slab, kernel, self.packing, Direction::Forward, work);
+                strided_piece(slab, kernel, Direction::Forward, work);
             }
         }
     }
@@ -774,7 +862,7 @@ impl Plan {
         for (ys, xs) in y.chunks_exact_mut(n1 * s2).zip(x.chunks_exact_mut(n1 * n2)) {
             if let Some(kernel) = &self.strided[1] {
                 let slab = ArrayViewMut3::from_shape([1, n1, s2], &mut *ys).expect("slab shape");
-                strided_piece(slab, kernel, self.packing, Direction::Inverse, work);
+                strided_piece(slab, kernel, Direction::Inverse, work);
             }
             self.last.inverse_rows(ys, xs, n2, scale, work);
         }
@@ -795,7 +883,7 @@ impl Plan {
         let mut view = ArrayViewMut3::from_shape(geometry, y).expect("spectrum shape");
         let threads = works.len();
         if threads == 1 {
-            strided_piece(view, kernel, self.packing, dir, &mut works[0]);
+            strided_piece(view, kernel, dir, &mut works[0]);
             return;
         }
         let (axis, chunk) = if geometry[0] >= threads {
@@ -807,7 +895,7 @@ impl Plan {
         view.axis_chunks_iter_mut(axis, chunk)
             .into_par_iter()
             .zip(works.par_iter_mut())
-            .for_each(|(piece, work)| strided_piece(piece, kernel, self.packing, dir, work));
+            .for_each(|(piece, work)| strided_piece(piece, kernel, dir, work));
     }
 }
 
@@ -823,13 +911,18 @@ impl LastAxis {
                         .expect("lengths fixed by the plan");
                 }
             }
-            LastAxis::Mirror(kernel) => {
-                let group = 2 * kernel.batch * n;
-                for (xg, yg) in x.chunks(group).zip(y.chunks_mut(group)) {
+            LastAxis::Mirror { kernel, packed } => {
+                let rows = 2 * kernel.batch;
+                let s = if *packed { n.div_ceil(2) } else { n };
+                for (xg, yg) in x.chunks(rows * n).zip(y.chunks_mut(rows * s)) {
                     let lanes = &mut work.lanes[..(xg.len() / n).div_ceil(2) * n];
                     pack_real_rows(xg, lanes, &kernel.pos);
                     kernel.apply(Direction::Forward, lanes, &mut work.scratch);
-                    unpack_to_complex_rows(lanes, yg, n);
+                    if *packed {
+                        unpack_to_packed_rows(lanes, yg, n);
+                    } else {
+                        unpack_to_complex_rows(lanes, yg, n);
+                    }
                 }
             }
         }
@@ -857,11 +950,16 @@ impl LastAxis {
                     xr.iter_mut().for_each(|v| *v *= scale);
                 }
             }
-            LastAxis::Mirror(kernel) => {
-                let group = 2 * kernel.batch * n;
-                for (yg, xg) in y.chunks(group).zip(x.chunks_mut(group)) {
-                    let lanes = &mut work.lanes[..(yg.len() / n).div_ceil(2) * n];
-                    pack_complex_rows(yg, lanes, n);
+            LastAxis::Mirror { kernel, packed } => {
+                let rows = 2 * kernel.batch;
+                let s = if *packed { n.div_ceil(2) } else { n };
+                for (yg, xg) in y.chunks(rows * s).zip(x.chunks_mut(rows * n)) {
+                    let lanes = &mut work.lanes[..(xg.len() / n).div_ceil(2) * n];
+                    if *packed {
+                        pack_packed_rows(yg, lanes, n);
+                    } else {
+                        pack_complex_rows(yg, lanes, n);
+                    }
                     kernel.apply(Direction::Inverse, lanes, &mut work.scratch);
                     unpack_to_real_rows(lanes, xg, &kernel.pos, scale);
                 }
@@ -901,6 +999,59 @@ fn unpack_to_complex_rows(lanes: &[Complex64], y: &mut [Complex64], n: usize) {
         b.iter_mut()
             .zip(lane)
             .for_each(|(v, z)| *v = Complex64::new(z.im, 0.0));
+    }
+}
+}
+
+wide_fn! {
+/// Unpack lanes of length `n` into packed rows of `y` (`⌈n/2⌉` values each): lane `l` gives row
+/// `2l` its real parts and row `2l+1` its imaginary parts, two consecutive values to a complex
+/// value (the last imaginary part 0 for odd `n`).
+fn unpack_to_packed_rows(lanes: &[Complex64], y: &mut [Complex64], n: usize) {
+    let s = n.div_ceil(2);
+    for (lane, rows) in lanes.chunks_exact(n).zip(y.chunks_mut(2 * s)) {
+        let (a, b) = rows.split_at_mut(s);
+        let (pairs, last) = lane.as_chunks::<2>();
+        if b.is_empty() {
+            for (a, [u, v]) in a.iter_mut().zip(pairs) {
+                *a = Complex64::new(u.re, v.re);
+            }
+        } else {
+            for ((a, b), [u, v]) in a.iter_mut().zip(b.iter_mut()).zip(pairs) {
+                (*a, *b) = (Complex64::new(u.re, v.re), Complex64::new(u.im, v.im));
+            }
+        }
+        if let [u] = last {
+            a[s - 1] = Complex64::new(u.re, 0.0);
+            if let Some(b) = b.last_mut() {
+                *b = Complex64::new(u.im, 0.0);
+            }
+        }
+    }
+}
+}
+
+wide_fn! {
+/// Inverse of [`unpack_to_packed_rows`]: packed rows `2l`, `2l+1` of `y` into lane `l` of
+/// length `n` (the first row's reals as its real parts, the second's as its imaginary parts).
+fn pack_packed_rows(y: &[Complex64], lanes: &mut [Complex64], n: usize) {
+    let s = n.div_ceil(2);
+    for (lane, rows) in lanes.chunks_exact_mut(n).zip(y.chunks(2 * s)) {
+        let (a, b) = rows.split_at(s);
+        let (pairs, last) = lane.as_chunks_mut::<2>();
+        if b.is_empty() {
+            for ([u, v], a) in pairs.iter_mut().zip(a) {
+                (*u, *v) = (Complex64::new(a.re, 0.0), Complex64::new(a.im, 0.0));
+            }
+        } else {
+            for ([u, v], (a, b)) in pairs.iter_mut().zip(a.iter().zip(b)) {
+                (*u, *v) = (Complex64::new(a.re, b.re), Complex64::new(a.im, b.im));
+            }
+        }
+        if let [u] = last {
+            let q = b.last().map_or(0.0, |b| b.re);
+            *u = Complex64::new(a[s - 1].re, q);
+        }
     }
 }
 }
@@ -946,7 +1097,6 @@ fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale:
 fn strided_piece(
     mut piece: ArrayViewMut3<Complex64>,
     strided: &Strided,
-    packing: Packing,
     dir: Direction,
     work: &mut Work,
 ) {
@@ -959,22 +1109,21 @@ fn strided_piece(
         }
         Strided::Lanes(kernel) => kernel,
     };
-    let per_lane = packing.columns_per_lane();
-    let columns = kernel.batch * per_lane;
+    let columns = kernel.batch;
     let (from, to) = kernel.orders(dir);
     for mut slab in piece.outer_iter_mut() {
         let width = slab.ncols();
         for c0 in (0..width).step_by(columns) {
             let mut block = slab.slice_mut(s![.., c0..(c0 + columns).min(width)]);
-            let lanes = &mut work.lanes[..block.ncols().div_ceil(per_lane) * kernel.stride];
-            if packing == Packing::Complex && kernel.twiddle.is_empty() {
+            let lanes = &mut work.lanes[..block.ncols() * kernel.stride];
+            if kernel.twiddle.is_empty() {
                 gather_in_order(block.view(), lanes, kernel.stride);
                 kernel.apply(dir, lanes, &mut work.scratch);
                 scatter_in_order(lanes, kernel.stride, block.view_mut());
             } else {
-                gather(block.view(), lanes, kernel.stride, from, packing);
+                gather(block.view(), lanes, kernel.stride, from);
                 kernel.apply(dir, lanes, &mut work.scratch);
-                scatter(lanes, kernel.stride, block.view_mut(), to, packing);
+                scatter(lanes, kernel.stride, block.view_mut(), to);
             }
         }
     }
@@ -982,33 +1131,12 @@ fn strided_piece(
 
 wide_fn! {
 /// Copy the columns of `block` into lanes `stride` apart: lane `l`, position `pos[i]` ← row `i`
-/// of column `l` (or of the real parts of columns `2l`, `2l+1` packed as `re + i·re'`).
-fn gather(
-    block: ArrayView2<Complex64>,
-    lanes: &mut [Complex64],
-    stride: usize,
-    pos: &[usize],
-    packing: Packing,
-) {
+/// of column `l`.
+fn gather(block: ArrayView2<Complex64>, lanes: &mut [Complex64], stride: usize, pos: &[usize]) {
     for (row, &p) in block.rows().into_iter().zip(pos) {
         let row = row.to_slice().expect("rows are contiguous");
-        match packing {
-            Packing::Complex => {
-                for (lane, &v) in lanes.chunks_exact_mut(stride).zip(row) {
-                    lane[p] = v;
-                }
-            }
-            Packing::RealPairs => {
-                let (pairs, last) = row.as_chunks::<2>();
-                let mut lanes = lanes.chunks_exact_mut(stride);
-                // The row's side first: a zip ends on it without taking the next lane.
-                for ([u, v], lane) in pairs.iter().zip(&mut lanes) {
-                    lane[p] = Complex64::new(u.re, v.re);
-                }
-                if let ([u], Some(lane)) = (last, lanes.next()) {
-                    lane[p] = Complex64::new(u.re, 0.0);
-                }
-            }
+        for (lane, &v) in lanes.chunks_exact_mut(stride).zip(row) {
+            lane[p] = v;
         }
     }
 }
@@ -1016,33 +1144,12 @@ fn gather(
 
 wide_fn! {
 /// Inverse of [`gather`]: write the lanes back into the columns of `block`.
-fn scatter(
-    lanes: &[Complex64],
-    stride: usize,
-    block: ArrayViewMut2<Complex64>,
-    pos: &[usize],
-    packing: Packing,
-) {
+fn scatter(lanes: &[Complex64], stride: usize, block: ArrayViewMut2<Complex64>, pos: &[usize]) {
     let mut block = block;
     for (row, &p) in block.rows_mut().into_iter().zip(pos) {
         let row = row.into_slice().expect("rows are contiguous");
-        match packing {
-            Packing::Complex => {
-                for (lane, v) in lanes.chunks_exact(stride).zip(row) {
-                    *v = lane[p];
-                }
-            }
-            Packing::RealPairs => {
-                let (pairs, last) = row.as_chunks_mut::<2>();
-                let mut lanes = lanes.chunks_exact(stride);
-                // The row's side first, as in `gather`.
-                for ([u, v], lane) in pairs.iter_mut().zip(&mut lanes) {
-                    (*u, *v) = (Complex64::new(lane[p].re, 0.0), Complex64::new(lane[p].im, 0.0));
-                }
-                if let ([u], Some(lane)) = (last, lanes.next()) {
-                    *u = Complex64::new(lane[p].re, 0.0);
-                }
-            }
+        for (lane, v) in lanes.chunks_exact(stride).zip(row) {
+            *v = lane[p];
         }
     }
 }
