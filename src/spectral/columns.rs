@@ -36,6 +36,7 @@
 
 use std::f64::consts::PI;
 
+use super::transform::{dct_twiddle_table, makhoul_positions};
 use ndarray::ArrayViewMut2;
 use rustfft::num_complex::Complex64;
 
@@ -106,13 +107,14 @@ impl ColumnFft {
 
     /// The plan of the DCT-II of columns of length `n` (forward, `X_k = Σ_i x_i cos(πk(2i+1)/(2n))`)
     /// and of its inverse up to the factor `n` (the lanes route's: inverse ∘ forward = n), on
-    /// the same conditions as [`ColumnFft::new`]. `positions[i]` is data row `i`'s lane
-    /// position in Makhoul's order, `twiddle[k]` = e^{−iπk/(2n)}.
-    pub fn new_dct(positions: &[usize], twiddle: Vec<Complex64>) -> Option<Self> {
-        let n = positions.len();
+    /// the same conditions as [`ColumnFft::new`], with the lanes route's Makhoul order and
+    /// twiddles.
+    pub fn new_dct(n: usize) -> Option<Self> {
         let mut plan = ColumnFft::new(n)?;
         let mut rows = vec![0; n];
+        let positions = makhoul_positions(n);
         positions.iter().enumerate().for_each(|(i, &p)| rows[p] = i);
+        let twiddle = dct_twiddle_table(n);
         plan.dct = Some(Dct { rows, twiddle });
         Some(plan)
     }
@@ -205,41 +207,39 @@ impl ColumnFft {
             order: std::ptr::null(),
         });
         let last = self.stages.len() - 1;
-        let Some(dct) = &self.dct else {
-            for (k, stage) in self.stages.iter().enumerate() {
-                let src = if k == 0 { rows } else { buffers[(k - 1) % 2] };
-                let dst = if k == last { rows } else { buffers[k % 2] };
-                // SAFETY: the caller's conditions; every row index a stage forms is below n.
-                unsafe { stage.run::<V>(inverse, src, dst, width) };
-            }
-            return;
-        };
         // A DCT reads its rows in Makhoul's order (forward) or writes them back in data order,
         // and twiddles on the way between the rows and a buffer: forward, the last stage writes
         // a buffer that the twiddle takes to the rows; inverse, the twiddle takes the rows to
         // the buffer that the first stage reads (the one stage 0 does not write).
-        let reordered = Rows {
-            order: dct.rows.as_ptr(),
-            ..rows
+        let (first, final_rows) = match &self.dct {
+            None => (rows, rows),
+            Some(dct) => {
+                let reordered = Rows {
+                    order: dct.rows.as_ptr(),
+                    ..rows
+                };
+                if inverse {
+                    (buffers[1], reordered)
+                } else {
+                    (reordered, buffers[last % 2])
+                }
+            }
         };
-        if inverse {
+        if let (Some(dct), true) = (&self.dct, inverse) {
             // SAFETY: the caller's conditions (buffer 1 holds n rows of `width`).
             unsafe { dct.twiddle_rows::<V, false>(rows, buffers[1], width) };
         }
         for (k, stage) in self.stages.iter().enumerate() {
-            let src = match k {
-                0 if inverse => buffers[1],
-                0 => reordered,
-                _ => buffers[(k - 1) % 2],
-            };
-            let dst = match k == last {
-                true if inverse => reordered,
-                _ => buffers[k % 2],
+            let src = if k == 0 { first } else { buffers[(k - 1) % 2] };
+            let dst = if k == last {
+                final_rows
+            } else {
+                buffers[k % 2]
             };
             // SAFETY: the caller's conditions; every row index a stage forms is below n.
             unsafe { stage.run::<V>(inverse, src, dst, width) };
         }
-        if !inverse {
+        if let (Some(dct), false) = (&self.dct, inverse) {
             // SAFETY: the caller's conditions.
             unsafe { dct.twiddle_rows::<V, true>(buffers[last % 2], rows, width) };
         }
@@ -265,33 +265,29 @@ impl Dct {
     unsafe fn twiddle_rows<V: Vector, const POST: bool>(&self, src: Rows, dst: Rows, width: usize) {
         let n = self.rows.len();
         let pair = dct_pair::<V, POST>;
+        // The row's registers: (first column, values), the last one partly filled.
+        let registers = (0..width)
+            .step_by(V::VALUES)
+            .map(|c| (c, V::VALUES.min(width - c)));
         // SAFETY (the loops): every row formed is below n, every column below width.
-        let copy = |i: usize| unsafe {
-            let (from, to) = (src.at(i, 0), dst.at(i, 0));
-            for c in (0..width).step_by(V::VALUES) {
-                let count = V::VALUES.min(width - c);
+        unsafe {
+            let (from, to) = (src.at(0, 0), dst.at(0, 0));
+            for (c, count) in registers.clone() {
                 V::load(from.add(c), count).store(to.add(c), count);
             }
-        };
-        copy(0);
-        for k in 1..=n.saturating_sub(1) / 2 {
-            unsafe {
+            for k in 1..=n.saturating_sub(1) / 2 {
                 let (ra, rb) = (src.at(k, 0), src.at(n - k, 0));
                 let (wa, wb) = (dst.at(k, 0), dst.at(n - k, 0));
-                for c in (0..width).step_by(V::VALUES) {
-                    let count = V::VALUES.min(width - c);
+                for (c, count) in registers.clone() {
                     let (a, b) = (V::load(ra.add(c), count), V::load(rb.add(c), count));
                     let (x, y) = pair(self.twiddle[k], a, b);
                     x.store(wa.add(c), count);
                     y.store(wb.add(c), count);
                 }
             }
-        }
-        if n.is_multiple_of(2) {
-            unsafe {
+            if n.is_multiple_of(2) {
                 let (r, w) = (src.at(n / 2, 0), dst.at(n / 2, 0));
-                for c in (0..width).step_by(V::VALUES) {
-                    let count = V::VALUES.min(width - c);
+                for (c, count) in registers {
                     let v = V::load(r.add(c), count);
                     pair(self.twiddle[n / 2], v, v).1.store(w.add(c), count);
                 }
@@ -767,13 +763,7 @@ mod tests {
         for n in [
             2, 3, 4, 5, 6, 8, 9, 12, 16, 20, 24, 25, 27, 32, 40, 48, 64, 75, 96,
         ] {
-            let positions: Vec<usize> = (0..n)
-                .map(|i| if i % 2 == 0 { i / 2 } else { n - 1 - i / 2 })
-                .collect();
-            let twiddle = (0..n)
-                .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * n) as f64))
-                .collect();
-            let dct = ColumnFft::new_dct(&positions, twiddle).expect("a product of 2s, 3s, 5s");
+            let dct = ColumnFft::new_dct(n).expect("a product of 2s, 3s and 5s");
             let mut scratch = vec![Complex64::default(); dct.scratch_len()];
             // X_k = Σ_i x_i cos(πk(2i+1)/(2n)).
             let naive_dct = |b: &Array2<Complex64>, c: usize| -> Vec<Complex64> {

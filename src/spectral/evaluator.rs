@@ -105,12 +105,11 @@ pub struct Symbols {
 impl Symbols {
     /// The tables of transform `t` on `grid`.
     pub fn new(t: &Transform, grid: &Grid, eps: f64, laplacian: Laplacian) -> Self {
-        let k2 = t.wavenumbers(grid.h).map(|ks| {
+        let mut k2 = t.wavenumbers(grid.h).map(|ks| {
             ks.iter()
                 .map(|&k| axis_symbol(k, grid.h, laplacian))
                 .collect::<Vec<f64>>()
         });
-        let mut k2 = k2;
         let mut weight = t.parseval_weights();
         let dv = grid.cell_volume() * grid.mirror_factor();
         weight[0].iter_mut().for_each(|w| *w *= dv);

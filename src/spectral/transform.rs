@@ -142,14 +142,14 @@ impl LaneKernel {
 
 /// Makhoul's reordering for the DCT through an FFT: data index `i` goes to lane position
 /// `i/2` when even and `m − 1 − (i−1)/2` when odd.
-fn makhoul_positions(m: usize) -> Vec<usize> {
+pub(super) fn makhoul_positions(m: usize) -> Vec<usize> {
     (0..m)
         .map(|i| if i % 2 == 0 { i / 2 } else { m - 1 - i / 2 })
         .collect()
 }
 
 /// The DCT twiddles `w_k = e^{−iπk/(2m)}`, k = 0..m, of a lane of m values.
-fn dct_twiddle_table(m: usize) -> Vec<Complex64> {
+pub(super) fn dct_twiddle_table(m: usize) -> Vec<Complex64> {
     (0..m)
         .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * m) as f64))
         .collect()
@@ -280,11 +280,11 @@ impl Strided {
         let n = shape[a];
         let columns = match kinds[a] {
             AxisKind::Periodic => ColumnFft::new(n),
-            AxisKind::Mirror => ColumnFft::new_dct(&makhoul_positions(n), dct_twiddle_table(n)),
+            AxisKind::Mirror => ColumnFft::new_dct(n),
         };
         match columns {
             Some(columns) => Strided::Columns(columns),
-            None => Strided::Lanes(LaneKernel::new(planner, shape[a], kinds[a], true)),
+            None => Strided::Lanes(LaneKernel::new(planner, n, kinds[a], true)),
         }
     }
 }
