@@ -3,14 +3,15 @@
 //!
 //! Each column `x_i` (`i = 0..n`, row `i` of the block) becomes `X_j = Σ_i x_i e^{∓2πi j i/n}`
 //! (`−` forward, `+` inverse, unnormalised, as `rustfft`). The algorithm is Stockham's
-//! self-sorting decimation in frequency with radices 4, 3, 2 and 5: a stage of radix `R` on
+//! self-sorting decimation in frequency with radices 8, 4, 2, 3 and 5: a stage of radix `R` on
 //! sub-sequences of length `L` (stride `s = n/L`, `m = L/R`) maps, for `p < m`, `q < s`,
 //!
 //! ```text
 //! y[q + s (R p + r)] = w_L^{p r} Σ_l x[q + s (p + m l)] w_R^{l r},   w_L = e^{∓2πi/L},
 //! ```
 //!
-//! and the last stage leaves the spectrum in natural order. A stage reads and writes whole rows
+//! and the last stage leaves the spectrum in natural order. Radix 8 comes first: a column of 64
+//! takes two stages, through one buffer, instead of three radix-4 stages through two. A stage reads and writes whole rows
 //! of a block of columns, so every operation acts on two columns at once (AVX2/FMA registers of
 //! two complex values). The first stage reads the strided block, the last writes it, and the
 //! stages between work in two small contiguous buffers that stay in L1. While a block is
@@ -296,14 +297,18 @@ impl Dct {
     }
 }
 
-/// The radices of the stages for length `n`: 4s, then a 2 if one is left, then 3s, then 5s;
+/// The radices of the stages for length `n`: 8s, then a 4 or a 2 if one is left, then 3s, then 5s;
 /// `None` if `n < 2` or `n` has another prime factor.
 fn radices(n: usize) -> Option<Vec<usize>> {
     if n < 2 {
         return None;
     }
     let (mut rest, mut radices) = (n, Vec::new());
-    while rest.is_multiple_of(4) {
+    while rest.is_multiple_of(8) {
+        radices.push(8);
+        rest /= 8;
+    }
+    if rest.is_multiple_of(4) {
         radices.push(4);
         rest /= 4;
     }
@@ -375,6 +380,8 @@ impl Stage {
         // SAFETY: the caller's conditions.
         unsafe {
             match (self.radix, inverse) {
+                (8, false) => self.butterflies::<V, 8, false>(src, dst, width),
+                (8, true) => self.butterflies::<V, 8, true>(src, dst, width),
                 (4, false) => self.butterflies::<V, 4, false>(src, dst, width),
                 (4, true) => self.butterflies::<V, 4, true>(src, dst, width),
                 (3, false) => self.butterflies::<V, 3, false>(src, dst, width),
@@ -461,17 +468,42 @@ unsafe fn butterfly<V: Vector, const R: usize, const INVERSE: bool>(
     }
 }
 
-/// The `R`-point DFT `Σ_l x_l w_R^{l r}`, `w_R = e^{∓2πi/R}` (`R` = 2, 3 or 4).
+/// The `R`-point DFT `Σ_l x_l w_R^{l r}`, `w_R = e^{∓2πi/R}` (`R` = 2, 3, 4, 5 or 8).
 #[inline(always)]
 fn dft<V: Vector, const R: usize, const INVERSE: bool>(x: [V; R]) -> [V; R] {
     let mut out = x;
     match R {
+        8 => out.copy_from_slice(&radix8(
+            INVERSE,
+            [x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7]],
+        )),
         4 => out.copy_from_slice(&radix4(INVERSE, [x[0], x[1], x[2], x[3]])),
         3 => out.copy_from_slice(&radix3(INVERSE, [x[0], x[1], x[2]])),
         5 => out.copy_from_slice(&radix5(INVERSE, [x[0], x[1], x[2], x[3], x[4]])),
         _ => out.copy_from_slice(&[x[0].add(x[1]), x[0].sub(x[1])]),
     }
     out
+}
+
+/// The 8-point DFT `Σ_l x_l w_8^{l r}`, `w_8 = e^{∓iπ/4}`, as two 4-point DFTs: with
+/// aₖ = xₖ + xₖ₊₄ and bₖ = (xₖ − xₖ₊₄) w_8^k (k < 4), `X_{2r} = Σₖ aₖ w_4^{k r}` and
+/// `X_{2r+1} = Σₖ bₖ w_4^{k r}` (since w_8^{4(2r+1)} = −1).
+#[inline(always)]
+fn radix8<V: Vector>(inverse: bool, x: [V; 8]) -> [V; 8] {
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let sign = if inverse { 1.0 } else { -1.0 };
+    let (w1, w3) = (Complex64::new(h, sign * h), Complex64::new(-h, sign * h));
+    let a: [V; 4] = std::array::from_fn(|k| x[k].add(x[k + 4]));
+    let d: [V; 4] = std::array::from_fn(|k| x[k].sub(x[k + 4]));
+    // w_8² = ∓i.
+    let d2 = if inverse {
+        d[2].times_i()
+    } else {
+        d[2].times_minus_i()
+    };
+    let even = radix4(inverse, a);
+    let odd = radix4(inverse, [d[0], d[1].times(w1), d2, d[3].times(w3)]);
+    std::array::from_fn(|j| if j % 2 == 0 { even[j / 2] } else { odd[j / 2] })
 }
 
 /// The 4-point DFT `Σ_l x_l w_4^{l r}`, `w_4 = ∓i`.
@@ -792,7 +824,8 @@ mod tests {
         for n in [0, 1, 7, 14, 33, 98, 121] {
             assert!(radices(n).is_none(), "n = {n}");
         }
-        assert_eq!(radices(96), Some(vec![4, 4, 2, 3]));
+        assert_eq!(radices(96), Some(vec![8, 4, 3]));
+        assert_eq!(radices(128), Some(vec![8, 8, 2]));
         assert_eq!(radices(150), Some(vec![2, 3, 5, 5]));
     }
 }

@@ -5,6 +5,7 @@ pub mod engine;
 pub mod evaluator;
 pub(crate) mod kernels;
 pub(crate) mod pieces;
+pub(crate) mod real_rows;
 pub(crate) mod saved;
 pub mod transform;
 

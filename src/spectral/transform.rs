@@ -18,8 +18,8 @@
 //! odd), so that no sweep moves zeros. Every other operator of the program is a real, even
 //! function of k, which acts on a packed spectrum real by real ([`crate::spectral::pieces`]).
 //!
-//! Implementation: the last (contiguous) axis is transformed lane by lane with `realfft` (periodic)
-//! or, for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
+//! Implementation: the last (contiguous) axis is transformed row by row, periodic through a
+//! complex FFT of half its length ([`super::real_rows`]; `realfft` when the length is odd) or, for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
 //! transformed down the columns in place ([`super::columns`]) when their length is a product of
 //! 2s, 3s and 5s, and otherwise gathered a block of columns at a time into contiguous lanes,
 //! transformed with one batched `rustfft` call and scattered back. A DCT-II of length `m` is
@@ -40,6 +40,7 @@ use rustfft::{Fft, FftPlanner};
 
 use super::columns::ColumnFft;
 use super::kernels::wide_fn;
+use super::real_rows::RealRows;
 use crate::grid::AxisKind;
 use crate::private::Private;
 
@@ -250,7 +251,9 @@ fn times_i(z: Complex64) -> Complex64 {
 
 /// The transform along the last (contiguous) axis.
 enum LastAxis {
-    /// Real-to-complex FFT (periodic axis).
+    /// Real-to-complex FFT of even rows through a half-length complex FFT (periodic axis).
+    Halved(RealRows),
+    /// Real-to-complex FFT by `realfft` (periodic axis of odd length, or no AVX2).
     Real {
         r2c: Arc<dyn RealToComplex<f64>>,
         c2r: Arc<dyn ComplexToReal<f64>>,
@@ -340,13 +343,16 @@ impl Transform {
         let packed = kinds[2] == AxisKind::Mirror
             && (0..2).all(|a| shape[a] == 1 || kinds[a] == AxisKind::Mirror);
         let last = match kinds[2] {
-            AxisKind::Periodic => {
-                let mut real = RealFftPlanner::new();
-                LastAxis::Real {
-                    r2c: real.plan_fft_forward(shape[2]),
-                    c2r: real.plan_fft_inverse(shape[2]),
+            AxisKind::Periodic => match RealRows::new(&mut planner, shape[2]) {
+                Some(rows) => LastAxis::Halved(rows),
+                None => {
+                    let mut real = RealFftPlanner::new();
+                    LastAxis::Real {
+                        r2c: real.plan_fft_forward(shape[2]),
+                        c2r: real.plan_fft_inverse(shape[2]),
+                    }
                 }
-            }
+            },
             AxisKind::Mirror => LastAxis::Mirror {
                 kernel: LaneKernel::new(&mut planner, shape[2], AxisKind::Mirror, false),
                 packed,
@@ -825,6 +831,7 @@ impl Plan {
             }
         }
         match &self.last {
+            LastAxis::Halved(rows) => scratch = scratch.max(rows.scratch_len()),
             LastAxis::Real { r2c, c2r } => {
                 scratch = scratch
                     .max(r2c.get_scratch_len())
@@ -904,6 +911,7 @@ impl LastAxis {
     /// as scratch).
     fn forward_rows(&self, x: &mut [f64], y: &mut [Complex64], n: usize, work: &mut Work) {
         match self {
+            LastAxis::Halved(rows) => rows.forward(x, y, &mut work.scratch),
             LastAxis::Real { r2c, .. } => {
                 let scratch = &mut work.scratch[..r2c.get_scratch_len()];
                 for (xr, yr) in x.chunks_exact_mut(n).zip(y.chunks_exact_mut(n / 2 + 1)) {
@@ -938,6 +946,7 @@ impl LastAxis {
         work: &mut Work,
     ) {
         match self {
+            LastAxis::Halved(rows) => rows.inverse(y, x, scale, &mut work.scratch),
             LastAxis::Real { c2r, .. } => {
                 let scratch = &mut work.scratch[..c2r.get_scratch_len()];
                 for (yr, xr) in y.chunks_exact_mut(n / 2 + 1).zip(x.chunks_exact_mut(n)) {
