@@ -977,23 +977,31 @@ impl LastAxis {
     }
 }
 
-wide_fn! {
-/// Pack real rows `2l`, `2l+1` of `x` into lane `l` as `x_{2l} + i x_{2l+1}` (reordered by `pos`).
+/// Pack real rows `2l`, `2l+1` of `x` into lane `l` as `x_{2l} + i x_{2l+1}` (reordered by `pos`,
+/// Makhoul's order). With AVX, four data values of each row at a time ([`avx::makhoul_pack`]:
+/// the same values, moved).
 fn pack_real_rows(x: &[f64], lanes: &mut [Complex64], pos: &[usize]) {
     let n = pos.len();
+    let wide = has_avx();
     for (lane, pair) in lanes.chunks_exact_mut(n).zip(x.chunks(2 * n)) {
         let (a, b) = pair.split_at(n);
         if b.is_empty() {
             a.iter()
                 .zip(pos)
                 .for_each(|(&u, &p)| lane[p] = Complex64::new(u, 0.0));
-        } else {
-            for ((&u, &v), &p) in a.iter().zip(b).zip(pos) {
-                lane[p] = Complex64::new(u, v);
-            }
+            continue;
+        }
+        let from = match wide {
+            // SAFETY: the CPU has AVX; `pos` is Makhoul's order of a lane of n values (the only
+            // order of a mirror last axis), and `a`, `b`, `lane` hold n values.
+            #[cfg(target_arch = "x86_64")]
+            true => unsafe { avx::makhoul_pack(a, b, lane) },
+            _ => 0,
+        };
+        for ((&u, &v), &p) in a[from..].iter().zip(&b[from..]).zip(&pos[from..]) {
+            lane[p] = Complex64::new(u, v);
         }
     }
-}
 }
 
 wide_fn! {
@@ -1083,21 +1091,29 @@ fn pack_complex_rows(y: &[Complex64], lanes: &mut [Complex64], n: usize) {
 }
 }
 
-wide_fn! {
-/// Unpack lane `l` (reordered by `pos`) into real rows `2l` (real part) and `2l+1` (imaginary
-/// part) of `x`, times `scale`.
+/// Unpack lane `l` (reordered by `pos`, Makhoul's order) into real rows `2l` (real part) and
+/// `2l+1` (imaginary part) of `x`, times `scale`. With AVX, four data values of each row at a
+/// time ([`avx::makhoul_unpack`]: the same products).
 fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale: f64) {
     let n = pos.len();
+    let wide = has_avx();
     for (lane, pair) in lanes.chunks_exact(n).zip(x.chunks_mut(2 * n)) {
         let (a, b) = pair.split_at_mut(n);
-        a.iter_mut()
-            .zip(pos)
+        let from = match wide && !b.is_empty() {
+            // SAFETY: as in `pack_real_rows`.
+            #[cfg(target_arch = "x86_64")]
+            true => unsafe { avx::makhoul_unpack(lane, a, b, scale) },
+            _ => 0,
+        };
+        a[from..]
+            .iter_mut()
+            .zip(&pos[from..])
             .for_each(|(u, &p)| *u = scale * lane[p].re);
-        b.iter_mut()
-            .zip(pos)
+        b[from..]
+            .iter_mut()
+            .zip(&pos[from..])
             .for_each(|(v, &p)| *v = scale * lane[p].im);
     }
-}
 }
 
 /// Transform a piece `[outer, len, width]` of the spectrum along its middle axis: down the
@@ -1223,6 +1239,74 @@ fn scatter_in_order(lanes: &[Complex64], stride: usize, mut block: ArrayViewMut2
 mod avx {
     use rustfft::num_complex::Complex64;
     use std::arch::x86_64::*;
+
+    /// Makhoul's packing of the real rows `a`, `b` (n values each) into `lane`: data values
+    /// 2p … 2p + 3 of both rows at a time, `lane[p], lane[p+1] = (a + ib)_{2p}, (a + ib)_{2p+2}`
+    /// and `lane[n−1−p], lane[n−2−p] = (a + ib)_{2p+1}, (a + ib)_{2p+3}`, while 2p + 4 ≤ n;
+    /// returns the first data index not done.
+    ///
+    /// # Safety
+    /// The CPU has AVX; `a`, `b` and `lane` hold n values.
+    #[target_feature(enable = "avx")]
+    pub unsafe fn makhoul_pack(a: &[f64], b: &[f64], lane: &mut [Complex64]) -> usize {
+        let n = a.len();
+        assert!(b.len() == n && lane.len() == n);
+        let (ap, bp, lp) = (a.as_ptr(), b.as_ptr(), lane.as_mut_ptr().cast::<f64>());
+        let mut p = 0;
+        while 2 * p + 4 <= n {
+            // SAFETY: 2p + 3 < n, and lane positions p + 1 < n − 2 − p < n.
+            unsafe {
+                let (x, y) = (
+                    _mm256_loadu_pd(ap.add(2 * p)),
+                    _mm256_loadu_pd(bp.add(2 * p)),
+                );
+                _mm256_storeu_pd(lp.add(2 * p), _mm256_unpacklo_pd(x, y));
+                let odd = _mm256_unpackhi_pd(x, y);
+                let odd = _mm256_permute2f128_pd(odd, odd, 1);
+                _mm256_storeu_pd(lp.add(2 * (n - 2 - p)), odd);
+            }
+            p += 2;
+        }
+        2 * p
+    }
+
+    /// The inverse of [`makhoul_pack`] times `scale`: data values 2p … 2p + 3 of `a` (real
+    /// parts) and `b` (imaginary parts) from lane positions p, n − 1 − p, p + 1, n − 2 − p,
+    /// while 2p + 4 ≤ n; returns the first data index not done.
+    ///
+    /// # Safety
+    /// As for [`makhoul_pack`].
+    #[target_feature(enable = "avx")]
+    pub unsafe fn makhoul_unpack(
+        lane: &[Complex64],
+        a: &mut [f64],
+        b: &mut [f64],
+        scale: f64,
+    ) -> usize {
+        let n = a.len();
+        assert!(b.len() == n && lane.len() == n);
+        let (lp, ap, bp) = (lane.as_ptr().cast::<f64>(), a.as_mut_ptr(), b.as_mut_ptr());
+        let s = _mm256_set1_pd(scale);
+        let mut p = 0;
+        while 2 * p + 4 <= n {
+            // SAFETY: as in `makhoul_pack`.
+            unsafe {
+                let low = _mm256_loadu_pd(lp.add(2 * p));
+                let high = _mm256_loadu_pd(lp.add(2 * (n - 2 - p)));
+                let high = _mm256_permute2f128_pd(high, high, 1);
+                _mm256_storeu_pd(
+                    ap.add(2 * p),
+                    _mm256_mul_pd(s, _mm256_unpacklo_pd(low, high)),
+                );
+                _mm256_storeu_pd(
+                    bp.add(2 * p),
+                    _mm256_mul_pd(s, _mm256_unpackhi_pd(low, high)),
+                );
+            }
+            p += 2;
+        }
+        2 * p
+    }
 
     /// The DCT twiddle ([`super::dct_post_pair`] when `POST`, else [`super::dct_pre_pair`]) on
     /// the pairs (k, m − k) of one lane of m values, two values of k at a time for k = 1, 2, …
