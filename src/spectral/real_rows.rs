@@ -26,8 +26,8 @@ use std::sync::Arc;
 use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftPlanner};
 
-/// Rows transformed by one call of the complex FFT (rows of 64 reals: 16 KiB, in L1 with the
-/// split's output).
+/// Rows transformed by one call of the complex FFT (16 rows of 64 reals and their spectra take
+/// 16 KiB, so the split reads what the FFT left in L1).
 const GROUP: usize = 16;
 
 /// A planned real FFT of rows of even length `n`.
