@@ -40,9 +40,9 @@ pub struct RealRows {
 }
 
 impl RealRows {
-    /// The plan for rows of length `n`, if `n` is even and the CPU has AVX2 and FMA.
+    /// The plan for rows of length `n`, if `n ≥ 2` is even and the CPU has AVX2 and FMA.
     pub fn new(planner: &mut FftPlanner<f64>, n: usize) -> Option<Self> {
-        if !n.is_multiple_of(2) || !super::kernels::has_avx2_fma() {
+        if n < 2 || !n.is_multiple_of(2) || !super::kernels::has_avx2_fma() {
             return None;
         }
         let m = n / 2;
@@ -114,7 +114,7 @@ fn split(z: &[Complex64], y: &mut [Complex64], w: &[Complex64]) {
     let m = z.len();
     y[0] = Complex64::new(z[0].re + z[0].im, 0.0);
     y[m] = Complex64::new(z[0].re - z[0].im, 0.0);
-    if m.is_multiple_of(2) && m > 0 {
+    if m.is_multiple_of(2) {
         y[m / 2] = z[m / 2].conj();
     }
     // SAFETY: plans exist only when the CPU has AVX2 and FMA (`RealRows::new`).
@@ -123,8 +123,9 @@ fn split(z: &[Complex64], y: &mut [Complex64], w: &[Complex64]) {
     #[cfg(not(target_arch = "x86_64"))]
     let mut k = 1;
     while 2 * k < m {
-        let (e, o) = halves(z[k], z[m - k].conj());
-        let o = Complex64::new(o.im, -o.re);
+        let (a, b) = (z[k], z[m - k].conj());
+        let (e, d) = ((a + b) * 0.5, (a - b) * 0.5);
+        let o = Complex64::new(d.im, -d.re);
         let t = w[k] * o;
         y[k] = e + t;
         y[m - k] = (e - t).conj();
@@ -137,7 +138,7 @@ fn merge(y: &[Complex64], z: &mut [Complex64], w: &[Complex64], s: f64) {
     let m = z.len();
     let (a, b) = (y[0].re, y[m].re);
     z[0] = Complex64::new(s * (a + b), s * (a - b));
-    if m.is_multiple_of(2) && m > 0 {
+    if m.is_multiple_of(2) {
         z[m / 2] = y[m / 2].conj() * (2.0 * s);
     }
     // SAFETY: as in `split`.
@@ -153,12 +154,6 @@ fn merge(y: &[Complex64], z: &mut [Complex64], w: &[Complex64], s: f64) {
         z[m - k] = (e - io).conj();
         k += 1;
     }
-}
-
-/// `((a + b)/2, (a − b)/2)`.
-#[inline(always)]
-fn halves(a: Complex64, b: Complex64) -> (Complex64, Complex64) {
-    ((a + b) * 0.5, (a - b) * 0.5)
 }
 
 #[cfg(target_arch = "x86_64")]

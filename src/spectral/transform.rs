@@ -19,7 +19,8 @@
 //! function of k, which acts on a packed spectrum real by real ([`crate::spectral::pieces`]).
 //!
 //! Implementation: the last (contiguous) axis is transformed row by row, periodic through a
-//! complex FFT of half its length ([`super::real_rows`]; `realfft` when the length is odd) or, for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
+//! complex FFT of half its length ([`super::real_rows`]; `realfft` when the length is odd) or,
+//! for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
 //! transformed down the columns in place ([`super::columns`]) when their length is a product of
 //! 2s, 3s and 5s, and otherwise gathered a block of columns at a time into contiguous lanes,
 //! transformed with one batched `rustfft` call and scattered back. A DCT-II of length `m` is
@@ -144,9 +145,17 @@ impl LaneKernel {
 /// Makhoul's reordering for the DCT through an FFT: data index `i` goes to lane position
 /// `i/2` when even and `m − 1 − (i−1)/2` when odd.
 pub(super) fn makhoul_positions(m: usize) -> Vec<usize> {
-    (0..m)
-        .map(|i| if i % 2 == 0 { i / 2 } else { m - 1 - i / 2 })
-        .collect()
+    (0..m).map(|i| makhoul_position(i, m)).collect()
+}
+
+/// Lane position of data index `i` in a lane of `m` values ([`makhoul_positions`]).
+#[inline(always)]
+fn makhoul_position(i: usize, m: usize) -> usize {
+    if i.is_multiple_of(2) {
+        i / 2
+    } else {
+        m - 1 - i / 2
+    }
 }
 
 /// The DCT twiddles `w_k = e^{−iπk/(2m)}`, k = 0..m, of a lane of m values.
@@ -924,7 +933,7 @@ impl LastAxis {
                 let s = if *packed { n.div_ceil(2) } else { n };
                 for (xg, yg) in x.chunks(rows * n).zip(y.chunks_mut(rows * s)) {
                     let lanes = &mut work.lanes[..(xg.len() / n).div_ceil(2) * n];
-                    pack_real_rows(xg, lanes, &kernel.pos);
+                    pack_real_rows(xg, lanes, n);
                     kernel.apply(Direction::Forward, lanes, &mut work.scratch);
                     if *packed {
                         unpack_to_packed_rows(lanes, yg, n);
@@ -970,36 +979,34 @@ impl LastAxis {
                         pack_complex_rows(yg, lanes, n);
                     }
                     kernel.apply(Direction::Inverse, lanes, &mut work.scratch);
-                    unpack_to_real_rows(lanes, xg, &kernel.pos, scale);
+                    unpack_to_real_rows(lanes, xg, n, scale);
                 }
             }
         }
     }
 }
 
-/// Pack real rows `2l`, `2l+1` of `x` into lane `l` as `x_{2l} + i x_{2l+1}` (reordered by `pos`,
-/// Makhoul's order). With AVX, four data values of each row at a time ([`avx::makhoul_pack`]:
-/// the same values, moved).
-fn pack_real_rows(x: &[f64], lanes: &mut [Complex64], pos: &[usize]) {
-    let n = pos.len();
+/// Pack real rows `2l`, `2l+1` of `x` (rows of `n` values) into lane `l` as `x_{2l} + i x_{2l+1}`,
+/// in Makhoul's order ([`makhoul_positions`]). With AVX, four data values of each row at a time
+/// ([`avx::makhoul_pack`]: the same values, moved).
+fn pack_real_rows(x: &[f64], lanes: &mut [Complex64], n: usize) {
     let wide = has_avx();
     for (lane, pair) in lanes.chunks_exact_mut(n).zip(x.chunks(2 * n)) {
         let (a, b) = pair.split_at(n);
         if b.is_empty() {
-            a.iter()
-                .zip(pos)
-                .for_each(|(&u, &p)| lane[p] = Complex64::new(u, 0.0));
+            for (i, &u) in a.iter().enumerate() {
+                lane[makhoul_position(i, n)] = Complex64::new(u, 0.0);
+            }
             continue;
         }
         let from = match wide {
-            // SAFETY: the CPU has AVX; `pos` is Makhoul's order of a lane of n values (the only
-            // order of a mirror last axis), and `a`, `b`, `lane` hold n values.
+            // SAFETY: the CPU has AVX; `a`, `b`, `lane` hold n values.
             #[cfg(target_arch = "x86_64")]
             true => unsafe { avx::makhoul_pack(a, b, lane) },
             _ => 0,
         };
-        for ((&u, &v), &p) in a[from..].iter().zip(&b[from..]).zip(&pos[from..]) {
-            lane[p] = Complex64::new(u, v);
+        for i in from..n {
+            lane[makhoul_position(i, n)] = Complex64::new(a[i], b[i]);
         }
     }
 }
@@ -1101,28 +1108,26 @@ fn pack_complex_rows(y: &[Complex64], lanes: &mut [Complex64], n: usize) {
 }
 }
 
-/// Unpack lane `l` (reordered by `pos`, Makhoul's order) into real rows `2l` (real part) and
-/// `2l+1` (imaginary part) of `x`, times `scale`. With AVX, four data values of each row at a
-/// time ([`avx::makhoul_unpack`]: the same products).
-fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], pos: &[usize], scale: f64) {
-    let n = pos.len();
+/// Unpack lane `l` (Makhoul's order, [`makhoul_positions`]) into real rows `2l` (real part) and
+/// `2l+1` (imaginary part) of `x` (rows of `n` values), times `scale`. With AVX, four data
+/// values of each row at a time ([`avx::makhoul_unpack`]: the same products).
+fn unpack_to_real_rows(lanes: &[Complex64], x: &mut [f64], n: usize, scale: f64) {
     let wide = has_avx();
     for (lane, pair) in lanes.chunks_exact(n).zip(x.chunks_mut(2 * n)) {
         let (a, b) = pair.split_at_mut(n);
         let from = match wide && !b.is_empty() {
-            // SAFETY: as in `pack_real_rows`.
+            // SAFETY: the CPU has AVX; `a`, `b`, `lane` hold n values.
             #[cfg(target_arch = "x86_64")]
             true => unsafe { avx::makhoul_unpack(lane, a, b, scale) },
             _ => 0,
         };
-        a[from..]
-            .iter_mut()
-            .zip(&pos[from..])
-            .for_each(|(u, &p)| *u = scale * lane[p].re);
-        b[from..]
-            .iter_mut()
-            .zip(&pos[from..])
-            .for_each(|(v, &p)| *v = scale * lane[p].im);
+        for i in from..n {
+            let v = lane[makhoul_position(i, n)];
+            a[i] = scale * v.re;
+            if let Some(b) = b.get_mut(i) {
+                *b = scale * v.im;
+            }
+        }
     }
 }
 
