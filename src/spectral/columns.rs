@@ -13,9 +13,9 @@
 //! and the last stage leaves the spectrum in natural order. Radix 8 comes first: a column of 64
 //! takes two stages, through one buffer, instead of three radix-4 stages through two. A stage
 //! reads and writes whole rows of a block of columns, so every operation acts on two columns at
-//! once (AVX2/FMA registers of two complex values). The first stage reads the strided block, the last writes it, and the
-//! stages between work in two small contiguous buffers that stay in L1. While a block is
-//! transformed, the next block's rows are prefetched into L2.
+//! once (AVX2/FMA registers of two complex values). The first stage reads the strided block,
+//! the last writes it, and the stages between work in two small contiguous buffers that stay in
+//! L1. While a block is transformed, the next block's rows are prefetched into L2.
 //!
 //! Measured against the gather–FFT–scatter route (`rustfft` on transposed lanes), the whole
 //! spectral step, interleaved runs on one machine: 64³ 4.99–5.00 → 4.69–4.73 ms on one thread,
