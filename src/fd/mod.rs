@@ -13,9 +13,10 @@
 //! RMS(μ_h − mean μ_h) is read from it, and the next step uses it.
 //!
 //! A step without the exact projection is one fused sweep ([`sweep`]): φ^{n+1}, μ^{n+1}, the
-//! measures and the residual in one pass over the box, into second buffers that replace the
-//! state only when the step is accepted. The exact projection, and the refreshes of a state
-//! (start, resume, a new σ), take the multi-pass route through [`stencil`].
+//! measures and the residual in one pass over the box, φ^{n+1} into a second buffer that
+//! replaces the state only when the step is accepted, μ^{n+1} over μⁿ (recomputed from φⁿ when
+//! the step is not). The exact projection, and the refreshes of a state (start, resume, a new
+//! σ), take the multi-pass route through [`stencil`].
 
 mod lanes;
 mod sweep;
@@ -51,7 +52,7 @@ pub struct FdEngine {
     phi: Array3<f64>,
     /// φ^{n+1} of a fused step; ∇²_h φ of the current state in the multi-pass route.
     next_phi: Array3<f64>,
-    /// μ^{n+1} of a fused step; Φ_h of the current state in the multi-pass route.
+    /// Φ_h of the current state in the multi-pass route and the refreshes.
     next_mu: Array3<f64>,
     /// μ_h(φ, σ) of the current state (the previous φ during a multi-pass step).
     mu: Array3<f64>,
@@ -293,7 +294,7 @@ impl FdEngine {
     }
 
     /// The fused step (no exact projection): φ^{n+1} = φⁿ + Δt ∇²_h μⁿ and
-    /// μ^{n+1} = μ_h(φ^{n+1}, σ^{n+1}) in one sweep into `next_phi`, `next_mu`, with
+    /// μ^{n+1} = μ_h(φ^{n+1}, σ^{n+1}) in one sweep into `next_phi` and over `mu`, with
     ///
     /// ```text
     /// F = Σ Φ_h² h^d,   A = −(3/(2√2)) ε Σ φ ∇²_h φ h^d,   V = Σ (1 + φ)/2 h^d
@@ -305,14 +306,14 @@ impl FdEngine {
     /// cancellation in that difference costs about ulp · (mean − c)²/RMS², and the mean moves
     /// little in a step (by Δt ∂_t mean μ), so near stationarity, where μ − mean μ is many orders
     /// below μ, the one pass keeps the accuracy of the two-pass mean-then-deviation. The state
-    /// is replaced only when the step passes the checks; a rejected step leaves it untouched.
+    /// is replaced only when the step passes the checks; a rejected step leaves it as it was
+    /// (its μ recomputed: [`Self::restore_mu`]).
     fn step_fused(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
         let sigma = self.next_sigma();
         let r = self.c0.ramp(t + dt);
         let (uniform, field) = self.c0.parts(r);
         let fields = Fields {
             phi: self.phi.as_slice().expect("standard layout"),
-            mu: self.mu.as_slice().expect("standard layout"),
             c0: field,
         };
         let k = Coefficients {
@@ -328,13 +329,16 @@ impl FdEngine {
             &fields,
             &k,
             self.next_phi.as_slice_mut().expect("standard layout"),
-            self.next_mu.as_slice_mut().expect("standard layout"),
+            self.mu.as_slice_mut().expect("standard layout"),
         );
         let measures = self.measures_of(&sums);
-        blow_up(sums.max_phi, measures.energy)?;
-        self.check(self.measures, measures, dt)?;
+        let checked = blow_up(sums.max_phi, measures.energy)
+            .and_then(|()| self.check(self.measures, measures, dt));
+        if let Err(e) = checked {
+            self.restore_mu();
+            return Err(e);
+        }
         std::mem::swap(&mut self.phi, &mut self.next_phi);
-        std::mem::swap(&mut self.mu, &mut self.next_mu);
         let n = self.grid.len() as f64;
         let (m1, m2) = (sums.dev / n, sums.dev_sq / n);
         self.measures = measures;
@@ -347,6 +351,18 @@ impl FdEngine {
             rate: sums.max_lap_mu,
             rejected: 0,
         })
+    }
+
+    /// μ_h(φⁿ, σⁿ) again after a fused step that failed its checks (the sweep wrote μ over it;
+    /// φⁿ and σⁿ are untouched), bit for bit as the sweep computed it; the measures, the
+    /// residual and its shift stay those of the state.
+    fn restore_mu(&mut self) {
+        let (measures, residual, mean) = (self.measures, self.residual, self.mu_mean);
+        // φⁿ passed the checks when it became the state, so it is finite.
+        self.refresh(self.t)
+            .expect("the state before the step is finite");
+        self.refresh_mu();
+        (self.measures, self.residual, self.mu_mean) = (measures, residual, mean);
     }
 
     /// F, A, V (full-box values) from a sweep's sums (see [`Self::step_fused`]).

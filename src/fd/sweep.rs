@@ -1,6 +1,6 @@
 //! The fused, plane-pipelined FD step: one sweep along the streamed axis reads φⁿ and μⁿ once
-//! and writes φ^{n+1} and μ^{n+1} once, with the measures of φ^{n+1} and the sums of the residual
-//! reduced on the way (the C reference's `fused` variant, `shared/bench/fd_limit.c`).
+//! and writes φ^{n+1} once and μ^{n+1} over μⁿ, with the measures of φ^{n+1} and the sums of the
+//! residual reduced on the way (the C reference's `fused` variant, `shared/bench/fd_limit.c`).
 //!
 //! Three stages run plane by plane, each a plane behind the one before:
 //!
@@ -10,12 +10,17 @@
 //! 3. μ' = q − 2ε² ∇²_h Φ                                        (plane z)
 //! ```
 //!
-//! Stage 1 writes the slab's planes of φ^{n+1} in place, stage 2 keeps Φ in a ring of three
-//! planes and q in the slab's planes of μ^{n+1}, which stage 3 completes. Each thread owns a
-//! contiguous slab of planes. Stage 2 at a slab's ends needs φ' two planes beyond them, so
+//! Stage 1 writes the slab's planes of φ^{n+1}, stage 2 keeps Φ in a ring of three planes and
+//! writes q over the slab's planes of μⁿ, which stage 3 completes into μ^{n+1}. Each thread owns
+//! a contiguous slab of planes. Stage 2 at a slab's ends needs φ' two planes beyond them, so
 //! stage 1 runs first on every slab's edges (its first two and last two planes), into buffers
 //! every slab reads; the pipeline then copies its own edges and computes stage 1 only on the
 //! planes between. Each slab recomputes the plane of Φ on either side of it into its own ring.
+//!
+//! μ is updated in place: stage 1 at plane z + 2 reads μⁿ on planes z + 1 to z + 3 before stage
+//! 2 overwrites plane z + 1, and stage 1 on the edges, the only one that reads a neighbour's
+//! μⁿ, has finished on every slab before any pipeline starts. So no second μ array is written
+//! (writing one costs a read of each of its cache lines before the write).
 //!
 //! The streamed axis is axis 0, or axis 1 for a 2D scene (n0 = 1): the planes are then rows.
 //! Planes outside the box are those of the periodic or mirror (even) extension: with the mirror
@@ -109,13 +114,11 @@ pub(super) struct Coefficients {
     pub shift: f64,
 }
 
-/// The fields the sweep reads.
+/// The fields the sweep reads only (μ it reads and overwrites).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Fields<'a> {
     /// φⁿ.
     pub phi: &'a [f64],
-    /// μ_h(φⁿ, σⁿ).
-    pub mu: &'a [f64],
     /// Unramped εC0 field, if C0 is a field.
     pub c0: Option<&'a [f64]>,
 }
@@ -239,13 +242,14 @@ impl Sweep {
         }
     }
 
-    /// One step: `phi_next` = φ^{n+1}, `mu_next` = μ_h(φ^{n+1}, σ^{n+1}); returns the sums.
+    /// One step: `phi_next` = φ^{n+1}, and `mu` from μ_h(φⁿ, σⁿ) to μ_h(φ^{n+1}, σ^{n+1});
+    /// returns the sums.
     pub fn run(
         &mut self,
         f: &Fields,
         k: &Coefficients,
         phi_next: &mut [f64],
-        mu_next: &mut [f64],
+        mu: &mut [f64],
     ) -> Sums {
         let (l, avx2) = (self.layout, self.avx2);
         let slabs = Slabs {
@@ -257,19 +261,22 @@ impl Sweep {
         let at = |i, edges| Slab::new(&l, slabs, i, f, k, edges);
         if n == 1 {
             let pipe = &mut self.pipes[0];
-            pipe.run(&at(0, &[]), avx2, Phase::Edges(&mut self.edges[0]));
+            pipe.run(&at(0, &[]), avx2, Phase::Edges(&mut self.edges[0], mu));
             let s = at(0, &self.edges);
-            pipe.run(&s, avx2, Phase::Pipeline(phi_next, mu_next));
+            pipe.run(&s, avx2, Phase::Pipeline(phi_next, mu));
         } else {
+            let old_mu = &*mu;
             self.pipes[..n]
                 .par_iter_mut()
                 .zip(&mut self.edges[..n])
                 .enumerate()
-                .for_each(|(i, (pipe, edges))| pipe.run(&at(i, &[]), avx2, Phase::Edges(edges)));
+                .for_each(|(i, (pipe, edges))| {
+                    pipe.run(&at(i, &[]), avx2, Phase::Edges(edges, old_mu));
+                });
             let edges = &self.edges;
             phi_next
                 .par_chunks_mut(slab)
-                .zip(mu_next.par_chunks_mut(slab))
+                .zip(mu.par_chunks_mut(slab))
                 .zip(self.pipes.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, ((phi, mu), pipe))| {
@@ -282,10 +289,10 @@ impl Sweep {
     }
 }
 
-/// What a slab's thread runs: stage 1 on the slab's edge planes into its edge buffer, or the
-/// pipeline into its planes of φ^{n+1} and μ^{n+1}.
+/// What a slab's thread runs: stage 1 on the slab's edge planes into its edge buffer (from the
+/// whole of μⁿ), or the pipeline into its planes of φ^{n+1} and over its planes of μ.
 enum Phase<'a> {
-    Edges(&'a mut [f64]),
+    Edges(&'a mut [f64], &'a [f64]),
     Pipeline(&'a mut [f64], &'a mut [f64]),
 }
 
@@ -318,20 +325,26 @@ impl Pipe {
     #[inline(always)]
     fn phase(&mut self, s: &Slab, phase: Phase) {
         match phase {
-            Phase::Edges(edges) => self.edge_planes(s, edges),
+            Phase::Edges(edges, mu) => self.edge_planes(s, edges, mu),
             Phase::Pipeline(phi, mu) => self.stages(s, phi, mu),
         }
     }
 
-    /// Stage 1 on each edge plane of slab `s`, written to its slot of `edges`, its sums kept
-    /// for the pipeline to add in plane order.
+    /// Stage 1 on each edge plane of slab `s`, from μⁿ (`mu`, the whole box), written to its
+    /// slot of `edges`, its sums kept for the pipeline to add in plane order.
     #[inline(always)]
-    fn edge_planes(&mut self, s: &Slab, edges: &mut [f64]) {
-        let p = s.l.plane();
+    fn edge_planes(&mut self, s: &Slab, edges: &mut [f64], mu: &[f64]) {
+        let (l, p) = (s.l, s.l.plane());
         for z in s.z0..s.z1 {
             if let Some((_, slot)) = s.slabs.edge(z as usize) {
                 let out = &mut edges[slot * p..][..p];
-                self.edge_sums[slot] = advance(s.l, s.f, s.k, z, out, &mut self.row);
+                let mu = [
+                    l.plane_of(mu, z - 1),
+                    l.plane_of(mu, z),
+                    l.plane_of(mu, z + 1),
+                ];
+                let old = l.plane_of(s.f.phi, z);
+                self.edge_sums[slot] = advance(l, s.k, mu, old, out, &mut self.row);
             }
         }
     }
@@ -344,13 +357,13 @@ impl Pipe {
         let (z0, z1) = (s.z0, s.z1);
         let mut sums = Sums::default();
         for z in z0..(z0 + 2).min(z1) {
-            self.advance(s, z, phi, &mut sums);
+            self.advance(s, z, phi, mu, &mut sums);
         }
         self.potential(s, z0 - 1, phi, mu, &mut sums);
         self.potential(s, z0, phi, mu, &mut sums);
         for z in z0..z1 {
             if z + 2 < z1 {
-                self.advance(s, z + 2, phi, &mut sums);
+                self.advance(s, z + 2, phi, mu, &mut sums);
             }
             self.potential(s, z + 1, phi, mu, &mut sums);
             self.correct(s, z, mu, &mut sums);
@@ -359,9 +372,10 @@ impl Pipe {
     }
 
     /// Stage 1 on plane `z` of the slab, its sums added: an edge plane copied from its slot,
-    /// another computed.
+    /// another computed from the slab's planes of μⁿ in `mu` (an inner plane's neighbours are
+    /// the slab's own, and stage 2 has not yet overwritten them).
     #[inline(always)]
-    fn advance(&mut self, s: &Slab, z: isize, phi: &mut [f64], sums: &mut Sums) {
+    fn advance(&mut self, s: &Slab, z: isize, phi: &mut [f64], mu: &[f64], sums: &mut Sums) {
         let p = s.l.plane();
         let out = &mut phi[(z - s.z0) as usize * p..][..p];
         let ([sum, max_phi, max_lap], [sum_t, max_phi_t, max_lap_t]) =
@@ -370,7 +384,12 @@ impl Pipe {
                     out.copy_from_slice(&s.edges[i][slot * p..][..p]);
                     self.edge_sums[slot]
                 }
-                None => advance(s.l, s.f, s.k, z, out, &mut self.row),
+                None => {
+                    let own = |z: isize| &mu[(z - s.z0) as usize * p..][..p];
+                    let mu = [own(z - 1), own(z), own(z + 1)];
+                    let old = s.l.plane_of(s.f.phi, z);
+                    advance(s.l, s.k, mu, old, out, &mut self.row)
+                }
             };
         sums.phi += total(sum, sum_t);
         sums.max_phi = largest(max_phi, max_phi_t, sums.max_phi);
@@ -456,23 +475,17 @@ impl Pipe {
     }
 }
 
-/// Stage 1 on plane `z` (a stored plane) into `out`: φ' = φⁿ + Δt ∇²_h μⁿ, with its sums;
-/// `row` is scratch for a row of ∇²_h μⁿ.
+/// Stage 1 on one plane into `out`: φ' = φⁿ + Δt ∇²_h μⁿ, with its sums, from the plane `old`
+/// of φⁿ and the planes `mu` of μⁿ around it; `row` is scratch for a row of ∇²_h μⁿ.
 #[inline(always)]
 fn advance(
     l: &Layout,
-    f: &Fields,
     k: &Coefficients,
-    z: isize,
+    mu: [&[f64]; 3],
+    old: &[f64],
     out: &mut [f64],
     row: &mut [f64],
 ) -> Advanced {
-    let mu = [
-        l.plane_of(f.mu, z - 1),
-        l.plane_of(f.mu, z),
-        l.plane_of(f.mu, z + 1),
-    ];
-    let old = l.plane_of(f.phi, z);
     let (kernel, mut acc) = (Advance { dt: k.dt }, Acc::zero());
     for j in 0..l.rows {
         laplacian_row(l, mu, j, k.inv_h2, row);
