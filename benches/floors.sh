@@ -7,9 +7,14 @@
 # shared machine a C median can move by half between two runs a minute apart, so a ratio is only
 # worth the C runs taken beside it.
 #
+# Then, in the same session, the two ratios of the route to stationary shapes (DESIGN.md §7):
+# one L-BFGS iteration over one conserved SBDF1 step on the 48³ prolate (criterion `relax/`, 1
+# and 2 threads), and the wall time of adaptive SBDF1 over L-BFGS to the energy 1e-6 above F*
+# (`vesicle study stationary runs/prolate3d_full.json`, 1 thread), ROUNDS times each.
+#
 # Needs the C programs built first (README, "Performance"):
 #   make -C ../shared/bench O="$PWD/target/cbench"
-# Usage, from the project root: bash benches/floors.sh [ROUNDS]   (default 3; about 2 min a round)
+# Usage, from the project root: bash benches/floors.sh [ROUNDS]   (default 3; about 4 min a round)
 set -euo pipefail
 rounds=${1:-3}
 cbench=target/cbench
@@ -38,6 +43,12 @@ our_median() {
     awk '{ v = $4; if ($5 == "µs") v /= 1000; if ($5 == "s") v *= 1000; print v }' <<<"$out"
 }
 
+# Criterion's median (ms) of the bench named `relax/$1` in the output $2.
+relax_median() {
+    grep -A1 "^relax/$1\$" <<<"$2" | grep -o 'time: *\[[^]]*\]' |
+        awk '{ v = $4; if ($5 == "µs") v /= 1000; if ($5 == "s") v *= 1000; print v }'
+}
+
 configs=("spectral 64 1" "spectral 64 2" "spectral 128 1" "spectral 128 2"
     "spectral_unconstrained 64 1" "spectral_unconstrained 64 2"
     "spectral_unconstrained 128 1" "spectral_unconstrained 128 2"
@@ -64,4 +75,22 @@ for c in "${configs[@]}"; do
         awk -v c="$method $n³ t$threads" '{ v[NR] = $1 }
             END { m = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
                   printf "%-32s %.2f× (%.2f–%.2f)\n", c, m, v[1], v[NR] }'
+done
+
+echo
+echo "the route to the 48³ prolate, $rounds rounds"
+cargo build --release -q
+route_dir=$(mktemp -d)
+trap 'rm -f "$results"; rm -rf "$route_dir"' EXIT
+for ((r = 1; r <= rounds; r++)); do
+    out=$(cargo bench -q --bench step -- --warm-up-time 1 --measurement-time 3 'relax/' 2>/dev/null)
+    for t in 1 2; do
+        it=$(relax_median "lbfgs_iteration/48^3/t$t" "$out")
+        st=$(relax_median "conserved_step/48^3/t$t" "$out")
+        awk -v i="$it" -v s="$st" -v t="$t" \
+            'BEGIN { printf "L-BFGS iteration / SBDF1 step, t%s   %.3f / %.3f ms = %.2f\n", t, i, s, i / s }'
+    done
+    target/release/vesicle study stationary runs/prolate3d_full.json --out "$route_dir/r$r" --force |
+        grep -o 'L-BFGS [0-9.]*x less wall time than SBDF1' |
+        sed 's/$/ to the energy 1e-6 above F*, t1/'
 done
