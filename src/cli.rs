@@ -207,9 +207,10 @@ enum Study {
         after_help = "Examples:\n  vesicle study convergence runs/studies/convergence.json --out out/convergence\n  vesicle study convergence runs/studies/convergence.json --quick"
     )]
     Convergence(StudyArgs),
-    /// What `stop_residual` buys per engine: L-BFGS (the reference), conserved SBDF1 and SBDF2
-    /// with adaptive steps, each run to residual 1e-8; steps, wall time and energy error at
-    /// every tolerance from 1e-4 to 1e-8, and FD at its bound (extrapolated).
+    /// What `stop_residual` buys per engine: L-BFGS (the reference; run three times, the run of
+    /// median wall time tabulated), conserved SBDF1 and SBDF2 with adaptive steps, each run to
+    /// residual 1e-8; steps, wall time and energy error at every tolerance from 1e-4 to 1e-8,
+    /// and FD at its bound (extrapolated).
     #[command(
         after_help = "Example:\n  vesicle study stationary runs/prolate3d.json --out out/stationary"
     )]
