@@ -35,18 +35,24 @@ c_median() {
     fi
 }
 
-# Our criterion median (ms) of one configuration.
+# The median (ms) of criterion's first `time: [low median high]` line on stdin.
+median_ms() {
+    grep -m1 -o 'time: *\[[^]]*\]' |
+        awk '{ v = $4; if ($5 == "µs") v /= 1000; if ($5 == "s") v *= 1000; print v }'
+}
+
+# Our criterion median (ms) of one configuration. The bench's output is captured whole first:
+# piped straight into `grep -m1`, cargo could be stopped by SIGPIPE, which `pipefail` reports.
 our_median() {
     local out
     out=$(cargo bench -q --bench step -- --warm-up-time 1 --measurement-time 3 \
-        "step/$1/full/$2\\^3/t$3\$" 2>/dev/null | grep -m1 -A1 "^step/" | grep -o 'time: *\[[^]]*\]')
-    awk '{ v = $4; if ($5 == "µs") v /= 1000; if ($5 == "s") v *= 1000; print v }' <<<"$out"
+        "step/$1/full/$2\\^3/t$3\$" 2>/dev/null)
+    grep -m1 -A1 "^step/" <<<"$out" | median_ms
 }
 
 # Criterion's median (ms) of the bench named `relax/$1` in the output $2.
 relax_median() {
-    grep -A1 "^relax/$1\$" <<<"$2" | grep -o 'time: *\[[^]]*\]' |
-        awk '{ v = $4; if ($5 == "µs") v /= 1000; if ($5 == "s") v *= 1000; print v }'
+    grep -A1 "^relax/$1\$" <<<"$2" | median_ms
 }
 
 configs=("spectral 64 1" "spectral 64 2" "spectral 128 1" "spectral 128 2"
