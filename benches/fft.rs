@@ -2,8 +2,8 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use ndarray::Array3;
-use vesicle::grid::AxisKind;
-use vesicle::spectral::transform::Transform;
+use vesicle::engines::spectral::transform::Transform;
+use vesicle::problem::grid::AxisKind;
 
 /// Time one forward + inverse pair on a smooth-ish deterministic field.
 fn bench_pair(c: &mut Criterion, name: &str, shape: [usize; 3], kinds: [AxisKind; 3]) {

@@ -10,11 +10,11 @@ use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion};
 use serde_json::json;
 use std::time::{Duration, Instant};
-use vesicle::awake::KeepAwake;
-use vesicle::config;
-use vesicle::engine::Engine;
-use vesicle::setup;
-use vesicle::simulation::Simulation;
+use vesicle::driver::awake::KeepAwake;
+use vesicle::driver::simulation::Simulation;
+use vesicle::engines::Engine;
+use vesicle::problem::config;
+use vesicle::problem::setup;
 
 /// One benched step: its name, the scene's `method`, `area` and `dt`, and whether the eighth box
 /// is benched too.

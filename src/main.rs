@@ -1,5 +1,5 @@
-//! The `vesicle` command line: thin; parsing and dispatch live in `vesicle::cli`.
+//! The `vesicle` command line: thin; parsing and dispatch live in `vesicle::commands::cli`.
 
 fn main() {
-    std::process::exit(vesicle::cli::main());
+    std::process::exit(vesicle::commands::cli::main());
 }

@@ -1,4 +1,4 @@
-//! Validation of the axisymmetric reference solver (`vesicle::axisym`, DESIGN.md §5 rung 6):
+//! Validation of the axisymmetric reference solver (`vesicle::analysis::axisym`, DESIGN.md §5 rung 6):
 //! the sphere, exponential convergence in the number of modes, energies against a much finer
 //! run, the transition volumes and branch ends of Seifert, Berndl & Lipowsky (1991), closed
 //! contours that reproduce A and V, the multipliers, and the `vesicle axisym` command.
@@ -9,7 +9,7 @@
 
 use std::f64::consts::PI;
 use std::process::Command;
-use vesicle::axisym::{self, quadrature, Branch, Options, Solution};
+use vesicle::analysis::axisym::{self, quadrature, Branch, Options, Solution};
 
 /// The energy of `branch` at `v` in a curve (panics if the curve has no shape there).
 fn e_at(curve: &[Solution], v: f64) -> f64 {

@@ -8,9 +8,9 @@ use common::{relax, scene, simulation};
 use ndarray::Array3;
 use serde_json::{json, Value};
 use std::time::Instant;
-use vesicle::axisym::{self, Branch, Options};
-use vesicle::levelset;
-use vesicle::setup::{self, Problem};
+use vesicle::analysis::axisym::{self, Branch, Options};
+use vesicle::analysis::levelset;
+use vesicle::problem::setup::{self, Problem};
 
 /// The full-box initial field of `v` (unfolding the mirror planes the setup detected).
 fn full_initial(v: Value) -> (Problem, Array3<f64>) {

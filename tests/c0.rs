@@ -5,10 +5,10 @@
 mod common;
 use common::{fd_spectral_gap, relax, scene, simulation, with};
 use serde_json::json;
-use vesicle::engine::Engine;
-use vesicle::model::max_abs_diff as max_diff;
-use vesicle::setup;
-use vesicle::simulation::Simulation;
+use vesicle::driver::simulation::Simulation;
+use vesicle::engines::Engine;
+use vesicle::problem::model::max_abs_diff as max_diff;
+use vesicle::problem::setup;
 
 /// A sphere of radius `radius` (ε = 1, h = ε/2, eighth box with 6ε of bulk beyond the sphere)
 /// with uniform `c0`, relaxed to residual 1e-6 with V and A held (relaxational dynamics: the
@@ -26,7 +26,7 @@ fn relaxed_sphere(radius: f64, c0: f64) -> (f64, f64, f64, usize) {
     let (problem, mut sim) = simulation(&s);
     let steps = relax(&mut sim, 1e-6, 3000).expect("the sphere relaxes in 3000 iterations");
     let e = sim.engine().measures().reduced(3, 1.0).energy;
-    let ls = vesicle::levelset::measure(&problem.grid.unfold(sim.engine().phi()), 3, h);
+    let ls = vesicle::analysis::levelset::measure(&problem.grid.unfold(sim.engine().phi()), 3, h);
     let r0 = (ls.area / (4.0 * std::f64::consts::PI)).sqrt();
     (e, ls.reduced_volume, r0, steps)
 }
@@ -93,10 +93,10 @@ fn effective_energy_never_rises_with_a_patch() {
                "width": 1.5},
         "area": {"method": "lagrangian", "alpha": 0.01}, "symmetry": ["x"]
     });
-    let grid = vesicle::grid::Grid::new(&[32, 32], 1.0, &[true, false]);
+    let grid = vesicle::problem::grid::Grid::new(&[32, 32], 1.0, &[true, false]);
     let fd = with(
         &fd,
-        json!({"dt": 0.5 * vesicle::fd::stability_bound(&grid, 1.0, 0.0)}),
+        json!({"dt": 0.5 * vesicle::engines::fd::stability_bound(&grid, 1.0, 0.0)}),
     );
     let spectral = json!({
         "dim": 3, "n": [24, 24, 32], "h": 1.0, "eps": 1.0, "method": "spectral",
@@ -175,7 +175,7 @@ fn fd_spectral_agree_on_a_cap_patch_as_h_squared() {
 /// like the patches' (the cap's y mirror is refused).
 #[test]
 fn c0_file_reproduces_a_patch() {
-    use vesicle::model::SpontaneousCurvature;
+    use vesicle::problem::model::SpontaneousCurvature;
     let dir = tempfile::tempdir().unwrap();
     let base = json!({
         "dim": 2, "n": [32, 40], "h": 1.0, "eps": 0.8, "dt": 0.01, "max_steps": 1,

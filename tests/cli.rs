@@ -661,7 +661,7 @@ fn run_example_tiny(name: &str, overrides: &[&str]) -> Value {
     );
     assert_eq!(summary["spec"]["n"], scene["n"], "{name}");
     assert_eq!(summary["spec"]["dim"], scene["dim"], "{name}");
-    let spec = vesicle::config::from_value(summary["spec"].clone())
+    let spec = vesicle::problem::config::from_value(summary["spec"].clone())
         .unwrap_or_else(|e| panic!("{name}: the spec does not read back: {e}"));
     spec.validate()
         .unwrap_or_else(|e| panic!("{name}: the spec does not validate: {e}"));

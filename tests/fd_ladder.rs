@@ -3,13 +3,13 @@
 mod common;
 use common::{engine, rel, scene};
 use serde_json::json;
-use vesicle::engine::Engine;
-use vesicle::fd::{self, FdEngine};
-use vesicle::model::C0;
-use vesicle::setup;
+use vesicle::engines::fd::{self, FdEngine};
+use vesicle::engines::Engine;
+use vesicle::problem::model::C0;
+use vesicle::problem::setup;
 
 /// A 3D prolate with c0 ≠ 0 (a patch) and the Lagrangian area update, FD on the eighth box.
-fn prolate_with_c0() -> vesicle::config::Scene {
+fn prolate_with_c0() -> vesicle::problem::config::Scene {
     scene(json!({
         "dim": 3, "n": [32, 32, 32], "h": 1.0, "eps": 1.0, "method": "fd", "dt": 4e-4,
         "max_steps": 300,
@@ -62,7 +62,7 @@ fn flat_interface_stationary_to_discretisation_error() {
         let n = (32.0 / h) as usize;
         let s = scene(json!({
             "dim": 2, "n": [4, n], "h": h, "eps": 1.0, "method": "fd",
-            "dt": 0.5 * fd::stability_bound(&vesicle::grid::Grid::new(&[4, n], h, &[false, false]), 1.0, 0.0),
+            "dt": 0.5 * fd::stability_bound(&vesicle::problem::grid::Grid::new(&[4, n], h, &[false, false]), 1.0, 0.0),
             "t_end": 0.05,
             "initial": {"shape": "capsule", "radius": 8.0, "length": 1000.0, "axis": "x"},
             "area": {"method": "none"}
@@ -109,8 +109,8 @@ fn chemical_potential_is_derivative_of_discrete_energy() {
         let psi = grid.field_from(|p| (0.3 * p[0]).cos() * (0.2 * p[1] + 0.1).cos());
         let c0 = C0::new(&s.c0, &grid, s.eps).unwrap();
         let mut e = FdEngine::new(grid.clone(), s.eps, c0, problem.phi.clone(), 0.0).unwrap();
-        e.set_area(vesicle::engine::AreaConstraint {
-            method: vesicle::config::AreaMethod::Lagrangian,
+        e.set_area(vesicle::engines::AreaConstraint {
+            method: vesicle::problem::config::AreaMethod::Lagrangian,
             alpha: 0.0,
             target: 1.0,
         });
@@ -129,10 +129,10 @@ fn chemical_potential_is_derivative_of_discrete_energy() {
 }
 
 /// Give the engine σ = `sigma` by one Lagrangian update with A0 chosen so α(A − A0) = σ.
-fn force_sigma(e: &mut FdEngine, sigma: f64, _s: &vesicle::config::Scene) {
+fn force_sigma(e: &mut FdEngine, sigma: f64, _s: &vesicle::problem::config::Scene) {
     let a = e.measures().area;
-    e.set_area(vesicle::engine::AreaConstraint {
-        method: vesicle::config::AreaMethod::Lagrangian,
+    e.set_area(vesicle::engines::AreaConstraint {
+        method: vesicle::problem::config::AreaMethod::Lagrangian,
         alpha: 1.0,
         target: a - sigma,
     });

@@ -7,8 +7,8 @@
 use proptest::prelude::*;
 use serde_json::{Map, Value};
 use std::io::Write;
-use vesicle::config::{self, Initial};
 use vesicle::error::Error;
+use vesicle::problem::config::{self, Initial};
 
 /// Every key the scene format knows, at any level.
 const KEYS: &[&str] = &[
@@ -212,15 +212,16 @@ fn exercise(value: Value) {
     if let Err(e) = scene.validate() {
         return assert_message(&e);
     }
-    let est = vesicle::memory::estimate(&scene);
+    let est = vesicle::problem::memory::estimate(&scene);
     assert!(est.bytes > 0.0, "{est:?}");
     let _ = scene.resolved_value();
     let _ = scene.record_every();
     let points: f64 = scene.n.iter().map(|&m| m as f64).product();
     if points <= 64.0 * 64.0 && !matches!(scene.initial, Initial::File { .. }) {
-        match vesicle::setup::build(&scene) {
+        match vesicle::problem::setup::build(&scene) {
             Ok(problem) => {
-                if let Err(e) = vesicle::simulation::check_stability(&scene, &problem.grid) {
+                if let Err(e) = vesicle::driver::simulation::check_stability(&scene, &problem.grid)
+                {
                     assert_message(&e);
                 }
             }
@@ -424,11 +425,11 @@ proptest! {
     ) {
         let mut data = Vec::new();
         if with_magic {
-            data.extend_from_slice(vesicle::checkpoint::MAGIC);
+            data.extend_from_slice(vesicle::driver::checkpoint::MAGIC);
             data.extend_from_slice(&header_len.to_le_bytes());
         }
         data.extend_from_slice(&bytes);
-        let r = vesicle::checkpoint::Checkpoint::from_bytes(&data, std::path::Path::new("x"));
+        let r = vesicle::driver::checkpoint::Checkpoint::from_bytes(&data, std::path::Path::new("x"));
         prop_assert!(r.is_err(), "arbitrary bytes were accepted as a checkpoint");
         prop_assert!(!r.unwrap_err().to_string().is_empty());
     }

@@ -5,8 +5,8 @@ mod common;
 use common::{rel, scene};
 use proptest::prelude::*;
 use serde_json::json;
-use vesicle::setup;
-use vesicle::simulation::Simulation;
+use vesicle::driver::simulation::Simulation;
+use vesicle::problem::setup;
 
 /// A circle of radius 7 with a perturbation Σ a_m cos(m θ + b_m) of its radius, as a `.npy`.
 fn perturbed_field(dir: &std::path::Path, modes: &[(f64, f64)]) -> std::path::PathBuf {

@@ -10,8 +10,8 @@ use common::scene;
 use serde_json::json;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use vesicle::setup;
-use vesicle::simulation::{Simulation, StopRules};
+use vesicle::driver::simulation::{Simulation, StopRules};
+use vesicle::problem::setup;
 
 struct CountingAlloc;
 

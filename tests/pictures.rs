@@ -53,7 +53,7 @@ fn sphere_mesh_area_volume_closed_outward() {
     assert!(ev < 0.01, "volume {volume} is {ev:.3e} off");
     assert!(volume > 0.0, "outward normals give a positive volume");
     // The same split as the sharp measures of `levelset` (written to summary.json).
-    let ls = vesicle::levelset::measure(&sphere(40, h, r), 3, h);
+    let ls = vesicle::analysis::levelset::measure(&sphere(40, h, r), 3, h);
     assert!(rel(area, ls.area) < 1e-12 && rel(volume, ls.volume) < 1e-10);
     assert!(mesh.is_closed());
     // Vertices are shared: a closed triangle mesh of genus 0 has V − E + F = 2, E = 3F/2.
@@ -379,8 +379,8 @@ fn refined_level_set_measures_spheres_accurately() {
     let mut errors = Vec::new();
     for r in [12.0, 18.0, 24.0] {
         let phi = sphere((2.0 * r + 16.0) as usize, 1.0, r);
-        let plain = vesicle::levelset::measure(&phi, 3, 1.0);
-        let refined = vesicle::levelset::measure_refined(&phi, 3, 1.0);
+        let plain = vesicle::analysis::levelset::measure(&phi, 3, 1.0);
+        let refined = vesicle::analysis::levelset::measure_refined(&phi, 3, 1.0);
         let ev = (refined.reduced_volume - 1.0).abs();
         println!(
             "sphere R = {r}h: v − 1 plain {:.2e}, refined {:.2e}; refined area {:.2e}, volume {:.2e}",

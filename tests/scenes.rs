@@ -7,8 +7,8 @@ use std::f64::consts::{PI, SQRT_2};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tempfile::TempDir;
-use vesicle::config::Dynamics;
-use vesicle::measure::{dominant_mode, inside_area, measure_field, neck, radius_profile};
+use vesicle::commands::measure::{dominant_mode, inside_area, measure_field, neck, radius_profile};
+use vesicle::problem::config::Dynamics;
 
 /// An axisymmetric field about the z axis (the box's centre line) with the φ = 0 surface at
 /// ρ = R(z): φ = tanh((R(z) − ρ)/√2) (ε = 1), spacing `h`, z_k = k h.
@@ -127,8 +127,8 @@ fn pear_is_skewed_towards_its_narrow_end() {
     let r = radius_profile(&field, 2, h);
     let flipped: Vec<f64> = r.iter().rev().cloned().collect();
     let (s, t) = (
-        vesicle::measure::skewness(&r, h),
-        vesicle::measure::skewness(&flipped, h),
+        vesicle::commands::measure::skewness(&r, h),
+        vesicle::commands::measure::skewness(&flipped, h),
     );
     println!("skewness {s:.4}, flipped {t:.4}");
     assert!(s > 0.1, "{s}");
@@ -187,7 +187,7 @@ fn budding_scene_runs_tiny_and_measure_writes_its_table() {
     assert!(done.status.success(), "{done:?}");
     let csv = std::fs::read_to_string(out.join("measure.csv")).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some(vesicle::measure::CSV_HEADER));
+    assert_eq!(lines.next(), Some(vesicle::commands::measure::CSV_HEADER));
     // Snapshots at steps 2, 4 and 6 (the final state is step 6).
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
@@ -216,7 +216,7 @@ fn budding_scene_runs_tiny_and_measure_writes_its_table() {
 fn scenes_carry_a_description_and_validate() {
     for name in ["budding3d", "pearling3d", "pear3d"] {
         let path = crate_dir().join(format!("runs/{name}.json"));
-        let scene = vesicle::config::load(&path, &[]).expect("valid scene");
+        let scene = vesicle::problem::config::load(&path, &[]).expect("valid scene");
         scene.validate().expect("valid scene");
         assert!(
             scene.description.len() > 40,

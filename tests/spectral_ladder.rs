@@ -5,8 +5,8 @@
 mod common;
 use common::{advance, engine, fd_spectral_gap, log_slope, rel, scene, simulation, with};
 use serde_json::{json, Value};
-use vesicle::model::max_abs_diff as max_diff;
-use vesicle::simulation::Simulation;
+use vesicle::driver::simulation::Simulation;
+use vesicle::problem::model::max_abs_diff as max_diff;
 
 fn prolate3d() -> Value {
     json!({
@@ -189,16 +189,16 @@ fn every_reduced_box_layout_matches_the_full_box() {
                 "initial": initial, "symmetry": sym
             }));
             let (problem, mut sim) = simulation(&s);
-            sim.run(&vesicle::simulation::StopRules::steps(150), &mut [])
+            sim.run(&vesicle::driver::simulation::StopRules::steps(150), &mut [])
                 .unwrap();
-            let full_grid = vesicle::grid::Grid::new(&s.n, s.h, &vec![false; dim]);
+            let full_grid = vesicle::problem::grid::Grid::new(&s.n, s.h, &vec![false; dim]);
             let full_phi = problem.grid.unfold(sim.engine().phi());
-            let mut ev = vesicle::spectral::evaluator::Evaluator::new(
+            let mut ev = vesicle::engines::spectral::evaluator::Evaluator::new(
                 full_grid,
                 s.eps,
                 problem.c0.clone(),
                 s.laplacian,
-                vesicle::spectral::evaluator::ExplicitTerm::ConservedRhs,
+                vesicle::engines::spectral::evaluator::ExplicitTerm::ConservedRhs,
             );
             let written = ev.state_of(&full_phi, sim.clock.t).unwrap().measures.area;
             (sim.record(), written, center)
@@ -254,8 +254,11 @@ fn residual_is_the_same_on_reduced_and_full_boxes() {
                     extra.clone(),
                 ));
                 let (_, mut sim) = simulation(&s);
-                sim.run(&vesicle::simulation::StopRules::steps(steps), &mut [])
-                    .unwrap();
+                sim.run(
+                    &vesicle::driver::simulation::StopRules::steps(steps),
+                    &mut [],
+                )
+                .unwrap();
                 sim.record().residual
             })
             .collect();
@@ -279,7 +282,7 @@ fn residual_is_the_same_on_reduced_and_full_boxes() {
 /// stored in single precision and round differently on a DCT's spectrum and an FFT's.
 #[test]
 fn relaxational_residual_is_the_same_on_reduced_and_full_boxes() {
-    use vesicle::engine::{AreaConstraint, Engine};
+    use vesicle::engines::{AreaConstraint, Engine};
     let box_of = |sym: Value| {
         scene(json!({
             "dim": 3, "n": [24, 24, 24], "h": 1.0, "eps": 1.0, "method": "spectral",
@@ -290,15 +293,16 @@ fn relaxational_residual_is_the_same_on_reduced_and_full_boxes() {
     };
     let eighth = box_of(json!(["x", "y", "z"]));
     let (problem, mut sim) = simulation(&eighth);
-    sim.run(&vesicle::simulation::StopRules::steps(20), &mut [])
+    sim.run(&vesicle::driver::simulation::StopRules::steps(20), &mut [])
         .unwrap();
     let reduced = sim.record();
     let full = box_of(json!([]));
-    let grid = vesicle::grid::Grid::new(&full.n, full.h, &[false; 3]);
+    let grid = vesicle::problem::grid::Grid::new(&full.n, full.h, &[false; 3]);
     let phi = problem.grid.unfold(sim.engine().phi()).into_owned();
-    let mut e = vesicle::relax::RelaxEngine::new(&full, grid, problem.c0.clone(), phi).unwrap();
+    let mut e =
+        vesicle::engines::relax::RelaxEngine::new(&full, grid, problem.c0.clone(), phi).unwrap();
     e.set_area(AreaConstraint {
-        method: vesicle::config::AreaMethod::Projection,
+        method: vesicle::problem::config::AreaMethod::Projection,
         alpha: 0.0,
         target: reduced.area,
     });
@@ -368,7 +372,7 @@ fn level_set_measures_a_sphere() {
     }));
     let (problem, e) = engine(&s);
     let full = problem.grid.unfold(e.phi());
-    let ls = vesicle::levelset::measure(&full, 3, 0.5);
+    let ls = vesicle::analysis::levelset::measure(&full, 3, 0.5);
     let pi = std::f64::consts::PI;
     eprintln!(
         "sphere R = 10: A0 = {:.3}, V0 = {:.3}, v0 = {:.5}, diffuse v = {:.5}",
@@ -395,7 +399,7 @@ fn level_set_measures_a_circle() {
         "max_steps": 1, "initial": {"shape": "sphere", "radius": 12.0}
     }));
     let (problem, e) = engine(&s);
-    let ls = vesicle::levelset::measure(&problem.grid.unfold(e.phi()), 2, 0.5);
+    let ls = vesicle::analysis::levelset::measure(&problem.grid.unfold(e.phi()), 2, 0.5);
     let pi = std::f64::consts::PI;
     assert!(rel(ls.area, 2.0 * pi * 12.0) < 5e-3, "L0 = {}", ls.area);
     assert!(rel(ls.volume, pi * 144.0) < 5e-3, "area = {}", ls.volume);

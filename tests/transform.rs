@@ -7,8 +7,8 @@ use std::f64::consts::PI;
 
 use ndarray::{Array3, Zip};
 use rustfft::num_complex::Complex64;
-use vesicle::grid::{AxisKind, Grid};
-use vesicle::spectral::transform::Transform;
+use vesicle::engines::spectral::transform::Transform;
+use vesicle::problem::grid::{AxisKind, Grid};
 
 use AxisKind::{Mirror as M, Periodic as P};
 

@@ -4,7 +4,7 @@
 //! shaded views ([`shade`]) and animated GIFs ([`animation`]).
 //!
 //! Every writer receives a FULL-box field (already unfolded from any mirror reduction) in the
-//! internal layout of [`crate::grid`]: a standard-layout `Array3<f64>` of shape `[n0, n1, n2]`,
+//! internal layout of [`crate::problem::grid`]: a standard-layout `Array3<f64>` of shape `[n0, n1, n2]`,
 //! with a 2D scene stored as `[1, nx, ny]`, together with the scene dimension.
 
 pub mod animation;

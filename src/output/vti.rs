@@ -5,7 +5,7 @@
 //! internal axes `(a0, a1, a2)` map to VTK `(z, y, x)` and the data is written in memory order.
 //! In 3D, VTK x/y/z are thus the scene's z/y/x; in 2D (`[1, nx, ny]`) VTK x/y are the scene's
 //! y/x and the image has a single z layer. Points sit at `(i + 1/2 − N/2) h`, so the box is
-//! centred on the origin exactly as in [`crate::grid::Grid::coords`].
+//! centred on the origin exactly as in [`crate::problem::grid::Grid::coords`].
 
 use super::{check_field, create_file, OutputError};
 use ndarray::Array3;

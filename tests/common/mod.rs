@@ -2,10 +2,10 @@
 #![allow(dead_code)]
 
 use serde_json::{json, Value};
-use vesicle::config::{self, Scene};
-use vesicle::engine::Engine;
-use vesicle::setup::{self, Problem};
-use vesicle::simulation::{Simulation, StopRules, Stopped};
+use vesicle::driver::simulation::{Simulation, StopRules, Stopped};
+use vesicle::engines::Engine;
+use vesicle::problem::config::{self, Scene};
+use vesicle::problem::setup::{self, Problem};
 
 /// A validated scene from JSON.
 pub fn scene(v: Value) -> Scene {
@@ -48,7 +48,7 @@ pub fn with(base: &Value, extra: Value) -> Value {
 pub fn fd_spectral_gap(base: &Value, t_end: f64) -> f64 {
     let probe = scene(with(base, json!({"method": "fd", "dt": 1e-6})));
     let grid = setup::build(&probe).expect("problem").grid;
-    let fd_dt = 0.5 * vesicle::fd::stability_bound(&grid, probe.eps, 0.0);
+    let fd_dt = 0.5 * vesicle::engines::fd::stability_bound(&grid, probe.eps, 0.0);
     let fd = scene(with(base, json!({"method": "fd", "dt": fd_dt})));
     let sp = scene(with(
         base,
@@ -58,7 +58,7 @@ pub fn fd_spectral_gap(base: &Value, t_end: f64) -> f64 {
     let (_, mut b) = simulation(&sp);
     advance(&mut a, t_end);
     advance(&mut b, t_end);
-    vesicle::model::max_abs_diff(a.engine().phi(), b.engine().phi())
+    vesicle::problem::model::max_abs_diff(a.engine().phi(), b.engine().phi())
 }
 
 /// Relative difference |a − b| / |b|.

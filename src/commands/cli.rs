@@ -1,0 +1,461 @@
+//! Command-line interface: `vesicle run | resume | check | compare | study | axisym | render |
+//! measure`.
+//!
+//! Exit codes: 0 success, 2 invalid input (the message names the field: a scene key, `n` for a
+//! grid whose estimated peak memory exceeds the memory available, `--out` for an output folder
+//! that exists or cannot be written; all checked before any computation, nothing written), 3 a
+//! run that blew up or broke a constraint (its last good state and summary are written), 1
+//! anything else.
+
+use crate::commands::run::{self, RunOptions};
+use crate::error::Error;
+use crate::problem::config::{self, Scene};
+use clap::{Parser, Subcommand};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+const RUN_EXAMPLE: &str = "Examples:
+  vesicle run runs/ellipse2d.json --out out/ellipse2d
+  vesicle run runs/prolate3d_fd.json --out out/p --set t_end=1 --set output.record_every=100
+  vesicle run runs/sphere3d.json --out out/s --set area.method=lagrangian --set area.alpha=0.002";
+
+/// Phase-field simulation of lipid vesicle shapes (Campelo & Hernández-Machado model).
+#[derive(Parser, Debug)]
+#[command(name = "vesicle", version, after_help = RUN_EXAMPLE)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Scene file and overrides shared by the subcommands.
+#[derive(clap::Args, Debug)]
+struct SceneArgs {
+    /// Scene (run) file, JSON.
+    scene: PathBuf,
+    /// Override a scene field: `key=value`, dotted keys for nested fields (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// Where a command writes.
+#[derive(clap::Args, Debug)]
+struct OutArgs {
+    /// Output folder (default: out/<scene name>[-<command>]); never overwritten without --force.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Replace an existing output folder.
+    #[arg(long)]
+    force: bool,
+}
+
+impl OutArgs {
+    /// The folder: `--out`, or `out/<scene stem><suffix>`.
+    fn folder(&self, scene: &Path, suffix: &str) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| {
+            let stem = scene
+                .file_stem()
+                .map_or("run".into(), |s| s.to_string_lossy().to_string());
+            PathBuf::from("out").join(format!("{stem}{suffix}"))
+        })
+    }
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a scene: writes timeseries.csv, summary.json, phi_final.npy/.vti and PNG images.
+    #[command(after_help = RUN_EXAMPLE)]
+    Run {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[command(flatten)]
+        output: OutArgs,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Continue a run from its checkpoint (`DIR/checkpoint.bin`, written every
+    /// `output.checkpoint_every` steps, every `output.checkpoint_minutes` and at the end),
+    /// bit for bit as if it had not stopped. Extend it with `--set max_steps=M` (counting from
+    /// the start), `--set t_end=T` or `--set stop_residual=R`.
+    #[command(
+        after_help = "Examples:\n  vesicle resume out/prolate3d --set stop_residual=1e-8\n  vesicle resume out/prolate3d_fd --set t_end=240"
+    )]
+    Resume {
+        /// The run folder.
+        dir: PathBuf,
+        /// Change a stop rule, `threads` or an `output.*` key: `key=value` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate a scene and print it with every default resolved, and its stability bound.
+    #[command(after_help = "Example:\n  vesicle check runs/prolate3d.json --set method=fd")]
+    Check {
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
+    /// Studies that compare methods in one run and print ratios (tables, CSV, charts).
+    #[command(
+        subcommand,
+        after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/studies/stability.json --out out/stability"
+    )]
+    Study(Study),
+    /// Shape diagram at c0 = 0 from the axisymmetric (sharp-interface) reference solver:
+    /// prolate, oblate and stomatocyte branches, e against v, and the transition volumes.
+    #[command(
+        after_help = "Example:\n  vesicle axisym --out out/axisym --v-min 0.5 --v-max 0.99 --dv 0.01"
+    )]
+    Axisym(crate::analysis::axisym::diagram::DiagramArgs),
+    /// Shape diagram from the phase-field model: every branch and reduced volume of FILE at
+    /// several ε/R0, relaxed by L-BFGS on its reduced box, extrapolated to ε/R0 → 0 and
+    /// compared with the axisymmetric reference (CSV, chart, thumbnails, transitions).
+    #[command(
+        after_help = "Examples:\n  vesicle diagram runs/diagram.json --out out/diagram\n  vesicle diagram runs/diagram.json --list\n  vesicle diagram runs/diagram.json --out out/diagram --case 7\n  vesicle diagram runs/diagram.json --out out/diagram --merge"
+    )]
+    Diagram(crate::commands::diagram::DiagramArgs),
+    /// Pictures of a finished run: DIR/frames/frame_<step>.png from its snapshots and final
+    /// state (3D: shaded φ = 0 surface, plus surface_<step>.ply), and DIR/movie.gif.
+    #[command(
+        after_help = "Example:\n  vesicle run runs/sphere3d.json --out out/s --set output.snapshot_every=20\n  vesicle render out/s --gif --cut y"
+    )]
+    Render {
+        /// Run folder (with summary.json and snapshots/phi_<step>.npy).
+        dir: PathBuf,
+        /// Also assemble DIR/movie.gif.
+        #[arg(long)]
+        gif: bool,
+        /// Cut away the near half of a 3D shape across the mid-plane normal to this axis.
+        #[arg(long, value_parser = ["x", "y", "z"])]
+        cut: Option<String>,
+        /// Use every K-th snapshot (the final state always).
+        #[arg(long, value_name = "K", default_value_t = 1)]
+        every: usize,
+        /// GIF frame delay in hundredths of a second.
+        #[arg(long, value_name = "CS", default_value_t = 20)]
+        delay: u16,
+        /// Replace an existing DIR/frames.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Radius profile of a finished 3D run along an axis, for every snapshot and the final
+    /// state: neck radius (budding), dominant wavelength against the tube radius (pearling),
+    /// skewness (pears). Writes DIR/measure.csv and DIR/neck.png and prints a short table.
+    #[command(
+        after_help = "Example:\n  vesicle run runs/budding3d.json --out out/budding3d\n  vesicle measure out/budding3d --axis z"
+    )]
+    Measure {
+        /// Run folder (with summary.json, timeseries.csv and snapshots/phi_<step>.npy).
+        dir: PathBuf,
+        /// Axis of the profile: slices are normal to it.
+        #[arg(long, default_value = "z")]
+        axis: String,
+        /// Replace an existing DIR/measure.csv and DIR/neck.png.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Run the finite-difference reference and the spectral engine on the same initial field;
+    /// print and write a table of both at common times.
+    #[command(after_help = "Example:\n  vesicle compare runs/compare2d.json --out out/compare")]
+    Compare {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[command(flatten)]
+        output: OutArgs,
+    },
+}
+
+/// A study file and how to run it.
+#[derive(clap::Args, Debug)]
+struct StudyArgs {
+    /// Study file, JSON (runs/studies/*.json).
+    file: PathBuf,
+    /// The quick variant (the file's "quick" block; under a minute).
+    #[arg(long)]
+    quick: bool,
+    #[command(flatten)]
+    output: OutArgs,
+}
+
+impl StudyArgs {
+    /// Refuse a study file that does not exist.
+    fn exists(&self) -> Result<(), Error> {
+        if self.file.exists() {
+            Ok(())
+        } else {
+            Err(Error::config(
+                "(study file)",
+                format!("{} does not exist", self.file.display()),
+            ))
+        }
+    }
+
+    /// The output folder: `--out`, or `out/<file stem>[-quick]`.
+    fn folder(&self) -> PathBuf {
+        self.output
+            .folder(&self.file, if self.quick { "-quick" } else { "" })
+    }
+}
+
+#[derive(Subcommand, Debug)]
+enum Study {
+    /// Observed orders in Δt (SBDF1, SBDF2; prepared and raw starts), in h (FD h², spectral
+    /// exponential) and in ε/R0 (prolate, oblate, sphere control, with extrapolated limits),
+    /// each from a least-squares fit.
+    #[command(
+        after_help = "Examples:\n  vesicle study convergence runs/studies/convergence.json --out out/convergence\n  vesicle study convergence runs/studies/convergence.json --quick"
+    )]
+    Convergence(StudyArgs),
+    /// What `stop_residual` buys per engine: L-BFGS (the reference; run three times, the run of
+    /// median wall time tabulated), conserved SBDF1 and SBDF2 with adaptive steps, each run to
+    /// residual 1e-8; steps, wall time and energy error at every tolerance from 1e-4 to 1e-8,
+    /// and FD at its bound (extrapolated).
+    #[command(
+        after_help = "Example:\n  vesicle study stationary runs/prolate3d.json --out out/stationary"
+    )]
+    Stationary {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[command(flatten)]
+        output: OutArgs,
+    },
+    /// Speed against accuracy on the 3D prolate: stationary energy error and transient φ error
+    /// against wall time for FD, conserved SBDF1/SBDF2 (fixed and adaptive) and L-BFGS; Pareto
+    /// charts and the spectral/FD wall-time ratio at each error level.
+    #[command(
+        after_help = "Example:\n  vesicle study precision runs/studies/precision.json --out out/precision [--quick]"
+    )]
+    Precision(StudyArgs),
+    /// The stability map: fixed Δt against h for FD, SBDF1 and SBDF2 (S = 0 and default S),
+    /// adaptive runs at several tolerances, the Lagrangian α against Δt; every run classified.
+    #[command(
+        after_help = "Example:\n  vesicle study stability runs/studies/stability.json --out out/stability [--quick]"
+    )]
+    Stability(StudyArgs),
+}
+
+/// Parse the command line, run it, and return the process exit code.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            exit_code(&e)
+        }
+    }
+}
+
+/// Exit code of an error: 2 invalid input, 3 blow-up, 1 otherwise.
+pub fn exit_code(e: &Error) -> i32 {
+    match e {
+        Error::Config { .. } => 2,
+        Error::Blowup { .. } => 3,
+        Error::Io { .. } | Error::Output(_) => 1,
+    }
+}
+
+fn load(args: &SceneArgs) -> Result<Scene, Error> {
+    if !args.scene.exists() {
+        return Err(Error::config(
+            "(scene file)",
+            format!("{} does not exist", args.scene.display()),
+        ));
+    }
+    config::load(&args.scene, &args.set)
+}
+
+/// Computed points below which one thread is faster than two on this machine kind (the
+/// 24³ eighth box of the 48³ prolate: 5.6 s on one thread, 9.1 s on two).
+const SERIAL_BELOW: usize = 1 << 17;
+
+/// Run `f` in a pool of the scene's `threads`; by default one thread for small grids
+/// (fewer than [`SERIAL_BELOW`] computed points) and all cores otherwise.
+fn with_threads<T>(scene: &Scene, f: impl FnOnce() -> T + Send) -> T
+where
+    T: Send,
+{
+    let mirrored = match &scene.symmetry {
+        crate::problem::config::Symmetry::Axes(a) => a.len() as u32,
+        crate::problem::config::Symmetry::Auto(_) => 0,
+    };
+    let points = scene.n.iter().fold(1usize, |p, &m| p.saturating_mul(m)) >> mirrored;
+    let threads = scene.threads.unwrap_or(if points < SERIAL_BELOW {
+        1
+    } else {
+        rayon::current_num_threads()
+    });
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("thread pool")
+        .install(f)
+}
+
+/// Print the one-line result of a run; its exit code (128 + the signal that interrupted it).
+fn report(outcome: &run::Outcome, out: &Path) -> i32 {
+    let l = &outcome.last;
+    eprintln!(
+        "done ({}): step {} t {:.6e} e {:.6} v {:.6} sigma {:.4e} residual {:.3e} in {:.2} s -> {}",
+        outcome.stopped.as_str(),
+        l.step,
+        l.t,
+        l.reduced_energy,
+        l.reduced_volume,
+        l.sigma,
+        l.residual,
+        outcome.wall_seconds,
+        out.display()
+    );
+    outcome.signal.map_or(0, |s| 128 + s)
+}
+
+/// Run the command; its exit code (0, or 130/143 for a run ended by SIGINT/SIGTERM).
+fn dispatch(cli: Cli) -> Result<i32, Error> {
+    match cli.command {
+        Command::Run {
+            scene: args,
+            output,
+            quiet,
+        } => {
+            let scene = load(&args)?;
+            let out = output.folder(&args.scene, "");
+            let opts = RunOptions {
+                out: out.clone(),
+                force: output.force,
+                progress: !quiet && std::io::stderr().is_terminal(),
+            };
+            let outcome = with_threads(&scene, || run::run(&scene, &opts))?;
+            Ok(report(&outcome, &out))
+        }
+        Command::Resume { dir, set, quiet } => {
+            let checkpoint = crate::driver::checkpoint::Checkpoint::read(&dir)?;
+            let scene = run::resumed_scene(checkpoint.scene.clone(), &set)?;
+            let progress = !quiet && std::io::stderr().is_terminal();
+            let outcome = with_threads(&scene, || run::resume(&dir, checkpoint, &scene, progress))?;
+            Ok(report(&outcome, &dir))
+        }
+        Command::Check { scene: args } => {
+            let scene = load(&args)?;
+            let problem = crate::problem::setup::build(&scene)?;
+            crate::driver::simulation::check_stability(&scene, &problem.grid)?;
+            let resolved = with_threads(&scene, || {
+                run::resolved_scene(
+                    &scene,
+                    scene.area.target.unwrap_or(f64::NAN),
+                    &problem.mirror,
+                )
+            });
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&resolved.resolved_value()).expect("serialisable")
+            );
+            eprintln!("{}", run::describe(&scene, &problem, "check"));
+            Ok(0)
+        }
+        Command::Study(Study::Stationary {
+            scene: args,
+            output,
+        }) => {
+            let scene = load(&args)?;
+            let out = output.folder(&args.scene, "-stationary");
+            with_threads(&scene, || {
+                crate::commands::study::stationary::stationary(&scene, &out, output.force)
+            })?;
+            Ok(0)
+        }
+        Command::Study(Study::Precision(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::commands::study::precision::precision(
+                &args.file,
+                args.quick,
+                &out,
+                args.output.force,
+            )?;
+            Ok(0)
+        }
+        Command::Study(Study::Stability(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::commands::study::stability::stability(
+                &args.file,
+                args.quick,
+                &out,
+                args.output.force,
+            )?;
+            Ok(0)
+        }
+        Command::Study(Study::Convergence(args)) => {
+            args.exists()?;
+            let out = args.folder();
+            crate::commands::study::convergence::convergence(
+                &args.file,
+                args.quick,
+                &out,
+                args.output.force,
+            )?;
+            Ok(0)
+        }
+        Command::Axisym(args) => {
+            crate::analysis::axisym::diagram::run(&args)?;
+            Ok(0)
+        }
+        Command::Diagram(args) => {
+            crate::commands::diagram::run(&args)?;
+            Ok(0)
+        }
+        Command::Render {
+            dir,
+            gif,
+            cut,
+            every,
+            delay,
+            force,
+        } => {
+            let opts = crate::commands::render::RenderOptions {
+                gif,
+                cut: cut
+                    .as_deref()
+                    .map(crate::commands::render::axis_index)
+                    .transpose()?,
+                every,
+                force,
+                delay_cs: delay,
+            };
+            let done = crate::commands::render::render(&dir, &opts)?;
+            let gif = done.gif.map(|g| format!(" and {}", g.display()));
+            eprintln!(
+                "{} frames -> {}{}",
+                done.frames.len(),
+                dir.join("frames").display(),
+                gif.unwrap_or_default()
+            );
+            Ok(0)
+        }
+        Command::Measure { dir, axis, force } => {
+            let opts = crate::commands::measure::MeasureOptions { axis, force };
+            let done = crate::commands::measure::measure(&dir, &opts)?;
+            print!("{}", crate::commands::measure::table(&done.rows, 12));
+            eprintln!(
+                "{} states -> {} and {}",
+                done.rows.len(),
+                done.csv.display(),
+                done.chart.display()
+            );
+            Ok(0)
+        }
+        Command::Compare {
+            scene: args,
+            output,
+        } => {
+            let scene = load(&args)?;
+            let out = output.folder(&args.scene, "-compare");
+            with_threads(&scene, || {
+                crate::commands::compare::compare(&scene, &out, output.force)
+            })?;
+            Ok(0)
+        }
+    }
+}

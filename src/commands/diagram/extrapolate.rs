@@ -1,0 +1,128 @@
+//! From the cases of a diagram to its best estimates. Each point `(branch, v₀)` computed at
+//! several x = ε/R0 is extrapolated to x → 0 in both of its coordinates,
+//!
+//! ```text
+//! v(x) = v∞ + c_v x^{p_v},   e(x) = e∞ + c_e x^{p_e},
+//! ```
+//!
+//! with the orders `p_v`, `p_e` shared by all points and fitted by least squares
+//! ([`crate::analysis::curves::common_order`]), and `v∞`, `e∞` by a least-squares fit per point at those
+//! orders ([`crate::analysis::curves::power_fit`]). Both coordinates move: at finite ε the φ = 0 surface
+//! relaxes to another reduced volume than the sharp start's (by about 0.01 at R0 = 24ε), so
+//! the pair `(v(x), e(x))` slides along the branch as it converges, and `(v∞, e∞)` is the
+//! point's sharp-interface estimate.
+//!
+//! **Pre-asymptotic resolutions are left out.** Where two sheets of the membrane come within a
+//! few ε of each other (an oblate's centre near v = 0.59 is 0.22 R0 thick: 5.4ε at R0 = 24ε)
+//! their profiles merge and e jumps by several percent instead of converging. A resolution
+//! whose e differs from the next finer one's by more than [`JUMP`] is dropped (with every
+//! coarser one); the point is then fitted from the rest at the shared orders.
+
+use super::case::CaseResult;
+use crate::analysis::curves::{common_order, power_fit};
+
+/// Largest relative change of e from one resolution to the next finer one that counts as
+/// convergence (consecutive resolutions of the committed diagram differ by at most 1.4%
+/// elsewhere).
+pub const JUMP: f64 = 0.02;
+
+/// One point of the diagram: a branch at a target reduced volume, at every resolution.
+#[derive(Clone, Debug)]
+pub struct Point {
+    /// Branch name.
+    pub branch: String,
+    /// Target reduced volume v₀ (the sharp start's).
+    pub v_target: f64,
+    /// The cases used in the fit, in increasing R0/ε.
+    pub cases: Vec<CaseResult>,
+    /// Coarser cases left out as pre-asymptotic.
+    pub dropped: Vec<CaseResult>,
+    /// Extrapolated reduced volume `v∞`.
+    pub v: f64,
+    /// Extrapolated reduced energy `e∞`.
+    pub e: f64,
+}
+
+impl Point {
+    /// The finest-resolution case.
+    pub fn finest(&self) -> &CaseResult {
+        self.cases.last().expect("a point has cases")
+    }
+
+    /// `(ε/R0, quantity)` of the cases used.
+    fn series(&self, get: fn(&CaseResult) -> f64) -> (Vec<f64>, Vec<f64>) {
+        (
+            self.cases.iter().map(|c| 1.0 / c.r0).collect(),
+            self.cases.iter().map(get).collect(),
+        )
+    }
+}
+
+/// The fitted orders.
+#[derive(Clone, Copy, Debug)]
+pub struct Orders {
+    /// Order of the φ = 0 reduced volume in ε/R0.
+    pub v: f64,
+    /// Order of the reduced energy in ε/R0.
+    pub e: f64,
+}
+
+/// Split `cases` (increasing R0) into the pre-asymptotic coarsest ones and the rest.
+fn split(mut cases: Vec<CaseResult>) -> (Vec<CaseResult>, Vec<CaseResult>) {
+    let mut dropped = Vec::new();
+    while cases.len() >= 2 && (cases[0].e / cases[1].e - 1.0).abs() > JUMP {
+        dropped.push(cases.remove(0));
+    }
+    (dropped, cases)
+}
+
+/// Group `results` into points (branch and target v; cases in increasing R0), leave out the
+/// pre-asymptotic resolutions and extrapolate. `None` if the orders cannot be fitted (no point
+/// keeps three resolutions).
+pub fn extrapolate(results: &[CaseResult]) -> Option<(Vec<Point>, Orders)> {
+    let mut groups: Vec<(String, f64, Vec<CaseResult>)> = Vec::new();
+    for r in results {
+        match groups
+            .iter_mut()
+            .find(|g| g.0 == r.branch && g.1 == r.v_target)
+        {
+            Some(g) => g.2.push(r.clone()),
+            None => groups.push((r.branch.clone(), r.v_target, vec![r.clone()])),
+        }
+    }
+    let mut points: Vec<Point> = groups
+        .into_iter()
+        .map(|(branch, v_target, mut cases)| {
+            cases.sort_by(|a, b| a.r0.total_cmp(&b.r0));
+            let (dropped, cases) = split(cases);
+            Point {
+                branch,
+                v_target,
+                cases,
+                dropped,
+                v: f64::NAN,
+                e: f64::NAN,
+            }
+        })
+        .collect();
+    let fitted = |get: fn(&CaseResult) -> f64| {
+        let series: Vec<_> = points.iter().map(|p| p.series(get)).collect();
+        common_order(&series)
+    };
+    let orders = Orders {
+        v: fitted(|c| c.v)?,
+        e: fitted(|c| c.e)?,
+    };
+    for p in &mut points {
+        let at = |get: fn(&CaseResult) -> f64, order: f64| {
+            let (x, y) = p.series(get);
+            if x.len() < 2 {
+                y[0]
+            } else {
+                power_fit(order, &x, &y).0
+            }
+        };
+        (p.v, p.e) = (at(|c| c.v, orders.v), at(|c| c.e, orders.e));
+    }
+    Some((points, orders))
+}

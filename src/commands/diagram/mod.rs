@@ -1,0 +1,298 @@
+//! `vesicle diagram FILE`: the c0 = 0 shape diagram (reduced bending energy e against reduced
+//! volume v on the prolate, oblate and stomatocyte branches) from the phase-field model,
+//! against the program's own sharp-interface reference ([`crate::analysis::axisym`]).
+//!
+//! Each point `(branch, v)` starts from the reference shape at `v` ([`crate::problem::revolution`]),
+//! scaled to R0 = `r0` ε for every resolution of the diagram file ([`spec`]), and is relaxed
+//! by L-BFGS on its symmetry-reduced box (⅛ for prolates and oblates, ¼ for stomatocytes) to
+//! the stationarity tolerance ([`case`]). The φ = 0 surface gives v, and the pair (v, e) is
+//! extrapolated to ε/R0 → 0 with orders fitted over the whole diagram ([`extrapolate`]).
+//!
+//! Cases are independent: `--list` prints them, `--case K` runs one into
+//! `OUT/cases/<case>/`, `--merge` collects the folders into the CSV files and charts
+//! ([`report`], [`chart`]); without these flags one process runs every case (`--jobs` at a
+//! time, one thread each) and merges. Either way the CSV files are the same.
+
+pub mod case;
+pub mod chart;
+pub mod extrapolate;
+pub mod reference;
+pub mod report;
+pub mod spec;
+
+use crate::analysis::axisym::{self, Options};
+use crate::error::{Error, Result};
+use case::{read_result, run_case, CaseResult};
+use rayon::prelude::*;
+use spec::{Case, DiagramSpec};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// Arguments of `vesicle diagram`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct DiagramArgs {
+    /// Diagram file (JSON): branches and reduced volumes, resolutions R0/ε, tolerance.
+    pub file: PathBuf,
+    /// Output folder (cases go to OUT/cases/); default out/<file stem>.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print the cases (number, branch, v, R0/ε, grid) and stop.
+    #[arg(long, conflicts_with_all = ["case", "merge"])]
+    pub list: bool,
+    /// Run case K only, into OUT/cases/<case>/.
+    #[arg(long, value_name = "K", conflicts_with = "merge")]
+    pub case: Option<usize>,
+    /// Collect OUT/cases/ into the CSV files and charts (every case must have finished).
+    #[arg(long)]
+    pub merge: bool,
+    /// Cases run at once by a single-process sweep (default: the number of cores).
+    #[arg(long, value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Replace an existing output folder (sweep), case result (--case) or merged files
+    /// (--merge).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Run the command.
+///
+/// # Errors
+/// `Error::Config` for a bad diagram file or arguments (naming the key or flag; nothing is
+/// written), a case that is already done (without `--force`), or a merge with cases missing.
+pub fn run(args: &DiagramArgs) -> Result<()> {
+    let spec = DiagramSpec::load(&args.file)?;
+    let cases = spec.cases();
+    let out = args.out.clone().unwrap_or_else(|| {
+        let stem = args.file.file_stem().unwrap_or_default().to_string_lossy();
+        PathBuf::from("out").join(stem.as_ref())
+    });
+    if args.list {
+        return list(&spec, &cases);
+    }
+    if let Some(k) = args.case {
+        let case = cases.get(k).ok_or_else(|| {
+            Error::config(
+                "--case",
+                format!("the diagram has cases 0..{}, got {k}", cases.len()),
+            )
+        })?;
+        let dir = out.join("cases").join(case.folder());
+        if dir.join("result.json").exists() && !args.force {
+            return Err(Error::config(
+                "--case",
+                format!("case {k} is done ({}); --force redoes it", dir.display()),
+            ));
+        }
+        let shape = start_shape(case)?;
+        let r = run_case(&spec, case, &shape, &dir)
+            .map_err(|e| e.within(&format!("diagram case {k} ({})", case.folder())))?;
+        eprintln!("{}", line(&r, 1, 1));
+        return Ok(());
+    }
+    if args.merge {
+        return merge(&cases, &out, args.force);
+    }
+    sweep(&spec, &cases, &out, args)?;
+    merge(&cases, &out, true)
+}
+
+/// The sharp start of `case`.
+fn start_shape(case: &Case) -> Result<axisym::Solution> {
+    axisym::solve(case.branch, case.v, &Options::default()).map_err(|e| {
+        Error::config(
+            format!("branches.{}", case.branch.name()),
+            format!("no reference shape at v = {}: {e}", case.v),
+        )
+    })
+}
+
+/// The sharp starts of every `(branch, v)` of `cases`, in parallel, in the order of `cases`.
+fn start_shapes(cases: &[Case]) -> Result<Vec<axisym::Solution>> {
+    let mut keys: Vec<&Case> = Vec::new();
+    for c in cases {
+        if !keys.iter().any(|k| k.branch == c.branch && k.v == c.v) {
+            keys.push(c);
+        }
+    }
+    let solved: Vec<axisym::Solution> = keys
+        .par_iter()
+        .map(|c| start_shape(c))
+        .collect::<Result<_>>()?;
+    Ok(cases
+        .iter()
+        .map(|c| {
+            let k = keys
+                .iter()
+                .position(|k| k.branch == c.branch && k.v == c.v)
+                .expect("listed");
+            solved[k].clone()
+        })
+        .collect())
+}
+
+fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
+    let shapes = start_shapes(cases)?;
+    println!("case  branch        v       R0/ε  grid (full box)    computed points");
+    let mut total = 0usize;
+    for (c, s) in cases.iter().zip(&shapes) {
+        let n = case::grid_for(s, c.r0, spec);
+        let points = case::computed_points(c.branch, n);
+        total += points;
+        println!(
+            "{:>4}  {:<12} {:>6} {:>6}  {:>4}x{:>4}x{:>4}  {:>10}",
+            c.index,
+            c.branch.name(),
+            c.v,
+            c.r0,
+            n[0],
+            n[1],
+            n[2],
+            points
+        );
+    }
+    println!("{} cases, {} computed points in all", cases.len(), total);
+    Ok(())
+}
+
+/// One line about a finished case.
+fn line(r: &CaseResult, done: usize, of: usize) -> String {
+    format!(
+        "[{done}/{of}] case {} {} v0 = {} R0 = {}ε: v {:.5} e {:.5} ({}, {} iterations, residual {:.1e}, {:.1} s)",
+        r.index, r.branch, r.v_target, r.r0, r.v, r.e, r.stopped, r.iterations, r.residual, r.wall_seconds
+    )
+}
+
+/// Run every case in `out/cases/`, `args.jobs` at a time, the largest first.
+fn sweep(spec: &DiagramSpec, cases: &[Case], out: &Path, args: &DiagramArgs) -> Result<()> {
+    if out.exists() {
+        if !args.force {
+            return Err(Error::config(
+                "--out",
+                format!("{} exists; --force replaces it", out.display()),
+            ));
+        }
+        std::fs::remove_dir_all(out).map_err(|source| Error::Io {
+            path: out.to_path_buf(),
+            source,
+        })?;
+    }
+    let start = Instant::now();
+    let shapes = start_shapes(cases)?;
+    let mut order: Vec<(usize, usize)> = cases
+        .iter()
+        .zip(&shapes)
+        .map(|(c, s)| (c.index, case::grid_for(s, c.r0, spec).iter().product()))
+        .collect();
+    order.sort_by_key(|&(_, points)| std::cmp::Reverse(points));
+    let (next, done) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    // Plain threads, each taking the next case and running it on a pool of one thread: a
+    // rayon pool here would start more cases while one waits on its own pool.
+    let worker = || -> Result<()> {
+        let single = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("thread pool");
+        while let Some(&(k, _)) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
+            let c = &cases[k];
+            let dir = out.join("cases").join(c.folder());
+            let r = single
+                .install(|| run_case(spec, c, &shapes[k], &dir))
+                .map_err(|e| e.within(&format!("diagram case {k} ({})", c.folder())))?;
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            let elapsed = start.elapsed().as_secs_f64();
+            let eta = elapsed / n as f64 * (cases.len() - n) as f64;
+            eprintln!(
+                "{} | {elapsed:.0} s, ETA {eta:.0} s",
+                line(&r, n, cases.len())
+            );
+        }
+        Ok(())
+    };
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..jobs).map(|_| scope.spawn(worker)).collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a sweep worker panicked"))
+            .collect::<Result<Vec<()>>>()
+    })?;
+    eprintln!(
+        "{} cases in {:.0} s on {jobs} job(s)",
+        cases.len(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Collect the case results of `out/cases/` into the merged files.
+fn merge(cases: &[Case], out: &Path, force: bool) -> Result<()> {
+    if out.join("diagram.csv").exists() && !force {
+        return Err(Error::config(
+            "--merge",
+            format!(
+                "{} exists; --force replaces the merged files",
+                out.join("diagram.csv").display()
+            ),
+        ));
+    }
+    let found: Vec<Option<CaseResult>> = cases
+        .iter()
+        .map(|c| read_result(&out.join("cases").join(c.folder())))
+        .collect::<Result<_>>()?;
+    report::check_complete(cases.len(), &found)?;
+    let results: Vec<CaseResult> = found.into_iter().flatten().collect();
+    let Some((points, orders)) = extrapolate::extrapolate(&results) else {
+        return Err(Error::config(
+            "r0",
+            "the orders in ε/R0 need three or more resolutions with distinct values",
+        ));
+    };
+    let (v_lo, v_hi) = results.iter().fold((1.0f64, 0.0f64), |(a, b), r| {
+        (a.min(r.v).min(r.v_target), b.max(r.v).max(r.v_target))
+    });
+    let reference = reference::Reference::new(v_lo - 0.03, v_hi + 0.03);
+    report::write_csv(out, &points, &results, &reference)?;
+    let extrapolated = report::branch_points(&points, |p| (p.v, p.e));
+    // Each transition: its name, the reference volume, and the extrapolated crossing as a
+    // point of the diagram (e on the first of the two branches).
+    let transitions: Vec<chart::Transition> = report::transitions(&points, &reference)
+        .into_iter()
+        .zip(reference::TRANSITIONS)
+        .map(|((name, t), (a, _))| {
+            let branch = &extrapolated[axisym::Branch::ALL
+                .iter()
+                .position(|b| *b == a)
+                .expect("listed")];
+            let crossing = (t[1].is_finite() && !branch.is_empty())
+                .then(|| (t[1], crate::analysis::curves::cubic_at(branch, t[1])));
+            chart::Transition {
+                name,
+                reference: t[0],
+                crossing,
+            }
+        })
+        .collect();
+    chart::write_chart(
+        &out.join("diagram.png"),
+        &reference,
+        &extrapolated,
+        &report::branch_points(&points, |p| (p.finest().v, p.finest().e)),
+        &transitions,
+    )?;
+    report::write_error_chart(out, &points, &reference)?;
+    let thumbnails: Vec<PathBuf> = cases
+        .iter()
+        .map(|c| out.join("cases").join(c.folder()).join("thumbnail.png"))
+        .filter(|p| p.exists())
+        .collect();
+    chart::write_montage(&out.join("thumbnails.png"), &thumbnails, 4)?;
+    let table = report::table(&points, &results, orders, &reference);
+    crate::commands::study::write_text(out, "table.txt", &table)?;
+    print!("{table}");
+    println!("-> {}", out.display());
+    Ok(())
+}

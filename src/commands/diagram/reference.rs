@@ -1,0 +1,68 @@
+//! The sharp-interface reference of a diagram: the branches of [`crate::analysis::axisym`] on a fine grid
+//! of reduced volumes, interpolated, and their transition volumes.
+
+use crate::analysis::axisym::{self, Branch, Options};
+use crate::analysis::curves::{crossings, cubic_at};
+use rayon::prelude::*;
+
+/// Grid spacing in v of the reference curves (the cubic interpolant is then exact to ~1e-8).
+const DV: f64 = 0.005;
+
+/// The reference branches, each `(v, e)` in increasing v.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    /// Per branch of [`Branch::ALL`].
+    pub curves: Vec<Vec<(f64, f64)>>,
+}
+
+/// A transition: where two branches' energies cross.
+pub const TRANSITIONS: [(Branch, Branch); 3] = [
+    (Branch::Prolate, Branch::Oblate),
+    (Branch::Oblate, Branch::Stomatocyte),
+    (Branch::Prolate, Branch::Stomatocyte),
+];
+
+impl Reference {
+    /// Follow every branch over `[v_lo, v_hi]` (clipped to (0, 1]) in steps of 0.005.
+    pub fn new(v_lo: f64, v_hi: f64) -> Self {
+        let lo = (v_lo / DV).floor().max(1.0) as usize;
+        // Below v = 1, where the prolate and oblate branches meet at the sphere.
+        let hi = ((v_hi / DV).ceil() as usize).min((0.995 / DV).round() as usize);
+        let vs: Vec<f64> = (lo..=hi).map(|i| i as f64 * DV).collect();
+        let opts = Options::default();
+        let curves = Branch::ALL
+            .par_iter()
+            .map(|&b| {
+                axisym::follow(b, &vs, &opts)
+                    .shapes
+                    .iter()
+                    .map(|s| (s.v, s.e))
+                    .collect()
+            })
+            .collect();
+        Reference { curves }
+    }
+
+    /// The curve of `branch`.
+    pub fn curve(&self, branch: Branch) -> &[(f64, f64)] {
+        let i = Branch::ALL
+            .iter()
+            .position(|b| *b == branch)
+            .expect("listed");
+        &self.curves[i]
+    }
+
+    /// e of `branch` at `v`, NaN outside the computed part of the branch.
+    pub fn e(&self, branch: Branch, v: f64) -> f64 {
+        let c = self.curve(branch);
+        match (c.first(), c.last()) {
+            (Some(lo), Some(hi)) if v >= lo.0 && v <= hi.0 => cubic_at(c, v),
+            _ => f64::NAN,
+        }
+    }
+
+    /// Where the two branches cross (empty if they do not on the computed range).
+    pub fn transition(&self, a: Branch, b: Branch) -> Vec<f64> {
+        crossings(self.curve(a), self.curve(b))
+    }
+}

@@ -1,0 +1,299 @@
+//! The merged diagram: `diagram.csv` (one row per point: the extrapolated estimate first, then
+//! the finest resolution's raw values), `cases.csv` (every case, with iterations and wall
+//! time), `transitions.csv`, `reference.csv`, the chart and the thumbnails, and a printed
+//! table against the reference.
+
+use super::case::CaseResult;
+use super::extrapolate::{Orders, Point};
+use super::reference::{Reference, TRANSITIONS};
+use super::spec::branch_named;
+use crate::analysis::axisym::Branch;
+use crate::analysis::curves::crossings;
+use crate::error::{Error, Result};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Relative error `e / e_ref − 1` (NaN when the reference does not reach `v`).
+fn error(reference: &Reference, branch: &str, v: f64, e: f64) -> f64 {
+    let b = branch_named(branch).expect("a listed branch");
+    e / reference.e(b, v) - 1.0
+}
+
+/// Per branch of [`Branch::ALL`]: its points as `(v, e)` in increasing v, by `coords`.
+pub fn branch_points(points: &[Point], coords: fn(&Point) -> (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    Branch::ALL
+        .iter()
+        .map(|b| {
+            let mut pts: Vec<(f64, f64)> = points
+                .iter()
+                .filter(|p| p.branch == b.name())
+                .map(coords)
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pts
+        })
+        .collect()
+}
+
+/// The transition volumes of the reference, of the extrapolated points and of the finest
+/// resolution, per pair of [`TRANSITIONS`] (NaN where the curves do not cross once).
+pub fn transitions(points: &[Point], reference: &Reference) -> Vec<(String, [f64; 3])> {
+    let extrapolated = branch_points(points, |p| (p.v, p.e));
+    let finest = branch_points(points, |p| (p.finest().v, p.finest().e));
+    let index = |b: Branch| Branch::ALL.iter().position(|x| *x == b).expect("listed");
+    let single = |vs: Vec<f64>| if vs.len() == 1 { vs[0] } else { f64::NAN };
+    TRANSITIONS
+        .iter()
+        .map(|&(a, b)| {
+            let (i, j) = (index(a), index(b));
+            (
+                format!("{}/{}", a.name(), b.name()),
+                [
+                    single(reference.transition(a, b)),
+                    single(crossings(&extrapolated[i], &extrapolated[j])),
+                    single(crossings(&finest[i], &finest[j])),
+                ],
+            )
+        })
+        .collect()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> Result<()> {
+    crate::commands::study::write_text(dir, name, text)
+}
+
+/// Write the CSV files of the merged diagram to `out`.
+///
+/// # Errors
+/// I/O errors.
+pub fn write_csv(
+    out: &Path,
+    points: &[Point],
+    results: &[CaseResult],
+    reference: &Reference,
+) -> Result<()> {
+    let mut s = String::from(
+        "branch,v,e,v_target,e_reference,error,r0_finest,v_finest,e_finest,e_reference_finest,\
+         error_finest,v_diffuse_finest,sigma_finest,resolutions_used\n",
+    );
+    for p in points {
+        let f = p.finest();
+        let b = branch_named(&p.branch).expect("listed");
+        let used: Vec<String> = p.cases.iter().map(|c| c.r0.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "{},{:.6},{:.6},{},{:.6},{:.3e},{},{:.6},{:.6},{:.6},{:.3e},{:.6},{:.6e},{}",
+            p.branch,
+            p.v,
+            p.e,
+            p.v_target,
+            reference.e(b, p.v),
+            error(reference, &p.branch, p.v, p.e),
+            f.r0,
+            f.v,
+            f.e,
+            reference.e(b, f.v),
+            error(reference, &p.branch, f.v, f.e),
+            f.v_diffuse,
+            f.sigma,
+            used.join(" ")
+        );
+    }
+    write(out, "diagram.csv", &s)?;
+
+    let mut s = String::from(
+        "index,branch,v_target,r0,n,points,v,v_diffuse,e,e_reference,error,sigma,residual,\
+         iterations,stopped,wall_seconds\n",
+    );
+    for r in results {
+        let b = branch_named(&r.branch).expect("listed");
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{}x{}x{},{},{:.8},{:.8},{:.8},{:.8},{:.3e},{:.8e},{:.3e},{},{},{:.2}",
+            r.index,
+            r.branch,
+            r.v_target,
+            r.r0,
+            r.n[0],
+            r.n[1],
+            r.n[2],
+            r.points,
+            r.v,
+            r.v_diffuse,
+            r.e,
+            reference.e(b, r.v),
+            error(reference, &r.branch, r.v, r.e),
+            r.sigma,
+            r.residual,
+            r.iterations,
+            r.stopped,
+            r.wall_seconds
+        );
+    }
+    write(out, "cases.csv", &s)?;
+
+    let mut s = String::from("transition,reference,extrapolated,finest\n");
+    for (name, [r, e, f]) in transitions(points, reference) {
+        let _ = writeln!(s, "{name},{r:.5},{e:.5},{f:.5}");
+    }
+    write(out, "transitions.csv", &s)?;
+
+    let mut s = String::from("branch,v,e\n");
+    for (b, c) in Branch::ALL.iter().zip(&reference.curves) {
+        for (v, e) in c {
+            let _ = writeln!(s, "{},{v:.6},{e:.8}", b.name());
+        }
+    }
+    write(out, "reference.csv", &s)
+}
+
+/// The printed table: every point against the reference, the orders, the transitions, the
+/// worst errors and the cases that did not converge.
+pub fn table(
+    points: &[Point],
+    results: &[CaseResult],
+    orders: Orders,
+    reference: &Reference,
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<12} {:>6} | {:>5} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8}",
+        "branch", "v0", "R0/ε", "v", "e", "error", "v∞", "e∞", "error"
+    );
+    let (mut worst_raw, mut worst_ext) = ((0.0f64, String::new()), (0.0f64, String::new()));
+    for p in points {
+        let f = p.finest();
+        let (er, ee) = (
+            error(reference, &p.branch, f.v, f.e),
+            error(reference, &p.branch, p.v, p.e),
+        );
+        let _ = writeln!(
+            s,
+            "{:<12} {:>6.3} | {:>5} {:>8.5} {:>8.5} {:>+7.3}% | {:>8.5} {:>8.5} {:>+7.3}%",
+            p.branch,
+            p.v_target,
+            f.r0,
+            f.v,
+            f.e,
+            100.0 * er,
+            p.v,
+            p.e,
+            100.0 * ee
+        );
+        let at = format!("{} v0 = {}", p.branch, p.v_target);
+        if er.abs() > worst_raw.0 {
+            worst_raw = (er.abs(), at.clone());
+        }
+        if ee.abs() > worst_ext.0 {
+            worst_ext = (ee.abs(), at);
+        }
+    }
+    let _ = writeln!(
+        s,
+        "orders in ε/R0 (least squares over all points): v {:.2}, e {:.2}",
+        orders.v, orders.e
+    );
+    for p in points.iter().filter(|p| !p.dropped.is_empty()) {
+        let r0: Vec<String> = p.dropped.iter().map(|c| c.r0.to_string()).collect();
+        let _ = writeln!(
+            s,
+            "{} v0 = {}: R0/ε = {} left out (e jumps by more than {}% to the next resolution)",
+            p.branch,
+            p.v_target,
+            r0.join(", "),
+            100.0 * super::extrapolate::JUMP
+        );
+    }
+    let _ = writeln!(
+        s,
+        "worst |error|: finest resolution {:.3}% ({}), extrapolated {:.3}% ({})",
+        100.0 * worst_raw.0,
+        worst_raw.1,
+        100.0 * worst_ext.0,
+        worst_ext.1
+    );
+    for (name, [r, e, f]) in transitions(points, reference) {
+        let _ = writeln!(
+            s,
+            "transition {name:<20} reference {r:.4}  extrapolated {e:.4} ({:+.4})  finest {f:.4} ({:+.4})",
+            e - r,
+            f - r
+        );
+    }
+    let failed: Vec<String> = results
+        .iter()
+        .filter(|r| !r.converged())
+        .map(|r| format!("{} ({})", r.index, r.stopped))
+        .collect();
+    if !failed.is_empty() {
+        let _ = writeln!(s, "NOT stationary: cases {}", failed.join(", "));
+    }
+    let wall: f64 = results.iter().map(|r| r.wall_seconds).sum();
+    let _ = writeln!(
+        s,
+        "{} cases; their wall times (one thread each) add up to {:.0} s",
+        results.len(),
+        wall
+    );
+    s
+}
+
+/// `errors.png`: the relative error `e / e_ref(v) − 1` in percent against v, per branch, of the
+/// finest resolution's raw points and of the extrapolated ones.
+///
+/// # Errors
+/// `Error::Output` if drawing or writing fails.
+pub fn write_error_chart(out: &Path, points: &[Point], reference: &Reference) -> Result<()> {
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for b in Branch::ALL {
+        let mine: Vec<&Point> = points.iter().filter(|p| p.branch == b.name()).collect();
+        let pct = |v: f64, e: f64| 100.0 * (e / reference.e(b, v) - 1.0);
+        series.push((
+            format!("{}, finest ε/R0 (raw)", b.name()),
+            mine.iter()
+                .map(|p| (p.finest().v, pct(p.finest().v, p.finest().e)))
+                .collect(),
+        ));
+        series.push((
+            format!("{}, extrapolated ε/R0 → 0", b.name()),
+            mine.iter().map(|p| (p.v, pct(p.v, p.e))).collect(),
+        ));
+    }
+    let named: Vec<(&str, Vec<(f64, f64)>)> = series
+        .iter()
+        .map(|(n, p)| (n.as_str(), p.clone()))
+        .collect();
+    crate::output::chart::write_timeseries_png(
+        &out.join("errors.png"),
+        &named,
+        "reduced volume v",
+        "e / e_reference(v) − 1  [%]",
+        false,
+    )?;
+    Ok(())
+}
+
+/// Check that `results` cover `expected` cases.
+///
+/// # Errors
+/// `Error::Config` (field `--merge`) listing the cases without a result.
+pub fn check_complete(expected: usize, results: &[Option<CaseResult>]) -> Result<()> {
+    let missing: Vec<String> = results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.is_none())
+        .map(|(k, _)| k.to_string())
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(Error::config(
+        "--merge",
+        format!(
+            "{} of {expected} cases have no result yet (run them with --case K): {}",
+            missing.len(),
+            missing.join(", ")
+        ),
+    ))
+}

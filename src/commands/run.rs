@@ -1,0 +1,451 @@
+//! `vesicle run` and `vesicle resume`: wire a scene (or a checkpoint) to the simulation driver
+//! and its writers. A run builds the problem and prepares the simulation; a resumed run rebuilds
+//! the engine from `checkpoint.bin`. Both then run with the recorder, progress bar, snapshot,
+//! checkpoint and interrupt observers, holding the folder's lock, and write the final field,
+//! images and `summary.json`.
+
+use crate::driver::checkpoint::Checkpoint;
+use crate::driver::observers::{Checkpointer, Progress, Recorder, Snapshots};
+use crate::driver::record::{Record, TimeSeries};
+use crate::driver::signals::Interrupts;
+use crate::driver::simulation::{
+    build_engine, check_stability, stability_bound, Prepared, Simulation, StopRules, Stopped,
+};
+use crate::engines::{AreaConstraint, Engine};
+use crate::error::{Error, Result};
+use crate::output;
+use crate::output::lock::{self, RunLock};
+use crate::problem::config::{self, AreaMethod, Scene, Symmetry};
+use crate::problem::grid::Grid;
+use crate::problem::setup::{self, Problem};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+/// How a run is driven and where it writes.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Output folder (created; must not exist unless `force`).
+    pub out: PathBuf,
+    /// Replace an existing output folder.
+    pub force: bool,
+    /// Show a progress bar (only drawn on a terminal).
+    pub progress: bool,
+}
+
+/// The result of a completed run.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The last record.
+    pub last: Record,
+    /// Why it stopped.
+    pub stopped: Stopped,
+    /// Wall time of the time loop.
+    pub wall_seconds: f64,
+    /// The signal that interrupted the run (SIGINT or SIGTERM), if one did.
+    pub signal: Option<i32>,
+}
+
+/// The scene with every default made explicit, as saved under `"spec"` in `summary.json`.
+pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
+    let mut s = scene.clone();
+    s.area.method = Some(scene.area_method());
+    s.area.target = Some(a0);
+    if scene.area_method() == AreaMethod::Lagrangian {
+        s.area.alpha = Some(scene.alpha());
+    }
+    s.symmetry = Symmetry::Axes(
+        mirror
+            .iter()
+            .zip(["x", "y", "z"])
+            .filter(|(m, _)| **m)
+            .map(|(_, a)| a.to_string())
+            .collect(),
+    );
+    s.threads = Some(rayon::current_num_threads());
+    s.output.record_every = Some(scene.record_every());
+    let st = scene.stabilizer();
+    s.stabilizer = crate::problem::config::StabilizerSpec {
+        s2: Some(st.s2),
+        s4: Some(st.s4),
+    };
+    s
+}
+
+/// Prepare the output folder: refuse an existing one unless `force`.
+///
+/// # Errors
+/// `Error::Config` on field `--out` if it exists without `force`; `Error::Io` on failure.
+pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
+    if out.exists() {
+        if !force {
+            return Err(Error::config(
+                "--out",
+                format!(
+                    "{} already exists; results are never overwritten silently (pass --force to replace it)",
+                    out.display()
+                ),
+            ));
+        }
+        std::fs::remove_dir_all(out).map_err(|source| Error::Io {
+            path: out.to_path_buf(),
+            source,
+        })?;
+    }
+    std::fs::create_dir_all(out.join("snapshots")).map_err(|source| Error::Io {
+        path: out.to_path_buf(),
+        source,
+    })
+}
+
+/// Check, before any computation, that the output folder can be made: refuse an existing one
+/// without `force` (as [`make_out_dir`]), an existing path that is not a folder, and a folder
+/// whose nearest existing ancestor is not a folder or cannot be written (probed by creating
+/// and removing an empty folder in it). Writes nothing that stays.
+///
+/// # Errors
+/// `Error::Config` on field `--out` with the reason.
+pub fn check_out_dir(out: &Path, force: bool) -> Result<()> {
+    let bad =
+        |why: String| Error::config("--out", format!("cannot write {}: {why}", out.display()));
+    if out.exists() {
+        lock::refuse_if_held(out)?;
+        if !force {
+            return make_out_dir(out, false);
+        }
+        if !out.is_dir() {
+            return Err(bad("it exists and is not a folder".into()));
+        }
+    }
+    // The nearest existing ancestor: where the folder (or its replacement) will be created.
+    let mut ancestor = out;
+    loop {
+        ancestor = match ancestor.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if ancestor.exists() || ancestor == Path::new(".") || ancestor.parent().is_none() {
+            break;
+        }
+    }
+    let meta = std::fs::metadata(ancestor)
+        .map_err(|e| bad(format!("{} cannot be read: {e}", ancestor.display())))?;
+    if !meta.is_dir() {
+        return Err(bad(format!("{} is not a folder", ancestor.display())));
+    }
+    let probe = ancestor.join(format!(".vesicle-write-probe-{}", std::process::id()));
+    std::fs::create_dir(&probe)
+        .map_err(|e| bad(format!("{} is not writable: {e}", ancestor.display())))?;
+    // An empty folder of ours: removing it cannot fail short of a race; ignore that.
+    let _ = std::fs::remove_dir(&probe);
+    Ok(())
+}
+
+/// Run a validated scene and write its outputs to `opts.out`.
+///
+/// # Errors
+/// `Error::Config` for input that only shows up once the field is built (shape outside the
+/// box, asymmetric mirror planes, unstable Δt, an output folder that exists or cannot be
+/// written, checked first), in which case nothing is written; `Error::Blowup` after writing
+/// the last good state and the summary.
+pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
+    check_out_dir(&opts.out, opts.force)?;
+    let mut problem = setup::build(scene)?;
+    check_stability(scene, &problem.grid)?;
+    let Prepared {
+        mut simulation,
+        area_target,
+    } = Prepared::new(scene, &problem)?;
+    // The engine holds its own copy of φ: free the initial field for the run.
+    problem.phi = ndarray::Array3::zeros((0, 0, 0));
+    make_out_dir(&opts.out, opts.force)?;
+    let _lock = RunLock::acquire(&opts.out)?;
+    let a0 = area_target
+        .as_ref()
+        .map_or_else(|_| simulation.engine().measures().area, |a| *a);
+    let resolved = resolved_scene(scene, a0, &problem.mirror);
+    let mut recorder = Recorder::to_file(scene.record_every(), &opts.out.join("timeseries.csv"))?;
+    match area_target {
+        Err(e) => {
+            simulation.run(&StopRules::steps(0), &mut [&mut recorder])?;
+            finish(
+                &opts.out,
+                &problem.grid,
+                &simulation,
+                &resolved,
+                &recorder,
+                (Err(e), None),
+            )
+        }
+        Ok(_) => {
+            eprintln!(
+                "{}",
+                describe(&resolved, &problem, simulation.engine().name())
+            );
+            drive(&resolved, &problem.grid, simulation, recorder, opts)
+        }
+    }
+}
+
+/// Continue the run in `dir` from its `checkpoint` (read from `dir`), with `scene` its
+/// scene after the overrides of [`resumed_scene`]. The time series is cut back to the
+/// checkpoint's step and continued; the final field and `summary.json` are rewritten at the end.
+///
+/// # Errors
+/// `Error::Config` if the checkpoint does not fit the scene or another run holds the folder;
+/// otherwise as [`run`].
+pub fn resume(
+    dir: &Path,
+    mut checkpoint: Checkpoint<'static>,
+    scene: &Scene,
+    progress: bool,
+) -> Result<Outcome> {
+    let _lock = RunLock::acquire(dir)?;
+    let problem = setup::frame(scene)?;
+    let mut engine = build_engine(scene, &problem)?;
+    let target = scene
+        .area
+        .target
+        .ok_or_else(|| Error::config("checkpoint", "its scene lacks the resolved area.target"))?;
+    engine.set_area(AreaConstraint {
+        method: scene.area_method(),
+        alpha: scene.alpha(),
+        target,
+    });
+    engine
+        .restore(&mut checkpoint.engine, checkpoint.clock.t)
+        .map_err(|m| Error::config("checkpoint", m))?;
+    let clock = checkpoint.clock;
+    // The engine holds the state now: the checkpoint's copy is not kept through the run.
+    drop(checkpoint);
+    let mut simulation = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
+    simulation.clock = clock;
+    let (series, history) = TimeSeries::resume(&dir.join("timeseries.csv"), clock.step)?;
+    let recorder = Recorder::resuming(scene.record_every(), series, history);
+    eprintln!(
+        "{}\n  resuming at step {} t = {:.6e}",
+        describe(scene, &problem, simulation.engine().name()),
+        clock.step,
+        clock.t
+    );
+    let opts = RunOptions {
+        out: dir.to_path_buf(),
+        force: false,
+        progress,
+    };
+    drive(scene, &problem.grid, simulation, recorder, &opts)
+}
+
+/// Top-level keys a resumed run may change.
+const RESUMABLE: [&str; 5] = ["max_steps", "t_end", "stop_residual", "threads", "output"];
+
+/// The checkpoint's scene with `overrides` applied, each to a key of [`RESUMABLE`]
+/// (`max_steps` counts every step since the start of the run).
+///
+/// # Errors
+/// `Error::Config` naming a key that cannot change on resume, or an invalid value.
+pub fn resumed_scene(mut value: serde_json::Value, overrides: &[String]) -> Result<Scene> {
+    for o in overrides {
+        let key = o.split('=').next().unwrap_or_default();
+        let top = key.split('.').next().unwrap_or_default();
+        if !RESUMABLE.contains(&top) {
+            return Err(Error::config(
+                key,
+                format!(
+                    "cannot change when resuming (the checkpoint continues the run that wrote it); \
+                     only {} can",
+                    RESUMABLE.join(", ")
+                ),
+            ));
+        }
+        config::apply_override(&mut value, o)?;
+    }
+    let scene = config::from_value(value)?;
+    scene.validate()?;
+    Ok(scene)
+}
+
+/// Run `simulation` with the writers of a run folder until a stop rule of `resolved` fires, an
+/// interrupt arrives or a step fails, then write the final outputs.
+fn drive(
+    resolved: &Scene,
+    grid: &Grid,
+    mut simulation: Simulation,
+    mut recorder: Recorder,
+    opts: &RunOptions,
+) -> Result<Outcome> {
+    let rules = StopRules::of(resolved);
+    let mut progress = Progress::new(rules, opts.progress);
+    let mut snapshots = Snapshots::new(
+        &opts.out.join("snapshots"),
+        grid,
+        resolved,
+        resolved.output.snapshot_every,
+    );
+    let mut checkpoints = Checkpointer::new(
+        &opts.out,
+        resolved.resolved_value(),
+        resolved.output.checkpoint_every,
+        resolved.output.checkpoint_minutes,
+    );
+    let mut interrupts = Interrupts::install();
+    let result = simulation.run(
+        &rules,
+        &mut [
+            &mut recorder,
+            &mut progress,
+            &mut snapshots,
+            &mut interrupts,
+            &mut checkpoints,
+        ],
+    );
+    let ending = (result, interrupts.received());
+    finish(&opts.out, grid, &simulation, resolved, &recorder, ending)
+}
+
+/// Write the final outputs and turn how the step loop ended (its result, and the signal that
+/// interrupted it) into the run's result.
+fn finish(
+    out: &Path,
+    grid: &Grid,
+    simulation: &Simulation,
+    resolved: &Scene,
+    recorder: &Recorder,
+    (result, signal): (Result<Stopped>, Option<i32>),
+) -> Result<Outcome> {
+    let last = *recorder.last().expect("the recorder keeps the last state");
+    let text = match &result {
+        Ok(stopped) => stopped.as_str().to_string(),
+        Err(e) => format!("blew up: {e}"),
+    };
+    let summary = End {
+        last: &last,
+        stopped: &text,
+        history: &recorder.history,
+    };
+    write_final(out, grid, simulation.engine(), resolved, &summary)?;
+    result.map(|stopped| Outcome {
+        last,
+        stopped,
+        wall_seconds: last.wall_seconds,
+        signal,
+    })
+}
+
+/// How a run ended, for the final outputs.
+struct End<'a> {
+    last: &'a Record,
+    stopped: &'a str,
+    history: &'a [Record],
+}
+
+fn write_final(
+    out: &Path,
+    grid: &Grid,
+    engine: &dyn Engine,
+    resolved: &Scene,
+    end: &End,
+) -> Result<()> {
+    let (last, stopped) = (end.last, end.stopped);
+    let full = grid.unfold(engine.phi());
+    output::npy::write_npy(&out.join("phi_final.npy"), &full, resolved.dim)?;
+    if resolved.output.vti {
+        output::vti::write_vti(
+            &out.join("phi_final.vti"),
+            &full,
+            resolved.dim,
+            resolved.h,
+            "phi",
+        )?;
+    }
+    if resolved.output.png {
+        let title = format!("step {} t = {:.4e} ({stopped})", last.step, last.t);
+        output::image::write_slices_png(&out.join("shape_final.png"), &full, resolved.dim, &title)?;
+        write_charts(out, end.history)?;
+    }
+    let mut last_json = serde_json::to_value(last).expect("serialisable");
+    last_json["steps"] = json!(last.step);
+    last_json["stopped"] = json!(stopped);
+    let summary = json!({
+        "spec": resolved.resolved_value(),
+        "final": last_json,
+        "levelset": crate::analysis::levelset::measure(&full, resolved.dim, resolved.h),
+        "max_dt_over_bound": engine.max_dt_over_bound(),
+        "steps": last.step,
+        "rejected_steps": last.rejected,
+        "wall_seconds": last.wall_seconds,
+        "stopped": stopped,
+        "computed_shape": grid.shape[3 - resolved.dim..],
+        "version": env!("CARGO_PKG_VERSION"),
+    });
+    let path = out.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).expect("serialisable");
+    std::fs::write(&path, text).map_err(|source| Error::Io { path, source })
+}
+
+fn write_charts(out: &Path, history: &[Record]) -> Result<()> {
+    let series = |f: fn(&Record) -> f64| history.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
+    output::chart::write_timeseries_png(
+        &out.join("energy.png"),
+        &[("reduced energy e", series(|r| r.reduced_energy))],
+        "t",
+        "e",
+        false,
+    )?;
+    output::chart::write_timeseries_png(
+        &out.join("residual.png"),
+        &[("RMS(μ − mean μ)", series(|r| r.residual))],
+        "t",
+        "residual",
+        true,
+    )?;
+    Ok(())
+}
+
+/// The stop rules in words.
+fn stop_text(scene: &Scene) -> String {
+    let mut parts = Vec::new();
+    if let Some(r) = scene.stop_residual {
+        parts.push(format!("residual < {r:e}"));
+    }
+    if let Some(t) = scene.t_end {
+        parts.push(format!("t = {t}"));
+    }
+    if let Some(m) = scene.max_steps {
+        parts.push(format!("{m} steps"));
+    }
+    parts.join(" or ")
+}
+
+/// A few lines describing the run, printed at start-up.
+pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
+    let g = &problem.grid;
+    let bound = stability_bound(scene, g);
+    let mut s = format!(
+        "vesicle {engine}: dim {} n {:?} (computed {:?}, mirror {:?}) h {} eps {}\n",
+        scene.dim,
+        scene.n,
+        &g.shape[3 - scene.dim..],
+        problem.mirror,
+        scene.h,
+        scene.eps
+    );
+    let stepper = match (scene.method, scene.dynamics) {
+        (crate::problem::config::Method::Fd, _) => "explicit Euler".to_string(),
+        (_, crate::problem::config::Dynamics::Relaxational) => "L-BFGS".to_string(),
+        _ => format!("{:?}", scene.scheme).to_lowercase(),
+    };
+    s += &format!(
+        "  dt {}  {stepper}  area {:?} (A0 = {:.6e})  stop: {}",
+        scene.dt,
+        scene.area_method(),
+        scene.area.target.unwrap_or(f64::NAN),
+        stop_text(scene)
+    );
+    if let Some(b) = bound {
+        s += &format!(
+            "\n  stability bound {b:.4e} (dt/bound = {:.3})",
+            scene.dt / b
+        );
+    }
+    s
+}

@@ -1,0 +1,44 @@
+//! `vesicle study …`: measurements that compare methods in one run and print ratios.
+//!
+//! * [`convergence`], [`stability`], [`precision`]: studies run from a study file
+//!   (`runs/studies/*.json`, read by [`file`]), with a `--quick` variant; orders from the
+//!   least-squares fits of [`fit`], stability classes from [`classify`];
+//! * [`stationary`]: what each `stop_residual` buys per engine, on a scene file.
+
+pub mod classify;
+pub mod convergence;
+pub mod file;
+pub mod fit;
+pub mod precision;
+pub mod stability;
+pub mod stationary;
+
+use crate::driver::simulation::Prepared;
+use crate::error::{Error, Result};
+use crate::problem::config::{AdaptiveSpec, Scene};
+use crate::problem::setup::Problem;
+use ndarray::Array3;
+use std::path::Path;
+
+/// Write `text` to `dir/name`.
+///
+/// # Errors
+/// `Error::Io` on failure.
+pub fn write_text(dir: &Path, name: &str, text: &str) -> Result<()> {
+    let path = dir.join(name);
+    std::fs::write(&path, text).map_err(|source| Error::Io { path, source })
+}
+
+/// The field after the scene's `prepare_steps` unconstrained fixed steps of its `dt` (FD explicit
+/// Euler, or spectral SBDF1; [`Prepared`]): the common start of a study's runs.
+///
+/// # Errors
+/// `Error::Config` for a non-finite initial field; `Error::Blowup` if a preparation step
+/// diverges.
+pub fn prepared_field(scene: &Scene, problem: &Problem) -> Result<Array3<f64>> {
+    let mut s = scene.clone();
+    s.adaptive = AdaptiveSpec::Flag(false);
+    let p = Prepared::new(&s, problem)?;
+    p.area_target?;
+    Ok(p.simulation.engine().phi().clone())
+}

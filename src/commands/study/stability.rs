@@ -1,0 +1,708 @@
+//! `vesicle study stability FILE`: the stability map (validation ladder rung 7).
+//!
+//! * **Fixed Δt against h**: at each h of the file (in units of ε; the box kept, n scaled), from
+//!   one prepared field (spectral SBDF1 preparation), `steps` fixed steps at each Δt of a
+//!   geometric sweep, for FD explicit Euler and spectral SBDF1 and SBDF2, each with S = 0 and
+//!   with its default S (area by the exact projection in every method, so that the map is the
+//!   time stepper's). Every run is classified
+//!   by the criteria of [`super::classify`].
+//! * **Adaptive**: spectral SBDF1 with adaptive steps over `[0, t_end]` at several controller
+//!   tolerances `energy_alpha` (Δt = dt_max/√(1 + α r²), r the relative energy rate): accepted
+//!   steps, rejected attempts and the Δt at which they were tried (an attempt rejected j times
+//!   before acceptance at Δt was tried at Δt/shrink^j).
+//! * **Lagrangian α**: FD at h = the first h, at fractions of its bound, the area target 1%
+//!   below the prepared area, α swept: the run is stable when it does not blow up and
+//!   |A − A0|/A0 never exceeds 10 × the initial 1% (a small α lets A drift slowly with the
+//!   shape, an unstable one makes it oscillate with growing amplitude; energy rises are
+//!   expected while σ moves, so they are not counted).
+//!
+//! Reports the largest stable Δt per method and h (the last stable Δt below the first
+//! failure), the spectral/FD ratios and their least-squares scaling with h, the FD bound of
+//! DESIGN.md §2. Writes `stability.csv` (every run), `frontier.csv`, `stability.txt`, and the
+//! charts `stability_map`, `stability_alpha` (PNG and SVG).
+
+use super::classify::{classify, Class, Criteria, StepSample};
+use super::{file, fit};
+use crate::commands::run;
+use crate::driver::simulation::{Flow, Now, Probe, Simulation, StopRules};
+use crate::engines::fd;
+use crate::engines::AreaConstraint;
+use crate::error::{Error, Result};
+use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
+use crate::problem::config::Scene;
+use crate::problem::setup::{self, Problem};
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// The study file's keys.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    /// `"stability"`.
+    pub study: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The base scene at h = ε (its `n` is scaled by ε/h).
+    pub scene: Value,
+    /// Spacings, in units of ε.
+    pub h: Vec<f64>,
+    /// Fixed steps per run.
+    pub steps: usize,
+    /// Smallest Δt of the sweep.
+    pub dt_min: f64,
+    /// Largest Δt of the sweep.
+    pub dt_max: f64,
+    /// Δt values per decade.
+    pub per_decade: f64,
+    /// Adaptive runs.
+    pub adaptive: AdaptiveSweep,
+    /// The Lagrangian α sweep.
+    pub alpha: AlphaSweep,
+}
+
+/// Adaptive runs at several tolerances.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveSweep {
+    /// The controller's `energy_alpha` values.
+    pub energy_alpha: Vec<f64>,
+    /// End time.
+    pub t_end: f64,
+    /// First Δt.
+    pub dt: f64,
+    /// Largest Δt.
+    pub dt_max: f64,
+}
+
+/// The Lagrangian α sweep (FD, first h).
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct AlphaSweep {
+    /// Δt as fractions of the FD bound.
+    pub dt_fractions: Vec<f64>,
+    /// Smallest α.
+    pub alpha_min: f64,
+    /// Largest α.
+    pub alpha_max: f64,
+    /// α values per decade.
+    pub per_decade: f64,
+    /// Steps per run.
+    pub steps: usize,
+}
+
+/// One classified run.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// `fixed`, `adaptive` or `alpha`.
+    pub sweep: &'static str,
+    /// Method name.
+    pub method: &'static str,
+    /// h/ε.
+    pub h: f64,
+    /// Δt (fixed), or the median accepted Δt (adaptive).
+    pub dt: f64,
+    /// α (alpha sweep), or the controller's energy_alpha (adaptive), else NaN.
+    pub alpha: f64,
+    /// The class.
+    pub class: Class,
+    /// Accepted steps.
+    pub steps: usize,
+    /// Rejected attempts (adaptive).
+    pub rejected: usize,
+    /// Largest max|φ| seen.
+    pub max_phi: f64,
+    /// Largest |A − A0|/A0 seen.
+    pub area_error: f64,
+    /// Δt of each rejected attempt (adaptive).
+    pub rejected_dts: Vec<f64>,
+}
+
+/// The fixed-Δt methods: name, marker and the scene patch.
+fn methods() -> Vec<(&'static str, Shape, Value)> {
+    let none = json!({"s2": 0.0, "s4": 0.0});
+    vec![
+        (
+            "FD explicit Euler",
+            Shape::Circle,
+            json!({"method": "fd", "scheme": null, "stabilizer": null, "laplacian": null,
+                   "area": {"method": "projection"}}),
+        ),
+        (
+            "SBDF1, S = 0",
+            Shape::Square,
+            json!({"method": "spectral", "scheme": "sbdf1", "stabilizer": none}),
+        ),
+        (
+            "SBDF1, default S",
+            Shape::Triangle,
+            json!({"method": "spectral", "scheme": "sbdf1", "stabilizer": null}),
+        ),
+        (
+            "SBDF2, S = 0",
+            Shape::Cross,
+            json!({"method": "spectral", "scheme": "sbdf2", "stabilizer": none}),
+        ),
+        (
+            "SBDF2, default S",
+            Shape::Diamond,
+            json!({"method": "spectral", "scheme": "sbdf2", "stabilizer": null}),
+        ),
+    ]
+}
+
+/// Geometric sweep with `per_decade` values per decade from `lo` to `hi`.
+fn sweep(lo: f64, hi: f64, per_decade: f64) -> Vec<f64> {
+    let count = ((hi / lo).log10() * per_decade).round() as i32;
+    (0..=count)
+        .map(|i| lo * 10f64.powf(i as f64 / per_decade))
+        .collect()
+}
+
+/// Run the study of `path` (quick variant if `quick`) into `out`.
+///
+/// # Errors
+/// `Error::Config` for a bad study file (naming the key) or an existing `out` without `force`.
+pub fn stability(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Vec<Run>> {
+    let spec: Spec = file::load(path, "stability", quick)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    if !(spec.dt_min > 0.0 && spec.dt_max > spec.dt_min && spec.per_decade > 0.0) {
+        return Err(Error::config(
+            "dt_min",
+            "need 0 < dt_min < dt_max and per_decade > 0",
+        ));
+    }
+    if spec.h.is_empty() || spec.h.iter().any(|h| h.is_nan() || *h <= 0.0) {
+        return Err(Error::config("h", "need at least one h > 0"));
+    }
+    run::check_out_dir(out, force)?;
+    let started = Instant::now();
+    let base = file::scene(&spec.scene, &[], "scene", dir)?;
+    let criteria = Criteria::default();
+    let mut runs = Vec::new();
+    let mut bounds = Vec::new();
+    for &h in &spec.h {
+        let n: Vec<usize> = base
+            .n
+            .iter()
+            .map(|&m| (m as f64 / h).round() as usize)
+            .collect();
+        let grid_patch = json!({"h": h * base.eps, "n": n, "prepare_steps": 0, "allow_unstable": true,
+                                "adaptive": null, "t_end": null, "stop_residual": null});
+        let prep = file::scene(
+            &spec.scene,
+            &[
+                grid_patch.clone(),
+                json!({"method": "spectral", "scheme": "sbdf1", "prepare_steps": base.prepare_steps, "allow_unstable": false}),
+            ],
+            "scene",
+            dir,
+        )?;
+        let mut problem = setup::build(&prep)?;
+        problem.phi = super::prepared_field(&prep, &problem)?;
+        bounds.push((h, fd::stability_bound(&problem.grid, base.eps, 0.0)));
+        for (name, _, patch) in methods() {
+            let mut blown = 0;
+            for dt in sweep(spec.dt_min, spec.dt_max, spec.per_decade) {
+                let s = file::scene(
+                    &spec.scene,
+                    &[
+                        grid_patch.clone(),
+                        patch.clone(),
+                        json!({"dt": dt, "max_steps": spec.steps}),
+                    ],
+                    "scene",
+                    dir,
+                )?;
+                let r = fixed_run(&s, &problem, &criteria, None)?;
+                let failed = matches!(r.0, Class::BlownUp | Class::ConstraintLost);
+                blown = if failed { blown + 1 } else { 0 };
+                runs.push(Run {
+                    sweep: "fixed",
+                    method: name,
+                    h,
+                    dt,
+                    alpha: f64::NAN,
+                    class: r.0,
+                    steps: r.1,
+                    rejected: 0,
+                    max_phi: r.2,
+                    area_error: r.3,
+                    rejected_dts: Vec::new(),
+                });
+                // Three failures in a row: larger steps fail too.
+                if blown == 3 {
+                    break;
+                }
+            }
+        }
+        for &ea in &spec.adaptive.energy_alpha {
+            let s = file::scene(
+                &spec.scene,
+                &[
+                    grid_patch.clone(),
+                    json!({"method": "spectral", "scheme": "sbdf1", "allow_unstable": false,
+                           "dt": spec.adaptive.dt, "t_end": spec.adaptive.t_end, "max_steps": null,
+                           "adaptive": {"energy_alpha": ea, "dt_max": spec.adaptive.dt_max}}),
+                ],
+                "adaptive",
+                dir,
+            )?;
+            runs.push(adaptive_run(&s, &problem, h, ea)?);
+        }
+        if h == spec.h[0] {
+            for &frac in &spec.alpha.dt_fractions {
+                let bound = bounds[0].1;
+                for alpha in sweep(
+                    spec.alpha.alpha_min,
+                    spec.alpha.alpha_max,
+                    spec.alpha.per_decade,
+                ) {
+                    let s = file::scene(
+                        &spec.scene,
+                        &[
+                            grid_patch.clone(),
+                            methods()[0].2.clone(),
+                            json!({"dt": frac * bound, "max_steps": spec.alpha.steps,
+                                   "area": {"method": "lagrangian", "alpha": alpha}}),
+                        ],
+                        "alpha",
+                        dir,
+                    )?;
+                    let lagrangian = Criteria {
+                        rise: f64::INFINITY,
+                        area: 10.0 * ALPHA_OFFSET,
+                        max_phi: criteria.max_phi,
+                    };
+                    let r = fixed_run(&s, &problem, &lagrangian, Some(alpha))?;
+                    runs.push(Run {
+                        sweep: "alpha",
+                        method: "FD explicit Euler, Lagrangian area",
+                        h,
+                        dt: frac * bound,
+                        alpha,
+                        class: r.0,
+                        steps: r.1,
+                        rejected: 0,
+                        max_phi: r.2,
+                        area_error: r.3,
+                        rejected_dts: Vec::new(),
+                    });
+                }
+            }
+        }
+    }
+    run::make_out_dir(out, force)?;
+    let frontier = frontier(&runs, &spec.h);
+    let text = table(
+        &runs,
+        &frontier,
+        &bounds,
+        &spec,
+        started.elapsed().as_secs_f64(),
+    );
+    println!("{text}");
+    super::write_text(out, "stability.txt", &text)?;
+    super::write_text(out, "stability.csv", &csv(&runs))?;
+    super::write_text(out, "frontier.csv", &frontier_csv(&frontier, &bounds))?;
+    charts(out, &runs, &frontier, &bounds, (base.dim, base.eps))?;
+    Ok(runs)
+}
+
+/// The area target's offset below the prepared area in the α sweep.
+const ALPHA_OFFSET: f64 = 0.01;
+
+/// `s` from `problem.phi` for its `max_steps`: class, steps, largest max|φ| and area error.
+/// With `alpha`, the Lagrangian update with that α toward (1 − [`ALPHA_OFFSET`]) × the
+/// prepared area.
+fn fixed_run(
+    s: &Scene,
+    problem: &Problem,
+    criteria: &Criteria,
+    alpha: Option<f64>,
+) -> Result<(Class, usize, f64, f64)> {
+    let (mut sim, a0) = Simulation::of_scene(s, problem)?;
+    let target = match alpha {
+        Some(alpha) => {
+            let target = (1.0 - ALPHA_OFFSET) * a0;
+            sim.engine_mut().set_area(AreaConstraint {
+                method: crate::problem::config::AreaMethod::Lagrangian,
+                alpha,
+                target,
+            });
+            target
+        }
+        None => a0,
+    };
+    let mut samples = Vec::new();
+    let mut before = sim.record();
+    let mut watch = Probe(|now: &Now| {
+        let after = &now.record;
+        let sigma = before.sigma;
+        samples.push(StepSample {
+            f_before: before.energy + sigma * before.area,
+            f_after: after.energy + sigma * after.area,
+            area_error: (after.area - target).abs() / target,
+            max_phi: now.engine.phi().iter().fold(0.0f64, |m, p| m.max(p.abs())),
+        });
+        before = *after;
+        Ok(Flow::Continue)
+    });
+    let failure = sim
+        .run(&StopRules::of(s), &mut [&mut watch])
+        .err()
+        .map(|e| e.to_string());
+    let class = classify(&samples, failure.as_deref(), criteria);
+    let max_phi = samples.iter().fold(0.0f64, |m, x| m.max(x.max_phi));
+    let area = samples.iter().fold(0.0f64, |m, x| m.max(x.area_error));
+    Ok((class, sim.clock.step, max_phi, area))
+}
+
+/// An adaptive run over `[0, t_end]`: its steps, rejections and where they were tried.
+fn adaptive_run(s: &Scene, problem: &Problem, h: f64, energy_alpha: f64) -> Result<Run> {
+    let shrink = s.adaptive.settings().map_or(0.5, |a| a.shrink);
+    let (mut sim, a0) = Simulation::of_scene(s, problem)?;
+    let mut accepted = Vec::new();
+    let mut rejected_dts = Vec::new();
+    let mut max_phi = 0.0f64;
+    let mut area = 0.0f64;
+    let mut probe = Probe(|now: &Now| {
+        if let Some(rep) = now.report {
+            accepted.push(rep.dt);
+            for j in 1..=rep.rejected {
+                rejected_dts.push(rep.dt / shrink.powi(j as i32));
+            }
+        }
+        max_phi = now.engine.phi().iter().fold(max_phi, |m, p| m.max(p.abs()));
+        area = area.max((now.record.area - a0).abs() / a0);
+        Ok(Flow::Continue)
+    });
+    let failure = sim.run(&StopRules::of(s), &mut [&mut probe]).err();
+    let class = match failure {
+        Some(e) => classify(&[], Some(&e.to_string()), &Criteria::default()),
+        None => Class::Stable,
+    };
+    let rejected = sim.clock.rejected;
+    accepted.sort_by(f64::total_cmp);
+    Ok(Run {
+        sweep: "adaptive",
+        method: "SBDF1 adaptive",
+        h,
+        dt: accepted
+            .get(accepted.len() / 2)
+            .copied()
+            .unwrap_or(f64::NAN),
+        alpha: energy_alpha,
+        class,
+        steps: sim.clock.step,
+        rejected,
+        max_phi,
+        area_error: area,
+        rejected_dts,
+    })
+}
+
+/// Largest stable Δt of each fixed method at each h: `(method, h, largest stable, first
+/// failure and its class)`.
+type Frontier = Vec<(&'static str, f64, Option<f64>, Option<(f64, Class)>)>;
+
+fn frontier(runs: &[Run], hs: &[f64]) -> Frontier {
+    let mut f = Vec::new();
+    for (name, ..) in methods() {
+        for &h in hs {
+            let rs: Vec<&Run> = runs
+                .iter()
+                .filter(|r| r.sweep == "fixed" && r.method == name && r.h == h)
+                .collect();
+            let first_fail = rs.iter().position(|r| r.class != Class::Stable);
+            let stable_end = first_fail.unwrap_or(rs.len());
+            let largest = stable_end.checked_sub(1).map(|i| rs[i].dt);
+            f.push((
+                name,
+                h,
+                largest,
+                first_fail.map(|i| (rs[i].dt, rs[i].class)),
+            ));
+        }
+    }
+    f
+}
+
+fn largest(f: &Frontier, name: &str, h: f64) -> Option<f64> {
+    f.iter().find(|x| x.0 == name && x.1 == h).and_then(|x| x.2)
+}
+
+fn table(runs: &[Run], f: &Frontier, bounds: &[(f64, f64)], spec: &Spec, wall: f64) -> String {
+    let mut s = format!(
+        "{} fixed steps per run, dt from {:.1e} to {:.1e} ({} per decade), from the prepared field\n\
+         classes: stable (and energy-decreasing); energy rising (F_eff at the step's sigma rose > 1e-10 relative); \
+         constraint lost (a V or A guard failed, or |A - A0|/A0 > 1e-3); blown up (diverged or max|phi| > 1.5)\n\n\
+         {:<20} {:>7} {:>14} {:>26} {:>12}\n",
+        spec.steps, spec.dt_min, spec.dt_max, spec.per_decade,
+        "method", "h/eps", "largest stable", "first failure", "FD bound"
+    );
+    for x in f {
+        let bound = bounds.iter().find(|b| b.0 == x.1).map_or(f64::NAN, |b| b.1);
+        let _ = writeln!(
+            s,
+            "{:<20} {:>7.4} {:>14} {:>26} {:>12.4e}",
+            x.0,
+            x.1,
+            x.2.map_or("none".into(), |d| format!("{d:.3e}")),
+            x.3.map_or("none".into(), |(d, c)| format!("{d:.3e} ({})", c.as_str())),
+            bound
+        );
+    }
+    let _ = writeln!(s, "\nspectral / FD largest stable dt:");
+    for (name, ..) in methods().into_iter().skip(1) {
+        let mut hs = Vec::new();
+        let mut ratios = Vec::new();
+        for &h in &spec.h {
+            if let (Some(a), Some(b)) = (largest(f, name, h), largest(f, "FD explicit Euler", h)) {
+                hs.push(h);
+                ratios.push(a / b);
+            }
+        }
+        let list: Vec<String> = hs
+            .iter()
+            .zip(&ratios)
+            .map(|(h, r)| format!("h = {h}: {r:.3e}"))
+            .collect();
+        let scaling =
+            fit::power(&hs, &ratios).map_or(String::new(), |p| format!("; ratio ∝ h^p, {p}"));
+        let _ = writeln!(s, "  {name:<18} {}{scaling}", list.join(", "));
+    }
+    for (name, ..) in methods() {
+        let (hs, dts): (Vec<f64>, Vec<f64>) = spec
+            .h
+            .iter()
+            .filter_map(|&h| largest(f, name, h).map(|d| (h, d)))
+            .unzip();
+        if let Some(p) = fit::power(&hs, &dts) {
+            let _ = writeln!(s, "  largest stable dt of {name} ∝ h^p: {p}");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\nadaptive SBDF1 to t = {} (dt_max {}):\n  {:>7} {:>12} {:>7} {:>9} {:>14} {:>16} {:>16}",
+        spec.adaptive.t_end,
+        spec.adaptive.dt_max,
+        "h/eps",
+        "energy_alpha",
+        "steps",
+        "rejected",
+        "median dt",
+        "median rejected",
+        "class"
+    );
+    for r in runs.iter().filter(|r| r.sweep == "adaptive") {
+        let mut rej = r.rejected_dts.clone();
+        rej.sort_by(f64::total_cmp);
+        let med = rej
+            .get(rej.len() / 2)
+            .map_or("-".into(), |d| format!("{d:.3e}"));
+        let _ = writeln!(
+            s,
+            "  {:>7.4} {:>12.1e} {:>7} {:>9} {:>14.3e} {:>16} {:>16}",
+            r.h,
+            r.alpha,
+            r.steps,
+            r.rejected,
+            r.dt,
+            med,
+            r.class.as_str()
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nLagrangian area update (FD, h = {}): largest stable alpha against dt",
+        spec.h[0]
+    );
+    for &frac in &spec.alpha.dt_fractions {
+        let rs: Vec<&Run> = runs
+            .iter()
+            .filter(|r| r.sweep == "alpha" && (r.dt / bounds[0].1 - frac).abs() < 1e-9)
+            .collect();
+        let first = rs
+            .iter()
+            .position(|r| r.class != Class::Stable)
+            .unwrap_or(rs.len());
+        let best = first
+            .checked_sub(1)
+            .map_or("none".into(), |i| format!("{:.3e}", rs[i].alpha));
+        let dt = frac * bounds[0].1;
+        let _ = writeln!(
+            s,
+            "  dt = {dt:.3e} ({frac} of the bound): largest stable alpha {best}"
+        );
+    }
+    let _ = writeln!(s, "study wall time {wall:.1} s");
+    s
+}
+
+fn csv(runs: &[Run]) -> String {
+    let mut s = String::from(
+        "sweep,method,h_over_eps,dt,alpha,class,steps,rejected,max_abs_phi,max_area_error\n",
+    );
+    for r in runs {
+        let _ = writeln!(
+            s,
+            "{},\"{}\",{},{},{},{},{},{},{},{}",
+            r.sweep,
+            r.method,
+            r.h,
+            r.dt,
+            r.alpha,
+            r.class.as_str(),
+            r.steps,
+            r.rejected,
+            r.max_phi,
+            r.area_error
+        );
+    }
+    s
+}
+
+fn frontier_csv(f: &Frontier, bounds: &[(f64, f64)]) -> String {
+    let mut s = String::from(
+        "method,h_over_eps,largest_stable_dt,first_failure_dt,first_failure_class,fd_bound\n",
+    );
+    for x in f {
+        let bound = bounds.iter().find(|b| b.0 == x.1).map_or(f64::NAN, |b| b.1);
+        let _ = writeln!(
+            s,
+            "\"{}\",{},{},{},{},{}",
+            x.0,
+            x.1,
+            x.2.unwrap_or(f64::NAN),
+            x.3.map_or(f64::NAN, |p| p.0),
+            x.3.map_or("none", |p| p.1.as_str()),
+            bound
+        );
+    }
+    s
+}
+
+/// Colour of a class on the map.
+fn class_colour(c: Class) -> [u8; 3] {
+    match c {
+        Class::Stable => [44, 160, 44],
+        Class::EnergyRising => [255, 165, 0],
+        Class::ConstraintLost => [148, 103, 189],
+        Class::BlownUp => [214, 39, 40],
+    }
+}
+
+fn charts(
+    out: &Path,
+    runs: &[Run],
+    f: &Frontier,
+    bounds: &[(f64, f64)],
+    (dim, eps): (usize, f64),
+) -> Result<()> {
+    let mut map = Figure::new(
+        "Stability map: fixed dt against h (markers by method, colour by class)",
+        Axis::log("h / eps (methods offset sideways)"),
+        Axis::log("dt [time units]"),
+    );
+    map.legend = Corner::LowerRight;
+    let ms = methods();
+    let offset = |i: usize| 1.12f64.powf(i as f64 - (ms.len() as f64 - 1.0) / 2.0);
+    for (i, (name, shape, _)) in ms.iter().enumerate() {
+        for class in Class::ALL {
+            let pts: Vec<(f64, f64)> = runs
+                .iter()
+                .filter(|r| r.sweep == "fixed" && r.method == *name && r.class == class)
+                .map(|r| (r.h * offset(i), r.dt))
+                .collect();
+            map.push(Series::new("", pts, class_colour(class), Mark::Points(*shape)).unlisted());
+        }
+        map.push(Series::new(
+            *name,
+            Vec::new(),
+            [90, 90, 90],
+            Mark::Points(*shape),
+        ));
+    }
+    for class in Class::ALL {
+        map.push(Series::new(
+            class.as_str(),
+            Vec::new(),
+            class_colour(class),
+            Mark::Line,
+        ));
+    }
+    let (lo, hi) = bounds.iter().fold((f64::INFINITY, 0.0f64), |(a, b), x| {
+        (a.min(x.0), b.max(x.0))
+    });
+    let curve: Vec<(f64, f64)> = (0..=40)
+        .map(|k| lo / 1.5 * (1.5 * 1.5 * hi / lo).powf(k as f64 / 40.0))
+        .map(|h| (h, fd_bound(dim, h * eps, eps)))
+        .collect();
+    map.push(Series::new(
+        "FD bound (DESIGN.md §2)",
+        curve,
+        [0, 0, 0],
+        Mark::Dashed,
+    ));
+    for (i, name) in ["SBDF1, default S", "SBDF2, default S", "SBDF1, S = 0"]
+        .into_iter()
+        .enumerate()
+    {
+        let pts: Vec<(f64, f64)> = f
+            .iter()
+            .filter(|x| x.0 == name)
+            .filter_map(|x| x.2.map(|d| (x.1, d)))
+            .collect();
+        map.push(Series::new(
+            format!("measured frontier, {name}"),
+            pts,
+            colour(4 + i),
+            Mark::Line,
+        ));
+    }
+    let rejected: Vec<(f64, f64)> = runs
+        .iter()
+        .filter(|r| r.sweep == "adaptive")
+        .flat_map(|r| r.rejected_dts.iter().map(move |d| (r.h * 1.35, *d)))
+        .collect();
+    map.push(Series::new(
+        "adaptive SBDF1: rejected attempts",
+        rejected,
+        [0, 0, 0],
+        Mark::Points(Shape::Cross),
+    ));
+    map.write(&out.join("stability_map"))?;
+
+    let mut alpha = Figure::new(
+        "Lagrangian area update (FD): stable alpha against dt",
+        Axis::log("dt [time units]"),
+        Axis::log("alpha"),
+    );
+    alpha.legend = Corner::LowerLeft;
+    for class in Class::ALL {
+        let pts: Vec<(f64, f64)> = runs
+            .iter()
+            .filter(|r| r.sweep == "alpha" && r.class == class)
+            .map(|r| (r.dt, r.alpha))
+            .collect();
+        alpha.push(Series::new(
+            class.as_str(),
+            pts,
+            class_colour(class),
+            Mark::Points(Shape::Circle),
+        ));
+    }
+    alpha.write(&out.join("stability_alpha"))?;
+    Ok(())
+}
+
+/// The FD bound of DESIGN.md §2 at σ = 0: Δt = 1 / (λ (2 + ε²λ)²), λ = 4d/h² (the curve on
+/// the map; [`fd::stability_bound`] gives the same at the computed grids).
+fn fd_bound(dim: usize, h: f64, eps: f64) -> f64 {
+    let l = 4.0 * dim as f64 / (h * h);
+    1.0 / (l * (2.0 + eps * eps * l).powi(2))
+}

@@ -1,0 +1,275 @@
+//! Observers of a [`Simulation`](crate::driver::simulation::Simulation): the time-series recorder, the
+//! progress bar, the snapshot writer and the checkpoint writer.
+
+use crate::driver::checkpoint::Checkpoint;
+use crate::driver::record::{Record, TimeSeries};
+use crate::driver::simulation::{Ending, Flow, Now, Observer, StopRules};
+use crate::error::Result;
+use crate::output;
+use crate::problem::config::Scene;
+use crate::problem::grid::Grid;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::path::{Path, PathBuf};
+
+/// Keeps a row every `every` steps, the first state and the last one, in memory and (when
+/// given a file) in `timeseries.csv`. A state is kept once even when several calls of
+/// `Simulation::run` see it.
+pub struct Recorder {
+    every: usize,
+    file: Option<TimeSeries>,
+    /// The rows kept so far.
+    pub history: Vec<Record>,
+}
+
+impl Recorder {
+    /// Rows in memory only.
+    pub fn in_memory(every: usize) -> Self {
+        Recorder {
+            every: every.max(1),
+            file: None,
+            history: Vec::new(),
+        }
+    }
+
+    /// Rows in memory and in the CSV file `path` (created with its header).
+    ///
+    /// # Errors
+    /// `Error::Io` if the file cannot be created.
+    pub fn to_file(every: usize, path: &Path) -> Result<Self> {
+        Ok(Recorder {
+            file: Some(TimeSeries::create(path)?),
+            ..Self::in_memory(every)
+        })
+    }
+
+    /// Continue a time series already holding `history` (a resumed run).
+    pub fn resuming(every: usize, file: TimeSeries, history: Vec<Record>) -> Self {
+        Recorder {
+            every: every.max(1),
+            file: Some(file),
+            history,
+        }
+    }
+
+    /// The last row kept.
+    pub fn last(&self) -> Option<&Record> {
+        self.history.last()
+    }
+
+    fn keep(&mut self, r: &Record) -> Result<()> {
+        if self.last().is_some_and(|l| l.step == r.step) {
+            return Ok(());
+        }
+        if let Some(f) = self.file.as_mut() {
+            f.push(r)?;
+        }
+        self.history.push(*r);
+        Ok(())
+    }
+}
+
+impl Observer for Recorder {
+    fn start(&mut self, now: &Now) -> Result<()> {
+        self.keep(&now.record)
+    }
+
+    fn step(&mut self, now: &Now) -> Result<Flow> {
+        if now.record.step.is_multiple_of(self.every) {
+            self.keep(&now.record)?;
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn finish(&mut self, now: &Now, _ending: Ending) -> Result<()> {
+        self.keep(&now.record)?;
+        match self.file.as_mut() {
+            Some(f) => f.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A progress bar on stderr (drawn only on a terminal): step, t, Δt, residual and an ETA from
+/// whichever stop rule is nearest (for `stop_residual`, the fraction of the way in
+/// log(residual) from the first state's residual to the tolerance).
+pub struct Progress {
+    bar: ProgressBar,
+    rules: StopRules,
+    first_residual: f64,
+}
+
+/// Positions of the bar: tenths of a per cent.
+const BAR_LENGTH: u64 = 1000;
+
+impl Progress {
+    /// A bar for a run with `rules`; hidden unless `show`.
+    pub fn new(rules: StopRules, show: bool) -> Self {
+        let bar = if show {
+            let bar = ProgressBar::new(BAR_LENGTH);
+            bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+            bar.set_style(
+                ProgressStyle::with_template("{bar:30} {percent:>3}% eta {eta:>5} | {msg}")
+                    .expect("valid template"),
+            );
+            bar
+        } else {
+            ProgressBar::hidden()
+        };
+        Progress {
+            bar,
+            rules,
+            first_residual: f64::NAN,
+        }
+    }
+
+    /// Fraction of the run done by the rule nearest to firing.
+    fn fraction(&self, r: &Record) -> f64 {
+        let by_time = self.rules.t_end.map(|te| r.t / te);
+        let by_steps = self.rules.max_steps.map(|m| r.step as f64 / m as f64);
+        let by_residual = self.rules.stop_residual.map(|tol| {
+            let span = (self.first_residual / tol).ln();
+            if span > 0.0 {
+                (self.first_residual / r.residual).ln() / span
+            } else {
+                1.0
+            }
+        });
+        [by_time, by_steps, by_residual]
+            .into_iter()
+            .flatten()
+            .filter(|f| f.is_finite())
+            .fold(0.0, f64::max)
+            .clamp(0.0, 1.0)
+    }
+}
+
+impl Observer for Progress {
+    fn start(&mut self, now: &Now) -> Result<()> {
+        self.first_residual = now.record.residual;
+        Ok(())
+    }
+
+    fn step(&mut self, now: &Now) -> Result<Flow> {
+        if !self.bar.is_hidden() {
+            let r = &now.record;
+            self.bar
+                .set_position((BAR_LENGTH as f64 * self.fraction(r)) as u64);
+            self.bar.set_message(format!(
+                "step {}  t {:.4e}  dt {:.3e}  residual {:.3e}",
+                r.step, r.t, r.dt, r.residual
+            ));
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn finish(&mut self, _now: &Now, ending: Ending) -> Result<()> {
+        match ending {
+            Ending::Stopped(_) => self.bar.finish_and_clear(),
+            Ending::Failed(_) => self.bar.abandon(),
+        }
+        Ok(())
+    }
+}
+
+/// Writes φ of the full box every `every` steps to `DIR/snapshots/phi_<step>.npy` (and `.vti`,
+/// `.png` when the scene asks for them).
+pub struct Snapshots<'a> {
+    dir: PathBuf,
+    grid: &'a Grid,
+    scene: &'a Scene,
+    every: usize,
+}
+
+impl<'a> Snapshots<'a> {
+    /// Snapshots of a run of `scene` on `grid` into `dir`; none when `every` is 0.
+    pub fn new(dir: &Path, grid: &'a Grid, scene: &'a Scene, every: usize) -> Self {
+        Snapshots {
+            dir: dir.to_path_buf(),
+            grid,
+            scene,
+            every,
+        }
+    }
+}
+
+impl Observer for Snapshots<'_> {
+    fn step(&mut self, now: &Now) -> Result<Flow> {
+        let step = now.record.step;
+        if self.every == 0 || !step.is_multiple_of(self.every) {
+            return Ok(Flow::Continue);
+        }
+        let full = self.grid.unfold(now.engine.phi());
+        let (dim, s) = (self.scene.dim, self.scene);
+        let base = self.dir.join(format!("phi_{step:08}"));
+        output::npy::write_npy(&base.with_extension("npy"), &full, dim)?;
+        if s.output.vti {
+            output::vti::write_vti(&base.with_extension("vti"), &full, dim, s.h, "phi")?;
+        }
+        if s.output.png {
+            let title = format!("step {step}");
+            output::image::write_slices_png(&base.with_extension("png"), &full, dim, &title)?;
+        }
+        Ok(Flow::Continue)
+    }
+}
+
+/// Writes `checkpoint.bin` into a run folder every `every_steps` steps (0: never by count),
+/// every `every_seconds` of wall time, and at the end (also after a failed step: the engine
+/// then holds the last good state).
+pub struct Checkpointer {
+    dir: PathBuf,
+    scene: serde_json::Value,
+    every_steps: usize,
+    every_seconds: f64,
+    last_wall: f64,
+}
+
+impl Checkpointer {
+    /// Checkpoints of a run of the resolved `scene` (its JSON value) into `dir`.
+    pub fn new(
+        dir: &Path,
+        scene: serde_json::Value,
+        every_steps: usize,
+        every_minutes: f64,
+    ) -> Self {
+        Checkpointer {
+            dir: dir.to_path_buf(),
+            scene,
+            every_steps,
+            every_seconds: 60.0 * every_minutes,
+            last_wall: 0.0,
+        }
+    }
+
+    fn write(&mut self, now: &Now) -> Result<()> {
+        Checkpoint {
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            scene: self.scene.clone(),
+            clock: now.clock,
+            engine: now.engine.save(),
+        }
+        .write(&self.dir)?;
+        self.last_wall = now.clock.wall_seconds;
+        Ok(())
+    }
+}
+
+impl Observer for Checkpointer {
+    fn start(&mut self, now: &Now) -> Result<()> {
+        self.last_wall = now.clock.wall_seconds;
+        Ok(())
+    }
+
+    fn step(&mut self, now: &Now) -> Result<Flow> {
+        let by_count = self.every_steps > 0 && now.clock.step.is_multiple_of(self.every_steps);
+        let by_time = now.clock.wall_seconds - self.last_wall >= self.every_seconds;
+        if by_count || by_time {
+            self.write(now)?;
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn finish(&mut self, now: &Now, _ending: Ending) -> Result<()> {
+        self.write(now)
+    }
+}

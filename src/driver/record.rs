@@ -1,0 +1,201 @@
+//! The time series of a run: one [`Record`] per recorded step, written to `timeseries.csv`
+//! with the contract's columns first.
+
+use crate::engines::Engine;
+use crate::error::{Error, Result};
+use serde::Serialize;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// One row of `timeseries.csv` (and the `"final"` object of `summary.json`).
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct Record {
+    /// Accepted steps so far.
+    pub step: usize,
+    /// Simulated time.
+    pub t: f64,
+    /// The step that produced this state (0 for the initial state).
+    pub dt: f64,
+    /// F_sc.
+    pub energy: f64,
+    /// Diffuse area A.
+    pub area: f64,
+    /// Diffuse volume V.
+    pub volume: f64,
+    /// v (DESIGN.md §1).
+    pub reduced_volume: f64,
+    /// e (DESIGN.md §1).
+    pub reduced_energy: f64,
+    /// σ.
+    pub sigma: f64,
+    /// Stationarity residual: RMS over the full box of μ − μ̄ (DESIGN.md §6).
+    pub residual: f64,
+    /// max|φ^{n+1} − φ^n|/Δt of the step that produced this state (NaN for the initial state
+    /// and for the relaxational engine, whose time is nominal).
+    pub rate: f64,
+    /// Rejected attempts so far (adaptive stepping).
+    pub rejected: usize,
+    /// Wall-clock seconds since the time loop started.
+    pub wall_seconds: f64,
+}
+
+impl Record {
+    /// A record of the state `engine` holds at `step`, time `t`, reached by a step `dt`, in a
+    /// scene of dimension `dim`, width `eps` (`rate` NaN, counters 0).
+    pub fn of(step: usize, t: f64, dt: f64, engine: &dyn Engine, dim: usize, eps: f64) -> Self {
+        let m = engine.measures();
+        let r = m.reduced(dim, eps);
+        Record {
+            step,
+            t,
+            dt,
+            energy: m.energy,
+            area: m.area,
+            volume: m.volume,
+            reduced_volume: r.volume,
+            reduced_energy: r.energy,
+            sigma: engine.sigma(),
+            residual: engine.residual(),
+            rate: f64::NAN,
+            rejected: 0,
+            wall_seconds: 0.0,
+        }
+    }
+}
+
+/// The CSV header: the contract's ten columns, then `rate,rejected,wall_seconds`.
+pub const HEADER: &str =
+    "step,t,dt,energy,area,volume,reduced_volume,reduced_energy,sigma,residual,\
+rate,rejected,wall_seconds";
+
+/// Writes `timeseries.csv` row by row (values in shortest round-trip form).
+pub struct TimeSeries {
+    path: PathBuf,
+    out: BufWriter<File>,
+}
+
+impl TimeSeries {
+    /// Create the file and write the header.
+    ///
+    /// # Errors
+    /// `Error::Io` if the file cannot be created.
+    pub fn create(path: &Path) -> Result<Self> {
+        let file = File::create(path).map_err(|source| io(path, source))?;
+        let mut ts = TimeSeries {
+            path: path.to_path_buf(),
+            out: BufWriter::new(file),
+        };
+        writeln!(ts.out, "{HEADER}").map_err(|e| io(path, e))?;
+        Ok(ts)
+    }
+
+    /// Continue the file at `path` after its row of `step`: rows of later steps (written after
+    /// the checkpoint a run resumes from) are dropped, the rest kept and returned, and rows are
+    /// appended from there.
+    ///
+    /// # Errors
+    /// `Error::Io` if the file cannot be read or written; `Error::Config` on field
+    /// `timeseries.csv` if it is not this program's time series.
+    pub fn resume(path: &Path, step: usize) -> Result<(Self, Vec<Record>)> {
+        let text = std::fs::read_to_string(path).map_err(|source| io(path, source))?;
+        let mut lines = text.lines();
+        if lines.next() != Some(HEADER) {
+            return Err(Error::config(
+                "timeseries.csv",
+                format!("{} does not start with the header {HEADER}", path.display()),
+            ));
+        }
+        let mut kept = Vec::new();
+        for (i, line) in lines.enumerate() {
+            let r = parse_row(line).ok_or_else(|| {
+                Error::config(
+                    "timeseries.csv",
+                    format!("{}: row {} is not a time-series row", path.display(), i + 2),
+                )
+            })?;
+            if r.step > step {
+                break;
+            }
+            kept.push(r);
+        }
+        // Rewrite beside the file and rename over it: a crash leaves the old file or the new.
+        let tmp = path.with_extension("csv.tmp");
+        let mut ts = TimeSeries::create(&tmp)?;
+        for r in &kept {
+            ts.write_row(r)?;
+        }
+        ts.flush()?;
+        std::fs::rename(&tmp, path).map_err(|source| io(path, source))?;
+        ts.path = path.to_path_buf();
+        Ok((ts, kept))
+    }
+
+    /// Append one row and flush it, so that a crash keeps every row written.
+    ///
+    /// # Errors
+    /// `Error::Io` on a write failure.
+    pub fn push(&mut self, r: &Record) -> Result<()> {
+        self.write_row(r)?;
+        self.flush()
+    }
+
+    fn write_row(&mut self, r: &Record) -> Result<()> {
+        writeln!(
+            self.out,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.step,
+            r.t,
+            r.dt,
+            r.energy,
+            r.area,
+            r.volume,
+            r.reduced_volume,
+            r.reduced_energy,
+            r.sigma,
+            r.residual,
+            r.rate,
+            r.rejected,
+            r.wall_seconds
+        )
+        .map_err(|e| io(&self.path, e))
+    }
+
+    /// Flush buffered rows to disk.
+    ///
+    /// # Errors
+    /// `Error::Io` on a write failure.
+    pub fn flush(&mut self) -> Result<()> {
+        self.out.flush().map_err(|e| io(&self.path, e))
+    }
+}
+
+/// A row of the file back into a record (the inverse of [`TimeSeries::push`]).
+fn parse_row(line: &str) -> Option<Record> {
+    let mut f = line.split(',');
+    let mut x = || f.next()?.parse::<f64>().ok();
+    let count = |v: f64| (v >= 0.0 && v.fract() == 0.0).then_some(v as usize);
+    let r = Record {
+        step: count(x()?)?,
+        t: x()?,
+        dt: x()?,
+        energy: x()?,
+        area: x()?,
+        volume: x()?,
+        reduced_volume: x()?,
+        reduced_energy: x()?,
+        sigma: x()?,
+        residual: x()?,
+        rate: x()?,
+        rejected: count(x()?)?,
+        wall_seconds: x()?,
+    };
+    Some(r)
+}
+
+fn io(path: &Path, source: std::io::Error) -> Error {
+    Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}

@@ -1,0 +1,288 @@
+//! The simulation driver: the one owner of the step loop. A [`Simulation`] holds an engine and
+//! its [`Clock`]; [`Simulation::run`] steps until one of the [`StopRules`] fires, the engine
+//! stalls, an [`Observer`] asks to stop, or a step fails, landing exactly on `t_end`.
+//! Observers (the time-series recorder, the progress bar, snapshot and checkpoint writers, the
+//! studies' probes) see the initial state, every accepted step and the end; the driver itself
+//! does no I/O.
+//!
+//! ```no_run
+//! use vesicle::driver::simulation::{Simulation, StopRules};
+//! let scene = vesicle::problem::config::load(std::path::Path::new("runs/ellipse2d.json"), &[]).unwrap();
+//! let problem = vesicle::problem::setup::build(&scene).unwrap();
+//! let (mut sim, _a0) = Simulation::of_scene(&scene, &problem).unwrap();
+//! let stopped = sim.run(&StopRules::of(&scene), &mut []).unwrap();
+//! println!("{}: e = {}", stopped.as_str(), sim.record().reduced_energy);
+//! ```
+
+mod start;
+mod stop;
+
+pub use start::{build_engine, check_stability, stability_bound, Prepared};
+pub use stop::{StopRules, Stopped};
+
+use crate::driver::awake::KeepAwake;
+use crate::driver::record::Record;
+use crate::engines::{Diverged, Engine, StepReport};
+use crate::error::{Error, Result};
+use std::time::Instant;
+
+/// Where a simulation is: accepted steps, time, the step to offer next, and counters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clock {
+    /// Accepted steps.
+    pub step: usize,
+    /// Simulated time (nominal for the relaxational engine).
+    pub t: f64,
+    /// The step to offer the engine next (before landing on `t_end`).
+    pub dt: f64,
+    /// The step that produced the current state (0 for the initial state).
+    pub last_dt: f64,
+    /// max|Δφ|/Δt of the step that produced the current state (NaN for the initial state).
+    pub last_rate: f64,
+    /// Rejected attempts in all.
+    pub rejected: usize,
+    /// Wall seconds spent stepping, over every call of [`Simulation::run`].
+    pub wall_seconds: f64,
+}
+
+impl Clock {
+    /// At t = 0 before any step, offering `dt` first.
+    pub fn new(dt: f64) -> Self {
+        Clock {
+            step: 0,
+            t: 0.0,
+            dt,
+            last_dt: 0.0,
+            last_rate: f64::NAN,
+            rejected: 0,
+            wall_seconds: 0.0,
+        }
+    }
+}
+
+/// What observers see: the record of the current state and the engine holding it.
+pub struct Now<'a> {
+    /// The clock (with the step to offer next, which the record lacks).
+    pub clock: Clock,
+    /// Row of the current state (step, t, measures, σ, residual, rate, counters, wall).
+    pub record: Record,
+    /// The engine (its φ, σ, measures).
+    pub engine: &'a dyn Engine,
+    /// The step that produced the state (`None` for the state a run starts from).
+    pub report: Option<StepReport>,
+}
+
+/// An observer's answer after a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flow {
+    /// Go on.
+    Continue,
+    /// End the run, for this reason (reported as [`Stopped::Requested`]).
+    Stop(&'static str),
+}
+
+/// How a run ended, as observers see it at the end.
+#[derive(Clone, Copy, Debug)]
+pub enum Ending<'a> {
+    /// A stop rule fired (or an observer asked, or the engine stalled).
+    Stopped(Stopped),
+    /// A step failed; the engine still holds the last good state.
+    Failed(&'a Error),
+}
+
+/// Sees a simulation's states. Every method defaults to doing nothing.
+pub trait Observer {
+    /// Once per [`Simulation::run`] call, with the state it starts from.
+    ///
+    /// # Errors
+    /// Any error ends the run with it (e.g. a write failure).
+    fn start(&mut self, _now: &Now) -> Result<()> {
+        Ok(())
+    }
+    /// After every accepted step.
+    ///
+    /// # Errors
+    /// As [`Observer::start`].
+    fn step(&mut self, _now: &Now) -> Result<Flow> {
+        Ok(Flow::Continue)
+    }
+    /// Once at the end of a [`Simulation::run`] call, with the last good state.
+    ///
+    /// # Errors
+    /// As [`Observer::start`].
+    fn finish(&mut self, _now: &Now, _ending: Ending) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// An engine and its clock, for a scene of dimension `dim` and interface width `eps` (which
+/// the records' reduced quantities need).
+pub struct Simulation {
+    engine: Box<dyn Engine + Send>,
+    /// Where the simulation is.
+    pub clock: Clock,
+    dim: usize,
+    eps: f64,
+}
+
+impl Simulation {
+    /// A simulation of `engine` from t = 0, offering `dt` first.
+    pub fn new(engine: Box<dyn Engine + Send>, dt: f64, dim: usize, eps: f64) -> Self {
+        Simulation {
+            engine,
+            clock: Clock::new(dt),
+            dim,
+            eps,
+        }
+    }
+
+    /// The engine.
+    pub fn engine(&self) -> &dyn Engine {
+        self.engine.as_ref()
+    }
+
+    /// The engine, mutably (to change its area constraint between runs, for instance).
+    pub fn engine_mut(&mut self) -> &mut (dyn Engine + Send) {
+        self.engine.as_mut()
+    }
+
+    /// Give the engine up.
+    pub fn into_engine(self) -> Box<dyn Engine + Send> {
+        self.engine
+    }
+
+    /// The record of the current state.
+    pub fn record(&self) -> Record {
+        let c = &self.clock;
+        let mut r = Record::of(c.step, c.t, c.last_dt, self.engine(), self.dim, self.eps);
+        r.rate = c.last_rate;
+        r.rejected = c.rejected;
+        r.wall_seconds = c.wall_seconds;
+        r
+    }
+
+    /// Step until a rule of `rules` fires, the engine stalls, an observer asks to stop, or a
+    /// step fails. The clock carries on from where an earlier call left it, so successive calls
+    /// with growing `t_end` advance one simulation through a sequence of times.
+    ///
+    /// # Errors
+    /// `Error::Blowup` (step, t and reason) when a step fails: the engine then still holds the
+    /// last good state, and the observers have seen it in [`Observer::finish`]. An observer's
+    /// error ends the run with that error.
+    pub fn run(
+        &mut self,
+        rules: &StopRules,
+        observers: &mut [&mut dyn Observer],
+    ) -> Result<Stopped> {
+        let wall_before = self.clock.wall_seconds;
+        let started = Instant::now();
+        let now = self.now(None);
+        for o in observers.iter_mut() {
+            o.start(&now)?;
+        }
+        let ending = self.step_loop(rules, observers, wall_before, started);
+        self.clock.wall_seconds = wall_before + started.elapsed().as_secs_f64();
+        let now = self.now(None);
+        let result = match ending {
+            Ok(stopped) => {
+                for o in observers.iter_mut() {
+                    o.finish(&now, Ending::Stopped(stopped))?;
+                }
+                Ok(stopped)
+            }
+            Err(e) => {
+                for o in observers.iter_mut() {
+                    // The run's own error is the one to report.
+                    let _ = o.finish(&now, Ending::Failed(&e));
+                }
+                Err(e)
+            }
+        };
+        result
+    }
+
+    fn now(&self, report: Option<StepReport>) -> Now<'_> {
+        Now {
+            clock: self.clock,
+            record: self.record(),
+            engine: self.engine(),
+            report,
+        }
+    }
+
+    fn step_loop(
+        &mut self,
+        rules: &StopRules,
+        observers: &mut [&mut dyn Observer],
+        wall_before: f64,
+        started: Instant,
+    ) -> Result<Stopped> {
+        let c = self.clock;
+        if let Some(s) = rules.check(c.t, c.last_dt, c.step, self.engine.residual()) {
+            return Ok(s);
+        }
+        // The pool's other workers wait for each step's parallel regions without sleeping.
+        let _awake = KeepAwake::start();
+        loop {
+            let report = self.advance(rules.t_end)?;
+            self.clock.wall_seconds = wall_before + started.elapsed().as_secs_f64();
+            let now = self.now(Some(report));
+            let mut flow = Flow::Continue;
+            for o in observers.iter_mut() {
+                if let Flow::Stop(why) = o.step(&now)? {
+                    flow = Flow::Stop(why);
+                }
+            }
+            let c = self.clock;
+            let stop = if self.engine.stalled() {
+                Some(Stopped::Stalled)
+            } else {
+                rules.check(c.t, c.last_dt, c.step, self.engine.residual())
+            };
+            match (stop, flow) {
+                (Some(s), _) => return Ok(s),
+                (None, Flow::Stop(why)) => return Ok(Stopped::Requested(why)),
+                (None, Flow::Continue) => {}
+            }
+        }
+    }
+
+    /// One accepted step, shortened to land on `t_end`; after a shortened step the next one is
+    /// offered the engine's proposal from before the shortening.
+    fn advance(&mut self, t_end: Option<f64>) -> Result<StepReport> {
+        let c = &mut self.clock;
+        let proposal = self.engine.next_dt(c.dt);
+        let dt = t_end.map_or(proposal, |te| proposal.min(te - c.t));
+        let report = self
+            .engine
+            .step(c.t, dt)
+            .map_err(|Diverged(reason)| Error::Blowup {
+                step: c.step + 1,
+                t: c.t + dt,
+                reason: format!(
+                    "step of Δt = {dt:.4e} from t = {:.6e} failed: {reason}",
+                    c.t
+                ),
+            })?;
+        c.t += report.dt;
+        c.step += 1;
+        c.rejected += report.rejected;
+        c.last_dt = report.dt;
+        c.last_rate = report.rate;
+        c.dt = if dt < proposal && report.dt == dt {
+            proposal
+        } else {
+            report.dt
+        };
+        Ok(report)
+    }
+}
+
+/// An observer made of a closure called after every step (the studies' probes).
+pub struct Probe<F>(pub F);
+
+impl<F: FnMut(&Now) -> Result<Flow>> Observer for Probe<F> {
+    fn step(&mut self, now: &Now) -> Result<Flow> {
+        (self.0)(now)
+    }
+}

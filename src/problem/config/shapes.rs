@@ -1,0 +1,266 @@
+//! The initial field: a shape object (`{"shape": "<kind>", ...}`) or a `.npy` file, and their
+//! deserialisation with the inner key of an error kept.
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::path::PathBuf;
+
+/// `initial`: a shape object or a field file.
+#[derive(Clone, Debug, Serialize)]
+#[serde(untagged)]
+pub enum Initial {
+    /// φ read from a float64 C-order `.npy` of shape `n`.
+    File {
+        /// Path, relative to the scene file's folder (or the working directory).
+        file: PathBuf,
+    },
+    /// A geometric shape.
+    Shape(Shape),
+}
+
+impl<'de> Deserialize<'de> for Initial {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let v = Value::deserialize(d)?;
+        let is_file = v.as_object().is_some_and(|o| o.contains_key("file"));
+        if is_file {
+            #[derive(Deserialize)]
+            #[serde(deny_unknown_fields)]
+            struct FileSpec {
+                file: PathBuf,
+            }
+            let f: FileSpec = serde_json::from_value(v).map_err(D::Error::custom)?;
+            Ok(Initial::File { file: f.file })
+        } else {
+            Shape::deserialize(v)
+                .map(Initial::Shape)
+                .map_err(D::Error::custom)
+        }
+    }
+}
+
+/// Initial shapes: φ = tanh(d/(√2 ε)) with d the (approximate) signed distance, positive inside.
+/// `center` defaults to the box centre; `axis` (symmetry axis) defaults to the last axis.
+/// Written `{"shape": "<kind>", ...fields of the kind}`.
+#[derive(Clone, Debug, Serialize)]
+#[serde(tag = "shape", rename_all = "lowercase")]
+pub enum Shape {
+    /// Sphere (circle in 2D).
+    Sphere(Sphere),
+    /// Ellipsoid (ellipse in 2D).
+    Ellipsoid(Ellipsoid),
+    /// Spheroid given by reduced volume and size.
+    Spheroid(Spheroid),
+    /// Stomatocyte-like cup.
+    Cup(Cup),
+    /// Tube with round caps.
+    Capsule(Capsule),
+    /// Union of shapes: d = max d_i.
+    Union(Union),
+    /// `base` with `minus` removed: d = min(d_base, −d_minus).
+    Difference(Difference),
+    /// Surface of revolution from the axisymmetric reference solver or a contour file.
+    Axisym(Axisym),
+}
+
+/// Sphere (circle in 2D) of radius `radius`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    pub radius: f64,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Ellipsoid (ellipse in 2D) with semi-axes `axes`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ellipsoid {
+    pub axes: Vec<f64>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Spheroid (ellipse in 2D) with reduced volume (area) `reduced_volume` and `R0 = √(A/4π)`
+/// (2D: perimeter/2π); `kind` prolate (long along `axis`) or oblate.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spheroid {
+    pub reduced_volume: f64,
+    pub r0: f64,
+    #[serde(default)]
+    pub kind: SpheroidKind,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Stomatocyte-like cup: a ball of `radius` minus a ball of `inner_radius` whose centre is
+/// shifted by `offset` along `axis`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cup {
+    pub radius: f64,
+    pub inner_radius: f64,
+    pub offset: f64,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Capsule (tube with round caps): radius `radius`, straight part `length` along `axis`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Capsule {
+    pub radius: f64,
+    pub length: f64,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Union of shapes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Union {
+    pub of: Vec<Shape>,
+}
+
+/// `base` with `minus` removed.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Difference {
+    pub base: Box<Shape>,
+    pub minus: Box<Shape>,
+}
+
+/// Surface of revolution about `axis`: the stationary shape of the axisymmetric reference
+/// solver (`branch` + `reduced_volume`) or an `r,z` contour file at `R0 = 1` (`contour`, as
+/// `vesicle axisym` writes `contours/<branch>_v<v>.csv`; relative to the scene file's folder),
+/// scaled to `r0`. Exactly one of the two sources. `center` offsets the middle of the shape's
+/// extent along the axis (the mirror centre of a prolate or oblate) from the box centre.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Axisym {
+    #[serde(default)]
+    pub branch: Option<AxisymBranch>,
+    #[serde(default)]
+    pub reduced_volume: Option<f64>,
+    #[serde(default)]
+    pub contour: Option<PathBuf>,
+    pub r0: f64,
+    #[serde(default)]
+    pub axis: Option<String>,
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Branch of the c0 = 0 shape diagram (`vesicle::analysis::axisym::Branch`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AxisymBranch {
+    /// Up–down symmetric, elongated along the axis.
+    Prolate,
+    /// Up–down symmetric, flattened (discocytes at smaller v).
+    Oblate,
+    /// An invaginated cup, not up–down symmetric.
+    Stomatocyte,
+}
+
+impl AxisymBranch {
+    /// Lower-case name, as in the scene file.
+    pub fn name(self) -> &'static str {
+        match self {
+            AxisymBranch::Prolate => "prolate",
+            AxisymBranch::Oblate => "oblate",
+            AxisymBranch::Stomatocyte => "stomatocyte",
+        }
+    }
+
+    /// Reduced volumes `(lo, hi]` where the reference solver's branch exists as a surface
+    /// without self-contact: the oblate touches itself at the poles below v ≈ 0.503 and the
+    /// stomatocyte ends at a limit point, v ≈ 0.6608 (tests/axisym.rs). Where the solver still
+    /// fails inside the range (the stomatocyte's neck closes at small v, self-contact near
+    /// v ≈ 0.2), building the field says so.
+    pub fn range(self) -> (f64, f64) {
+        match self {
+            AxisymBranch::Prolate => (0.0, 1.0),
+            AxisymBranch::Oblate => (0.503, 1.0),
+            AxisymBranch::Stomatocyte => (0.0, 0.6608),
+        }
+    }
+}
+
+impl Shape {
+    /// Every `contour` path inside the shape (for resolving them against the scene's folder).
+    pub fn contours_mut(&mut self) -> Vec<&mut PathBuf> {
+        match self {
+            Shape::Axisym(a) => a.contour.iter_mut().collect(),
+            Shape::Union(u) => u.of.iter_mut().flat_map(|s| s.contours_mut()).collect(),
+            Shape::Difference(d) => {
+                let mut v = d.base.contours_mut();
+                v.extend(d.minus.contours_mut());
+                v
+            }
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// Marks the inner path of a shape's error inside its message (serde keeps no path inside a
+/// hand-written deserializer); [`super::from_value`] turns it back into a dotted field.
+pub(super) const PATH_MARK: char = '\u{1f}';
+
+impl<'de> Deserialize<'de> for Shape {
+    /// Reads the `"shape"` tag, then the kind's struct with path tracking, so an error names
+    /// the inner key (`initial.radius`, `initial.of[1].axes`).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        fn kind<T: serde::de::DeserializeOwned>(v: Value) -> std::result::Result<T, String> {
+            serde_path_to_error::deserialize(v).map_err(|e| {
+                let path = e.path().to_string();
+                let inner = e.into_inner().to_string();
+                match (path.as_str(), inner.strip_prefix(PATH_MARK)) {
+                    (".", _) => inner,
+                    (_, Some(rest)) => format!("{PATH_MARK}{path}.{rest}"),
+                    (_, None) => format!("{PATH_MARK}{path}{PATH_MARK}{inner}"),
+                }
+            })
+        }
+        let mut v = Value::deserialize(d)?;
+        let tag = v
+            .as_object_mut()
+            .ok_or_else(|| D::Error::custom("expected a shape object"))?
+            .remove("shape")
+            .ok_or_else(|| D::Error::missing_field("shape"))?;
+        let shape = match tag.as_str().unwrap_or_default() {
+            "sphere" => kind(v).map(Shape::Sphere),
+            "ellipsoid" => kind(v).map(Shape::Ellipsoid),
+            "spheroid" => kind(v).map(Shape::Spheroid),
+            "cup" => kind(v).map(Shape::Cup),
+            "capsule" => kind(v).map(Shape::Capsule),
+            "union" => kind(v).map(Shape::Union),
+            "difference" => kind(v).map(Shape::Difference),
+            "axisym" => kind(v).map(Shape::Axisym),
+            _ => Err(format!(
+                "{PATH_MARK}shape{PATH_MARK}unknown variant {tag}, expected one of `sphere`, \
+                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `union`, `difference`, `axisym`"
+            )),
+        };
+        shape.map_err(D::Error::custom)
+    }
+}
+
+/// Which way a spheroid is stretched.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpheroidKind {
+    /// Long along the axis.
+    #[default]
+    Prolate,
+    /// Short along the axis.
+    Oblate,
+}

@@ -1,0 +1,416 @@
+//! [`Scene::validate`]: every check that needs no initial field, each error naming the dotted
+//! key and the reason.
+
+use super::c0::{C0Field, C0Spec};
+use super::scene::{axis_index, AreaMethod, Dynamics, Method, Scene, Scheme, Symmetry};
+use super::shapes::{AxisymBranch, Initial, Shape};
+use crate::error::{Error, Result};
+
+impl Scene {
+    /// Check every field that can be checked without building the initial field.
+    ///
+    /// # Errors
+    /// `Error::Config` naming the first invalid field and the reason.
+    pub fn validate(&self) -> Result<()> {
+        if self.dim != 2 && self.dim != 3 {
+            return Err(Error::config(
+                "dim",
+                format!("must be 2 or 3, got {}", self.dim),
+            ));
+        }
+        if self.n.len() != self.dim {
+            return Err(Error::config(
+                "n",
+                format!(
+                    "needs {} entries (dim = {}), got {}",
+                    self.dim,
+                    self.dim,
+                    self.n.len()
+                ),
+            ));
+        }
+        if let Some(&bad) = self.n.iter().find(|&&m| m < 4) {
+            return Err(Error::config(
+                "n",
+                format!("every entry must be at least 4, got {bad}"),
+            ));
+        }
+        positive("h", self.h)?;
+        positive("eps", self.eps)?;
+        positive("dt", self.dt)?;
+        if let Some(t) = self.t_end {
+            positive("t_end", t)?;
+        }
+        if self.max_steps == Some(0) {
+            return Err(Error::config("max_steps", "must be at least 1"));
+        }
+        if let Some(r) = self.stop_residual {
+            positive("stop_residual", r)?;
+        }
+        if self.t_end.is_none() && self.max_steps.is_none() && self.stop_residual.is_none() {
+            return Err(Error::config(
+                "t_end",
+                "the run needs a stop rule: set t_end, max_steps or stop_residual",
+            ));
+        }
+        if self.threads == Some(0) {
+            return Err(Error::config("threads", "must be at least 1"));
+        }
+        self.validate_method()?;
+        self.validate_area()?;
+        self.validate_c0()?;
+        self.validate_symmetry()?;
+        if let Initial::Shape(s) = &self.initial {
+            validate_shape(s, "initial", self.dim)?;
+        }
+        if self.output.checkpoint_minutes <= 0.0 {
+            return Err(Error::config(
+                "output.checkpoint_minutes",
+                "must be positive (checkpoints are always written at the end)",
+            ));
+        }
+        if self.output.record_every == Some(0) {
+            return Err(Error::config("output.record_every", "must be at least 1"));
+        }
+        Ok(())
+    }
+
+    fn validate_method(&self) -> Result<()> {
+        if self.method == Method::Fd {
+            if self.scheme != Scheme::Sbdf1 {
+                return Err(Error::config(
+                    "scheme",
+                    "the fd method is explicit Euler; sbdf schemes belong to the spectral method",
+                ));
+            }
+            if self.adaptive.settings().is_some() {
+                return Err(Error::config(
+                    "adaptive",
+                    "the fd reference runs with a fixed step (its stability bound); use the spectral method",
+                ));
+            }
+            if self.dynamics != Dynamics::Conserved {
+                return Err(Error::config(
+                    "dynamics",
+                    "the fd method runs conserved dynamics only",
+                ));
+            }
+        }
+        if self.dynamics == Dynamics::Relaxational && self.area_method() == AreaMethod::Lagrangian {
+            return Err(Error::config(
+                "area.method",
+                "relaxational dynamics holds the area exactly; use projection or none",
+            ));
+        }
+        if self.lbfgs_memory == 0 {
+            return Err(Error::config("lbfgs_memory", "must be at least 1"));
+        }
+        if self.lbfgs_memory > crate::engines::relax::MAX_MEMORY {
+            return Err(Error::config(
+                "lbfgs_memory",
+                format!("must be at most {}", crate::engines::relax::MAX_MEMORY),
+            ));
+        }
+        if !(self.stabilizer().s2 >= 0.0 && self.stabilizer().s2.is_finite()) {
+            return Err(Error::config("stabilizer.s2", "must be finite and ≥ 0"));
+        }
+        if !(self.stabilizer().s4 >= 0.0 && self.stabilizer().s4.is_finite()) {
+            return Err(Error::config("stabilizer.s4", "must be finite and ≥ 0"));
+        }
+        if let Some(a) = self.adaptive.settings() {
+            if let Some(m) = a.dt_min {
+                positive("adaptive.dt_min", m)?;
+                if m > self.dt {
+                    return Err(Error::config("adaptive.dt_min", "must not exceed dt"));
+                }
+            }
+            if let Some(m) = a.dt_max {
+                positive("adaptive.dt_max", m)?;
+                if m < self.dt {
+                    return Err(Error::config("adaptive.dt_max", "must not be below dt"));
+                }
+            }
+            if !(a.growth > 1.0 && a.growth < 1.0 + 2f64.sqrt()) {
+                return Err(Error::config(
+                    "adaptive.growth",
+                    format!(
+                        "must lie in (1, 1+√2) for SBDF2 stability, got {}",
+                        a.growth
+                    ),
+                ));
+            }
+            if !(a.shrink > 0.0 && a.shrink < 1.0) {
+                return Err(Error::config("adaptive.shrink", "must lie in (0, 1)"));
+            }
+            if !(a.energy_alpha >= 0.0 && a.energy_alpha.is_finite()) {
+                return Err(Error::config(
+                    "adaptive.energy_alpha",
+                    "must be finite and ≥ 0",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_area(&self) -> Result<()> {
+        if let Some(a) = self.area.alpha {
+            positive("area.alpha", a)?;
+        }
+        if let Some(t) = self.area.target {
+            positive("area.target", t)?;
+        }
+        if self.area.alpha.is_some() && self.area_method() != AreaMethod::Lagrangian {
+            return Err(Error::config(
+                "area.alpha",
+                "only the lagrangian area method uses alpha",
+            ));
+        }
+        Ok(())
+    }
+
+    fn validate_c0(&self) -> Result<()> {
+        let f = match &self.c0 {
+            C0Spec::Uniform(c) => return finite("c0", *c),
+            C0Spec::Field(f) => f,
+        };
+        if let Some(t) = f.ramp_time() {
+            positive("c0.ramp_time", t)?;
+        }
+        let blend = |inside: f64, outside: f64, width: f64| -> Result<()> {
+            finite("c0.inside", inside)?;
+            finite("c0.outside", outside)?;
+            positive("c0.width", width)
+        };
+        match f {
+            C0Field::Ball(b) => {
+                blend(b.inside, b.outside, b.width)?;
+                if let Some(r) = b.radius {
+                    positive("c0.radius", r)?;
+                }
+                check_center("c0.center", &b.center, self.dim)
+            }
+            C0Field::Cap(c) => {
+                blend(c.inside, c.outside, c.width)?;
+                if !(c.angle > 0.0 && c.angle < 180.0) {
+                    return Err(Error::config(
+                        "c0.angle",
+                        format!(
+                            "must lie in (0, 180) degrees (the rim's polar angle), got {}",
+                            c.angle
+                        ),
+                    ));
+                }
+                check_axis("c0.axis", &c.axis, self.dim)?;
+                check_center("c0.center", &c.center, self.dim)
+            }
+            C0Field::Band(b) => {
+                blend(b.inside, b.outside, b.width)?;
+                positive("c0.half_width", b.half_width)?;
+                check_axis("c0.axis", &b.axis, self.dim)?;
+                check_center("c0.center", &b.center, self.dim)
+            }
+            C0Field::File(_) => Ok(()),
+        }
+    }
+
+    fn validate_symmetry(&self) -> Result<()> {
+        if let Symmetry::Axes(axes) = &self.symmetry {
+            let mut seen = Vec::new();
+            for a in axes {
+                let i = axis_index(a, self.dim).ok_or_else(|| {
+                    Error::config(
+                        "symmetry",
+                        format!(
+                            "unknown axis {a:?} for dim {} (use x, y{})",
+                            self.dim,
+                            if self.dim == 3 { ", z" } else { "" }
+                        ),
+                    )
+                })?;
+                if seen.contains(&i) {
+                    return Err(Error::config("symmetry", format!("axis {a:?} given twice")));
+                }
+                seen.push(i);
+                if !self.n[i].is_multiple_of(2) {
+                    return Err(Error::config(
+                        "symmetry",
+                        format!("mirror axis {a:?} needs an even n, got {}", self.n[i]),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn positive(field: &str, x: f64) -> Result<()> {
+    if x > 0.0 && x.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::config(
+            field,
+            format!("must be a finite number > 0, got {x}"),
+        ))
+    }
+}
+
+fn finite(field: &str, x: f64) -> Result<()> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::config(field, format!("must be finite, got {x}")))
+    }
+}
+
+fn check_center(field: &str, center: &Option<Vec<f64>>, dim: usize) -> Result<()> {
+    if let Some(c) = center {
+        if c.len() != dim {
+            return Err(Error::config(
+                field,
+                format!("needs {dim} entries, got {}", c.len()),
+            ));
+        }
+        if c.iter().any(|x| !x.is_finite()) {
+            return Err(Error::config(field, "entries must be finite"));
+        }
+    }
+    Ok(())
+}
+
+fn check_axis(field: &str, axis: &Option<String>, dim: usize) -> Result<()> {
+    match axis {
+        Some(a) if axis_index(a, dim).is_none() => Err(Error::config(
+            field,
+            format!("unknown axis {a:?} for dim {dim}"),
+        )),
+        _ => Ok(()),
+    }
+}
+
+fn validate_shape(s: &Shape, at: &str, dim: usize) -> Result<()> {
+    let f = |k: &str| format!("{at}.{k}");
+    match s {
+        Shape::Sphere(s) => {
+            positive(&f("radius"), s.radius)?;
+            check_center(&f("center"), &s.center, dim)
+        }
+        Shape::Ellipsoid(s) => {
+            if s.axes.len() != dim {
+                return Err(Error::config(
+                    f("axes"),
+                    format!("needs {dim} entries, got {}", s.axes.len()),
+                ));
+            }
+            for a in &s.axes {
+                positive(&f("axes"), *a)?;
+            }
+            check_center(&f("center"), &s.center, dim)
+        }
+        Shape::Spheroid(s) => {
+            if !(s.reduced_volume > 0.0 && s.reduced_volume <= 1.0) {
+                return Err(Error::config(
+                    f("reduced_volume"),
+                    format!("must lie in (0, 1], got {}", s.reduced_volume),
+                ));
+            }
+            positive(&f("r0"), s.r0)?;
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
+        }
+        Shape::Cup(s) => {
+            positive(&f("radius"), s.radius)?;
+            positive(&f("inner_radius"), s.inner_radius)?;
+            finite(&f("offset"), s.offset)?;
+            if s.inner_radius + s.offset.abs() <= s.radius {
+                return Err(Error::config(
+                    f("offset"),
+                    "the inner ball lies inside the outer one (no opening): need inner_radius + |offset| > radius",
+                ));
+            }
+            if s.offset.abs() - s.inner_radius >= s.radius {
+                return Err(Error::config(
+                    f("offset"),
+                    "the inner ball misses the outer one",
+                ));
+            }
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
+        }
+        Shape::Capsule(s) => {
+            positive(&f("radius"), s.radius)?;
+            if !(s.length >= 0.0 && s.length.is_finite()) {
+                return Err(Error::config(f("length"), "must be finite and ≥ 0"));
+            }
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
+        }
+        Shape::Union(u) => {
+            if u.of.is_empty() {
+                return Err(Error::config(f("of"), "needs at least one shape"));
+            }
+            for (i, s) in u.of.iter().enumerate() {
+                validate_shape(s, &format!("{at}.of[{i}]"), dim)?;
+            }
+            Ok(())
+        }
+        Shape::Difference(d) => {
+            validate_shape(&d.base, &f("base"), dim)?;
+            validate_shape(&d.minus, &f("minus"), dim)
+        }
+        Shape::Axisym(s) => {
+            if dim != 3 {
+                return Err(Error::config(
+                    f("shape"),
+                    format!("axisym is a surface of revolution: it needs dim = 3, got {dim}"),
+                ));
+            }
+            match (&s.contour, s.branch, s.reduced_volume) {
+                (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+                    return Err(Error::config(
+                        f("contour"),
+                        "give either branch + reduced_volume or contour, not both",
+                    ))
+                }
+                (Some(path), None, None) => {
+                    crate::problem::revolution::read_contour(path)
+                        .map_err(|e| Error::config(f("contour"), e))?;
+                }
+                (None, None, _) => {
+                    return Err(Error::config(
+                        f("branch"),
+                        "missing: give branch (prolate, oblate or stomatocyte) + reduced_volume, \
+                         or contour",
+                    ))
+                }
+                (None, Some(_), None) => {
+                    return Err(Error::config(
+                        f("reduced_volume"),
+                        "missing: the branch's shape is chosen by its reduced volume",
+                    ))
+                }
+                (None, Some(b), Some(v)) => {
+                    let (lo, hi) = b.range();
+                    if !(v > lo && v <= hi) {
+                        return Err(Error::config(
+                            f("reduced_volume"),
+                            format!(
+                                "the {} branch exists for {lo} < v ≤ {hi}{}, got {v}",
+                                b.name(),
+                                match b {
+                                    AxisymBranch::Prolate => "",
+                                    AxisymBranch::Oblate =>
+                                        " (below v ≈ 0.503 the oblate intersects itself)",
+                                    AxisymBranch::Stomatocyte =>
+                                        " (the branch ends at its limit point v ≈ 0.6608)",
+                                }
+                            ),
+                        ));
+                    }
+                }
+            }
+            positive(&f("r0"), s.r0)?;
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
+        }
+    }
+}
