@@ -198,9 +198,16 @@ fn budding_scene_runs_tiny_and_measure_writes_its_table() {
     );
     // The prolate of R0 = 7 at v = 0.8: its equator radius lies between R0·0.6 and R0, times
     // are the recorded ones (increasing), and a closed shape has a finite skewness.
+    // The φ = 0 surface: a prolate of v = 0.8 keeps a reduced volume between 0.75 and 0.9
+    // (the tanh profile of R0 = 7ε reads v a few per cent off the spheroid's) and its area
+    // within 15% of 4π R0²; one connected piece.
     for row in &rows {
         assert!(row[1] > 0.0 && row[2] > 4.0 && row[2] < 7.0, "{row:?}");
         assert!(row[10].is_finite());
+        let sphere_area = 4.0 * std::f64::consts::PI * 49.0;
+        assert!((row[11] / sphere_area - 1.0).abs() < 0.15, "{row:?}");
+        assert!(row[13] > 0.75 && row[13] < 0.9, "{row:?}");
+        assert_eq!(row[14], 1.0, "{row:?}");
     }
     assert!(rows.windows(2).all(|w| w[1][1] > w[0][1]));
     assert!(out.join("neck.png").is_file());

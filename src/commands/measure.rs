@@ -17,10 +17,15 @@
 //! the whole axis for a tube through a periodic box, the part between the tips of a capsule)
 //! the dominant Fourier mode of r − r̄ with its wavelength λ = M h/k (M body slices) and the
 //! equivalent tube radius R_tube = √(mean r²), the ratio λ/(2π R_tube) (the Rayleigh–Plateau
-//! threshold of a cylinder is λ = 2πR) and the skewness of the volume along the axis (0 for a shape with a mirror plane
-//! normal to the axis, nonzero for a pear). Results go to `DIR/measure.csv` and the chart
-//! `DIR/neck.png` (neck and largest radius against t).
+//! threshold of a cylinder is λ = 2πR) and the skewness of the volume along the axis (0 for a
+//! shape with a mirror plane normal to the axis, nonzero for a pear). Per state also the area,
+//! volume and reduced volume of the φ = 0 surface, with their drift over the run
+//! ([`surface_drift`]), and the number of connected pieces of {φ > 0} (a chain or separate
+//! spheres). Results go to `DIR/measure.csv` and the chart `DIR/neck.png` (neck and largest
+//! radius against t).
 
+use crate::analysis::components;
+use crate::analysis::levelset::{self, LevelSet};
 use crate::commands::run_folder::{self, RunInfo};
 use crate::error::{Error, Result};
 use crate::output::{self, chart};
@@ -50,6 +55,12 @@ pub struct ShapeMeasure {
     pub r_tube: f64,
     /// Volume skewness along the axis (see [`skewness`]).
     pub skewness: f64,
+    /// Area, enclosed volume and reduced volume of the φ = 0 surface
+    /// ([`levelset::measure_refined`]).
+    pub surface: LevelSet,
+    /// Connected pieces of {φ > 0} ([`components::count`]): 1 for a connected chain or a bud on
+    /// its neck, more once pieces have separated at the grid's resolution.
+    pub pieces: usize,
 }
 
 /// The dominant Fourier mode of a radius profile.
@@ -233,7 +244,24 @@ pub fn measure_field(phi: &Array3<f64>, axis: usize, h: f64, step: usize, t: f64
         mode: dominant_mode(body, h),
         r_tube,
         skewness: skewness(&r, h),
+        surface: levelset::measure_refined(phi, 3, h),
+        pieces: components::count(phi),
     }
+}
+
+/// The largest relative departure of the φ = 0 area and volume from the first state's over
+/// all states, `max_i |X_i − X_0| / X_0` for X = A₀ and V₀: the drift of the constrained
+/// quantities as the sharp surface sees them (the diffuse A and V are held to round-off; the
+/// φ = 0 ones move when the profile across the interface changes, e.g. when a feature
+/// approaches the interface width).
+pub fn surface_drift(rows: &[ShapeMeasure]) -> Option<(f64, f64)> {
+    let first = rows.first()?.surface;
+    let worst = |of: fn(&LevelSet) -> f64| {
+        rows.iter()
+            .map(|m| ((of(&m.surface) - of(&first)) / of(&first)).abs())
+            .fold(0.0, f64::max)
+    };
+    Some((worst(|s| s.area), worst(|s| s.volume)))
 }
 
 /// What `vesicle measure` reads and writes.
@@ -354,7 +382,8 @@ fn time_of(step: usize, rows: &[(usize, f64)], info: &RunInfo) -> f64 {
 
 /// The CSV header of `measure.csv`.
 pub const CSV_HEADER: &str = "step,t,r_max,r_neck,z_neck,mode,wavelength,amplitude,r_tube,\
-                              wavelength_over_2pi_r_tube,skewness";
+                              wavelength_over_2pi_r_tube,skewness,surface_area,surface_volume,\
+                              surface_reduced_volume,pieces";
 
 /// The rows as CSV (an absent neck is written `NaN`).
 fn csv_text(rows: &[ShapeMeasure]) -> String {
@@ -363,7 +392,7 @@ fn csv_text(rows: &[ShapeMeasure]) -> String {
         let (r_neck, z_neck) = m.neck.unwrap_or((f64::NAN, f64::NAN));
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             m.step,
             m.t,
             m.r_max,
@@ -374,7 +403,11 @@ fn csv_text(rows: &[ShapeMeasure]) -> String {
             m.mode.amplitude,
             m.r_tube,
             m.mode.wavelength / (2.0 * PI * m.r_tube),
-            m.skewness
+            m.skewness,
+            m.surface.area,
+            m.surface.volume,
+            m.surface.reduced_volume,
+            m.pieces
         );
     }
     s
@@ -408,7 +441,7 @@ fn write_chart(path: &Path, rows: &[ShapeMeasure]) -> Result<()> {
 /// one always).
 pub fn table(rows: &[ShapeMeasure], limit: usize) -> String {
     let mut s = String::from(
-        "    step          t    r_max   r_neck   mode  wavelength  λ/2πR_tube  skewness\n",
+        "    step          t    r_max   r_neck   mode  wavelength  λ/2πR_tube  skewness      A(φ=0)      V(φ=0)  v(φ=0)  pieces\n",
     );
     let stride = rows.len().div_ceil(limit.max(1)).max(1);
     let last = rows.len().saturating_sub(1);
@@ -421,14 +454,18 @@ pub fn table(rows: &[ShapeMeasure], limit: usize) -> String {
             .map_or("       -".to_string(), |(r, _)| format!("{r:8.3}"));
         let _ = writeln!(
             s,
-            "{:8} {:10.4e} {:8.3} {neck} {:6} {:11.3} {:11.3} {:9.4}",
+            "{:8} {:10.4e} {:8.3} {neck} {:6} {:11.3} {:11.3} {:9.4} {:11.2} {:11.2} {:7.4} {:7}",
             m.step,
             m.t,
             m.r_max,
             m.mode.k,
             m.mode.wavelength,
             m.mode.wavelength / (2.0 * PI * m.r_tube),
-            m.skewness
+            m.skewness,
+            m.surface.area,
+            m.surface.volume,
+            m.surface.reduced_volume,
+            m.pieces
         );
     }
     s
