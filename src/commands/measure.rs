@@ -468,5 +468,14 @@ pub fn table(rows: &[ShapeMeasure], limit: usize) -> String {
             m.pieces
         );
     }
+    if let Some((area, volume)) = surface_drift(rows) {
+        let _ = writeln!(
+            s,
+            "φ = 0 surface over the run: area drift {:.2}%, volume drift {:.2}% (largest \
+             departure from the first state)",
+            100.0 * area,
+            100.0 * volume
+        );
+    }
     s
 }
