@@ -532,13 +532,18 @@ fn bad_overrides_are_rejected_with_exit_2_and_no_output() {
             "`adaptive`: ignored by \"dynamics\": \"relaxational\"",
         ),
         (&sphere, &["--set", "lbfgs_memory=3"], "`lbfgs_memory`"),
-        (&sphere, &["--set", "dt=null"], "missing field `dt`"),
+        // A required key removed is named as the field itself.
+        (&sphere, &["--set", "dt=null"], "`dt`: required, missing"),
         (
             &sphere,
             &["--set", "initial=null"],
-            "missing field `initial`",
+            "`initial`: required, missing",
         ),
-        (&sphere, &["--set", "initial.radius=null"], "radius"),
+        (
+            &sphere,
+            &["--set", "initial.radius=null"],
+            "`initial.radius`: required, missing",
+        ),
     ];
     let mut failures = Vec::new();
     for (scene, extra, expect) in cases {

@@ -307,30 +307,45 @@ fn render_command_end_to_end() {
     let render = vesicle(&["render", out_s, "--gif", "--cut", "y"], &crate_dir());
     assert!(render.status.success(), "{render:?}");
     let frames = out.join("frames");
-    // Snapshots at steps 2 and 4; the final state is step 4 too.
+    // Snapshots of the initial state (step 0) and at steps 2 and 4; the final state is step 4
+    // too.
     assert_eq!(
         files_in(&frames, ".png"),
-        ["frame_00000002.png", "frame_00000004.png"]
+        [
+            "frame_00000000.png",
+            "frame_00000002.png",
+            "frame_00000004.png"
+        ]
     );
     assert_eq!(
         files_in(&frames, ".ply"),
-        ["surface_00000002.ply", "surface_00000004.ply"]
+        [
+            "surface_00000000.ply",
+            "surface_00000002.ply",
+            "surface_00000004.ply"
+        ]
     );
+    // The initial sphere of radius 10 as well.
+    let first: Mesh = read_ply(&frames.join("surface_00000000.ply")).unwrap();
+    assert!(rel(first.area(), 4.0 * PI * 100.0) < 0.02);
     let mesh: Mesh = read_ply(&frames.join("surface_00000004.ply")).unwrap();
     assert!(mesh.is_closed() && mesh.enclosed_volume() > 0.0);
     // The sphere of radius 10 (h = 1), from the mesh of the written field.
     assert!(rel(mesh.area(), 4.0 * PI * 100.0) < 0.02);
     let gif = std::fs::read(out.join("movie.gif")).unwrap();
     assert_eq!(&gif[..6], b"GIF89a");
-    assert_eq!(gif_frames(&out.join("movie.gif")), 2);
+    assert_eq!(gif_frames(&out.join("movie.gif")), 3);
     // An existing frames/ is kept without --force, replaced with it.
     let again = vesicle(&["render", out_s], &crate_dir());
     assert_eq!(again.status.code(), Some(2), "{again:?}");
     assert!(String::from_utf8_lossy(&again.stderr).contains("--force"));
     let forced = vesicle(&["render", out_s, "--force", "--every", "2"], &crate_dir());
     assert!(forced.status.success(), "{forced:?}");
-    // Every 2nd snapshot (step 2) plus the final state (step 4).
-    assert_eq!(files_in(&frames, ".png").len(), 2);
+    // Every 2nd snapshot (steps 0 and 4; the final state is step 4).
+    assert_eq!(
+        files_in(&frames, ".png"),
+        ["frame_00000000.png", "frame_00000004.png"]
+    );
     // A folder without snapshots is refused.
     std::fs::remove_dir_all(out.join("snapshots")).unwrap();
     std::fs::create_dir(out.join("snapshots")).unwrap();
@@ -364,9 +379,10 @@ fn render_command_2d_gif() {
     let render = vesicle(&["render", out_s, "--gif"], &crate_dir());
     assert!(render.status.success(), "{render:?}");
     let frames = out.join("frames");
-    assert_eq!(files_in(&frames, ".png").len(), 3);
+    // Steps 0, 2, 4 and 6: the movie starts at the initial state.
+    assert_eq!(files_in(&frames, ".png").len(), 4);
     assert!(files_in(&frames, ".ply").is_empty());
-    assert_eq!(gif_frames(&out.join("movie.gif")), 3);
+    assert_eq!(gif_frames(&out.join("movie.gif")), 4);
 }
 
 /// The refined φ = 0 measure (area on the band-limited interpolant at h/2, volume Richardson-

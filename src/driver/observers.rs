@@ -192,12 +192,10 @@ impl<'a> Snapshots<'a> {
     }
 }
 
-impl Observer for Snapshots<'_> {
-    fn step(&mut self, now: &Now) -> Result<Flow> {
+impl Snapshots<'_> {
+    /// φ of `now` into `phi_<step>` (full box).
+    fn write(&self, now: &Now) -> Result<()> {
         let step = now.record.step;
-        if self.every == 0 || !step.is_multiple_of(self.every) {
-            return Ok(Flow::Continue);
-        }
         let full = self.grid.unfold(now.engine.phi());
         let (dim, s) = (self.scene.dim, self.scene);
         let base = self.dir.join(format!("phi_{step:08}"));
@@ -208,6 +206,24 @@ impl Observer for Snapshots<'_> {
         if s.output.png {
             let title = format!("step {step}");
             output::image::write_slices_png(&base.with_extension("png"), &full, dim, &title)?;
+        }
+        Ok(())
+    }
+}
+
+impl Observer for Snapshots<'_> {
+    /// The initial state (step 0) of a new run, so that a movie starts at t = 0; a resumed run
+    /// starts from a state whose snapshot, if due, was written before it stopped.
+    fn start(&mut self, now: &Now) -> Result<()> {
+        if self.every > 0 && now.record.step == 0 {
+            self.write(now)?;
+        }
+        Ok(())
+    }
+
+    fn step(&mut self, now: &Now) -> Result<Flow> {
+        if self.every > 0 && now.record.step.is_multiple_of(self.every) {
+            self.write(now)?;
         }
         Ok(Flow::Continue)
     }

@@ -502,6 +502,10 @@ impl Engine for FdEngine {
             .scalar("max_bound_ratio", self.max_bound_ratio)
             .scalar("volume0", self.volume0)
             .scalar("mu_mean", self.mu_mean)
+            .scalar("energy", self.measures.energy)
+            .scalar("area", self.measures.area)
+            .scalar("volume", self.measures.volume)
+            .scalar("residual", self.residual)
             .array("phi", SavedArray::Real(self.phi.view().into()))
     }
 
@@ -518,6 +522,22 @@ impl Engine for FdEngine {
         // with the two-pass mean: residuals equal to round-off rather than bit for bit).
         if let Ok(m) = saved.get("mu_mean") {
             self.mu_mean = m;
+        }
+        // The measures and the residual as the step that made the state summed them: the fused
+        // sweep sums A as Σ φ∇²φ, the refresh from forward differences, equal to round-off
+        // only, and the Lagrangian update σ^{n+1} = σⁿ + α (Aⁿ − A0) reads Aⁿ.
+        if let (Ok(energy), Ok(area), Ok(volume), Ok(residual)) = (
+            saved.get("energy"),
+            saved.get("area"),
+            saved.get("volume"),
+            saved.get("residual"),
+        ) {
+            self.measures = Measures {
+                energy,
+                area,
+                volume,
+            };
+            self.residual = residual;
         }
         Ok(())
     }

@@ -119,12 +119,26 @@ pub fn from_value(value: Value) -> Result<Scene> {
             .strip_prefix(PATH_MARK)
             .and_then(|r| r.split_once(PATH_MARK))
         {
-            Some((inner, rest)) => Error::config(format!("{field}.{inner}"), rest),
-            None => Error::config(field, reason),
+            Some((inner, rest)) => missing_or(format!("{field}.{inner}"), rest),
+            None => missing_or(field, &reason),
         }
     })?;
     ignored::refuse_ignored(&value, &scene)?;
     Ok(scene)
+}
+
+/// The error of `reason` at `field`; serde's "missing field `k`" names the object that lacks
+/// the key, so that one names the key itself (`dt`, `initial.radius`) as the field.
+fn missing_or(field: String, reason: &str) -> Error {
+    let missing = reason
+        .strip_prefix("missing field `")
+        .and_then(|r| r.split_once('`'))
+        .map(|(key, _)| key);
+    match missing {
+        Some(key) if field == "(top level)" => Error::config(key, "required, missing"),
+        Some(key) => Error::config(format!("{field}.{key}"), "required, missing"),
+        None => Error::config(field, reason),
+    }
 }
 
 /// Serde reads a struct from an array too, positionally (`"area": ["lagrangian", 0.01]`); a
@@ -303,8 +317,11 @@ mod tests {
         let mut v = scene();
         apply_override(&mut v, "dt=null").unwrap();
         match from_value(v) {
-            Err(Error::Config { reason, .. }) => {
-                assert!(reason.contains("missing field `dt`"), "{reason}")
+            Err(Error::Config { field, reason }) => {
+                assert_eq!(
+                    (field.as_str(), reason.as_str()),
+                    ("dt", "required, missing")
+                )
             }
             other => panic!("{other:?}"),
         }
