@@ -42,6 +42,7 @@ use rustfft::{Fft, FftPlanner};
 use super::columns::ColumnFft;
 use super::kernels::wide_fn;
 use super::real_rows::RealRows;
+use crate::cpu::has_avx;
 use crate::engines::private::Private;
 use crate::problem::grid::AxisKind;
 
@@ -241,15 +242,6 @@ fn dct_twiddles<const POST: bool>(
         };
         twiddle_lane(lane, w, from, pair);
     }
-}
-
-/// Whether the CPU has AVX (cached by the standard library).
-#[inline(always)]
-fn has_avx() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return is_x86_feature_detected!("avx");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
 }
 
 /// i z.
