@@ -26,11 +26,16 @@ struct Variant {
     eighth: bool,
 }
 
-/// A prepared engine of `v` for a prolate (v = 0.85, R0 = n/4) on an n³ box.
-fn engine(v: &Variant, n: usize, symmetry: serde_json::Value) -> Box<dyn Engine + Send> {
+/// A prepared engine of `v` for a prolate (v = 0.85, R0 = n/4) on an n³ box, for `threads`.
+fn engine(
+    v: &Variant,
+    n: usize,
+    symmetry: serde_json::Value,
+    threads: usize,
+) -> Box<dyn Engine + Send> {
     engine_of(json!({
         "dim": 3, "n": [n, n, n], "h": 1.0, "eps": 1.0, "method": v.method, "dt": v.dt,
-        "max_steps": 1,
+        "max_steps": 1, "threads": threads,
         "initial": {"shape": "spheroid", "reduced_volume": 0.85, "r0": n as f64 / 4.0},
         "symmetry": symmetry, "area": v.area
     }))
@@ -102,7 +107,7 @@ fn bench_steps(c: &mut Criterion) {
             group.sample_size(if n == 128 { 10 } else { 100 });
             for threads in [1, 2] {
                 let id = BenchmarkId::new(format!("{name}/full"), format!("{n}^3/t{threads}"));
-                let make = || engine(&v, n, json!([]));
+                let make = || engine(&v, n, json!([]), threads);
                 time_steps(&mut group, id, threads, make, v.dt);
             }
         }
@@ -113,18 +118,19 @@ fn bench_steps(c: &mut Criterion) {
         // 32³ computed points: `vesicle run` takes one thread below 2¹⁷ (`cli::SERIAL_BELOW`).
         for threads in [1, 2] {
             let id = BenchmarkId::new(format!("{name}/eighth"), format!("64^3/t{threads}"));
-            let make = || engine(&v, 64, json!(["x", "y", "z"]));
+            let make = || engine(&v, 64, json!(["x", "y", "z"]), threads);
             time_steps(&mut group, id, threads, make, v.dt);
         }
     }
     group.finish();
 }
 
-/// The 48³ full-box prolate of DESIGN.md §7 (`runs/prolate3d_full.json`) with `dynamics`.
-fn prolate48(dynamics: &str) -> Box<dyn Engine + Send> {
+/// The 48³ full-box prolate of DESIGN.md §7 (`runs/prolate3d_full.json`) with `dynamics`, for
+/// `threads`.
+fn prolate48(dynamics: &str, threads: usize) -> Box<dyn Engine + Send> {
     let mut scene = json!({
         "dim": 3, "n": [48, 48, 48], "h": 1.0, "eps": 1.0, "method": "spectral",
-        "dynamics": dynamics, "dt": 0.5, "max_steps": 1,
+        "dynamics": dynamics, "dt": 0.5, "max_steps": 1, "threads": threads,
         "initial": {"shape": "ellipsoid", "axes": [17.0, 10.0, 10.0]}
     });
     if dynamics == "relaxational" {
@@ -144,7 +150,7 @@ fn bench_relaxation(c: &mut Criterion) {
             .build()
             .expect("thread pool");
         let fresh = || {
-            let mut e = prolate48("relaxational");
+            let mut e = prolate48("relaxational", threads);
             (0..10).for_each(|i| {
                 e.step(i as f64, 1.0).expect("iteration");
             });
@@ -173,7 +179,13 @@ fn bench_relaxation(c: &mut Criterion) {
             })
         });
         let id = BenchmarkId::new("conserved_step", format!("48^3/t{threads}"));
-        time_steps(&mut group, id, threads, || prolate48("conserved"), 0.5);
+        time_steps(
+            &mut group,
+            id,
+            threads,
+            || prolate48("conserved", threads),
+            0.5,
+        );
     }
     group.finish();
 }

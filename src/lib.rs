@@ -37,6 +37,7 @@
 
 pub mod analysis;
 pub mod commands;
+pub mod cpu;
 pub mod driver;
 pub mod engines;
 pub mod error;

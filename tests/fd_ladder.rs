@@ -103,12 +103,12 @@ fn chemical_potential_is_derivative_of_discrete_energy() {
         let sigma = 0.37;
         let f_eff = |phi: &ndarray::Array3<f64>| {
             let c0 = C0::new(&s.c0, &grid, s.eps).unwrap();
-            let e = FdEngine::new(grid.clone(), s.eps, c0, phi.clone(), 0.0).unwrap();
+            let e = FdEngine::new(grid.clone(), s.eps, c0, phi.clone(), 0.0, 1).unwrap();
             e.measures().energy + sigma * e.measures().area
         };
         let psi = grid.field_from(|p| (0.3 * p[0]).cos() * (0.2 * p[1] + 0.1).cos());
         let c0 = C0::new(&s.c0, &grid, s.eps).unwrap();
-        let mut e = FdEngine::new(grid.clone(), s.eps, c0, problem.phi.clone(), 0.0).unwrap();
+        let mut e = FdEngine::new(grid.clone(), s.eps, c0, problem.phi.clone(), 0.0, 1).unwrap();
         e.set_area(vesicle::engines::AreaConstraint {
             method: vesicle::problem::config::AreaMethod::Lagrangian,
             alpha: 0.0,

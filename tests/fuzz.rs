@@ -24,6 +24,7 @@ const KEYS: &[&str] = &[
     "t_end",
     "max_steps",
     "stop_residual",
+    "max_wall_minutes",
     "initial",
     "prepare_steps",
     "c0",
@@ -74,6 +75,12 @@ const KEYS: &[&str] = &[
     "png",
     "checkpoint_every",
     "checkpoint_minutes",
+    "records",
+    "snapshots",
+    "checkpoints",
+    "every_steps",
+    "every_time",
+    "every_minutes",
     "bogus",
 ];
 

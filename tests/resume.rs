@@ -370,3 +370,144 @@ fn energy_rise_at_a_fixed_step_stops_with_exit_3_and_a_good_checkpoint() {
     let s = summary(&out);
     assert!(s["rejected_steps"].as_u64().unwrap() > 0, "{s}");
 }
+
+/// The times of the rows of `dir`'s time series (column `t`), the first and the last left out.
+fn inner_row_times(dir: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "t").unwrap();
+    let t: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    t[1..t.len() - 1].to_vec()
+}
+
+/// Outputs on simulated time: rows every 1.25 and snapshots every 2.5 of t, with fixed steps
+/// of 0.5 (not a divisor of 1.25) and with adaptive steps. The driver shortens the step that
+/// would pass a due time, so every row but the first and last lies on a multiple of 1.25 (to
+/// the round-off of a sum of steps, 1e-9 here), and a run of 2N steps and a run of N steps
+/// resumed for N more (its next due time read from the checkpoint, not found again from t)
+/// give bitwise identical φ, identical rows and the same snapshot files.
+#[test]
+fn outputs_on_simulated_time_land_on_their_times_and_resume_bitwise() {
+    let n = 30;
+    for (name, extra) in [
+        ("sbdf1-fixed", json!({"scheme": "sbdf1"})),
+        (
+            "sbdf2-adaptive",
+            json!({"scheme": "sbdf2", "adaptive": {"dt_max": 50.0}}),
+        ),
+    ] {
+        let mut scene = ellipse(extra);
+        scene["output"] = json!({
+            "records": {"every_time": 1.25},
+            "snapshots": {"every_time": 2.5},
+            "png": false, "vti": false
+        });
+        let tmp = TempDir::new().unwrap();
+        let scene = write_scene(tmp.path(), "s.json", &scene);
+        let scene = scene.to_str().unwrap();
+        let (whole, split) = (tmp.path().join("whole"), tmp.path().join("split"));
+        let steps = |k: usize| format!("max_steps={k}");
+        for (out, k) in [(&whole, 2 * n), (&split, n)] {
+            let o = vesicle(&[
+                "run",
+                scene,
+                "--out",
+                out.to_str().unwrap(),
+                "--set",
+                &steps(k),
+            ]);
+            assert!(o.status.success(), "{name}: {}", stderr(&o));
+        }
+        let o = vesicle(&["resume", split.to_str().unwrap(), "--set", &steps(2 * n)]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let times = inner_row_times(&whole);
+        assert!(times.len() >= 3, "{name}: {times:?}");
+        for (k, t) in times.iter().enumerate() {
+            let due = 1.25 * (k + 1) as f64;
+            assert!(
+                (t - due).abs() <= 1e-9,
+                "{name}: row {k} at t = {t}, due {due}"
+            );
+        }
+        let phi = |d: &Path| std::fs::read(d.join("phi_final.npy")).unwrap();
+        assert!(
+            phi(&whole) == phi(&split),
+            "{name}: φ differs after resuming"
+        );
+        // The split run also keeps the state it stopped at (step N), as every run keeps its
+        // last state.
+        let whole_rows = rows_without_wall(&whole);
+        let split_rows: Vec<String> = rows_without_wall(&split)
+            .into_iter()
+            .filter(|r| whole_rows.contains(r) || !r.starts_with(&format!("{n},")))
+            .collect();
+        assert_eq!(whole_rows, split_rows, "{name}");
+        let snaps = |d: &Path| {
+            let mut v: Vec<_> = std::fs::read_dir(d.join("snapshots"))
+                .unwrap()
+                .map(|e| e.unwrap().file_name())
+                .collect();
+            v.sort();
+            v
+        };
+        assert!(!snaps(&whole).is_empty(), "{name}: no snapshots");
+        assert_eq!(snaps(&whole), snaps(&split), "{name}: snapshots");
+    }
+}
+
+/// `max_wall_minutes`: a run that would step past it (0.001 min here, against a million steps)
+/// stops after a step with `"stopped": "wall_time"`, exit 0 and a checkpoint; resumed without the
+/// limit it continues to its stop rule and ends bitwise where an uninterrupted run ends.
+#[test]
+fn wall_time_limit_stops_cleanly_and_the_run_resumes() {
+    let tmp = TempDir::new().unwrap();
+    let scene = write_scene(
+        tmp.path(),
+        "s.json",
+        &ellipse(json!({"scheme": "sbdf1", "max_steps": 1_000_000, "max_wall_minutes": 0.001})),
+    );
+    let out = tmp.path().join("r");
+    let o = vesicle(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["stopped"], json!("wall_time"), "{s}");
+    let steps = s["steps"].as_u64().unwrap();
+    assert!((1..1_000_000).contains(&steps), "{steps} steps");
+    assert!(out.join("checkpoint.bin").exists());
+    let target = format!("max_steps={}", steps + 5);
+    let o = vesicle(&[
+        "resume",
+        out.to_str().unwrap(),
+        "--set",
+        "max_wall_minutes=null",
+        "--set",
+        &target,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["stopped"], json!("max_steps"), "{s}");
+    assert_eq!(s["steps"].as_u64(), Some(steps + 5));
+    let whole = tmp.path().join("whole");
+    let o = vesicle(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        whole.to_str().unwrap(),
+        "--set",
+        "max_wall_minutes=null",
+        "--set",
+        &target,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let phi = |d: &Path| std::fs::read(d.join("phi_final.npy")).unwrap();
+    assert!(phi(&whole) == phi(&out), "φ differs after a wall-time stop");
+    assert_eq!(rows_without_wall(&whole), rows_without_wall(&out));
+}

@@ -199,6 +199,7 @@ fn every_reduced_box_layout_matches_the_full_box() {
                 problem.c0.clone(),
                 s.laplacian,
                 vesicle::engines::spectral::evaluator::ExplicitTerm::ConservedRhs,
+                s.threads(),
             );
             let written = ev.state_of(&full_phi, sim.clock.t).unwrap().measures.area;
             (sim.record(), written, center)

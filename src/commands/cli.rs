@@ -73,17 +73,18 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
-    /// Continue a run from its checkpoint (`DIR/checkpoint.bin`, written every
-    /// `output.checkpoint_every` steps, every `output.checkpoint_minutes` and at the end),
+    /// Continue a run from its checkpoint (`DIR/checkpoint.bin`, written on `output.checkpoints`
+    /// (by default every 10 minutes) and at the end, also when `max_wall_minutes` stopped it),
     /// bit for bit as if it had not stopped. Extend it with `--set max_steps=M` (counting from
-    /// the start), `--set t_end=T` or `--set stop_residual=R`.
+    /// the start), `--set t_end=T`, `--set stop_residual=R` or `--set max_wall_minutes=W`.
     #[command(
         after_help = "Examples:\n  vesicle resume out/prolate3d --set stop_residual=1e-8\n  vesicle resume out/prolate3d_fd --set t_end=240"
     )]
     Resume {
         /// The run folder.
         dir: PathBuf,
-        /// Change a stop rule, `threads` or an `output.*` key: `key=value` (repeatable).
+        /// Change a stop rule (`max_steps`, `t_end`, `stop_residual`, `max_wall_minutes`),
+        /// `threads` or an `output.*` key: `key=value` (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
         /// No progress bar.
@@ -191,6 +192,19 @@ impl StudyArgs {
         }
     }
 
+    /// Run `f` in one pool of the study's threads ([`crate::commands::study::file::threads`]).
+    ///
+    /// # Errors
+    /// A study file that cannot be read as the study `name`.
+    fn in_pool<T: Send>(
+        &self,
+        name: &str,
+        f: impl FnOnce() -> Result<T, Error> + Send,
+    ) -> Result<T, Error> {
+        let threads = crate::commands::study::file::threads(&self.file, name, self.quick)?;
+        crate::cpu::in_pool(threads, f)
+    }
+
     /// The output folder: `--out`, or `out/<file stem>[-quick]`.
     fn folder(&self) -> PathBuf {
         self.output
@@ -266,31 +280,9 @@ fn load(args: &SceneArgs) -> Result<Scene, Error> {
     config::load(&args.scene, &args.set)
 }
 
-/// Computed points below which one thread is faster than two on this machine kind (the
-/// 24³ eighth box of the 48³ prolate: 5.6 s on one thread, 9.1 s on two).
-const SERIAL_BELOW: usize = 1 << 17;
-
-/// Run `f` in a pool of the scene's `threads`; by default one thread for small grids
-/// (fewer than [`SERIAL_BELOW`] computed points) and all cores otherwise.
-fn with_threads<T>(scene: &Scene, f: impl FnOnce() -> T + Send) -> T
-where
-    T: Send,
-{
-    let mirrored = match &scene.symmetry {
-        crate::problem::config::Symmetry::Axes(a) => a.len() as u32,
-        crate::problem::config::Symmetry::Auto(_) => 0,
-    };
-    let points = scene.n.iter().fold(1usize, |p, &m| p.saturating_mul(m)) >> mirrored;
-    let threads = scene.threads.unwrap_or(if points < SERIAL_BELOW {
-        1
-    } else {
-        rayon::current_num_threads()
-    });
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool")
-        .install(f)
+/// Run `f` in a pool of the scene's [`Scene::threads`].
+fn with_threads<T: Send>(scene: &Scene, f: impl FnOnce() -> T + Send) -> T {
+    crate::cpu::in_pool(scene.threads(), f)
 }
 
 /// Print the one-line result of a run; its exit code (128 + the signal that interrupted it).
@@ -368,34 +360,40 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         Command::Study(Study::Precision(args)) => {
             args.exists()?;
             let out = args.folder();
-            crate::commands::study::precision::precision(
-                &args.file,
-                args.quick,
-                &out,
-                args.output.force,
-            )?;
+            args.in_pool("precision", || {
+                crate::commands::study::precision::precision(
+                    &args.file,
+                    args.quick,
+                    &out,
+                    args.output.force,
+                )
+            })?;
             Ok(0)
         }
         Command::Study(Study::Stability(args)) => {
             args.exists()?;
             let out = args.folder();
-            crate::commands::study::stability::stability(
-                &args.file,
-                args.quick,
-                &out,
-                args.output.force,
-            )?;
+            args.in_pool("stability", || {
+                crate::commands::study::stability::stability(
+                    &args.file,
+                    args.quick,
+                    &out,
+                    args.output.force,
+                )
+            })?;
             Ok(0)
         }
         Command::Study(Study::Convergence(args)) => {
             args.exists()?;
             let out = args.folder();
-            crate::commands::study::convergence::convergence(
-                &args.file,
-                args.quick,
-                &out,
-                args.output.force,
-            )?;
+            args.in_pool("convergence", || {
+                crate::commands::study::convergence::convergence(
+                    &args.file,
+                    args.quick,
+                    &out,
+                    args.output.force,
+                )
+            })?;
             Ok(0)
         }
         Command::Axisym(args) => {
@@ -403,7 +401,9 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             Ok(0)
         }
         Command::Diagram(args) => {
-            crate::commands::diagram::run(&args)?;
+            // Cases run on pools of one thread each (their scenes set `threads` to 1); the
+            // rest (the sharp starts, the merge) on one pool of `--jobs` workers.
+            crate::cpu::in_pool(args.jobs(), || crate::commands::diagram::run(&args))?;
             Ok(0)
         }
         Command::Render {

@@ -61,8 +61,13 @@ pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
             .map(|(_, a)| a.to_string())
             .collect(),
     );
-    s.threads = Some(rayon::current_num_threads());
-    s.output.record_every = Some(scene.record_every());
+    s.threads = Some(scene.threads());
+    if scene.output.records.is_none() {
+        s.output.record_every = Some(scene.record_every());
+    }
+    if scene.output.checkpoints.is_none() {
+        s.output.checkpoint_minutes = Some(scene.checkpoints().every_minutes.unwrap_or_default());
+    }
     let st = scene.stabilizer();
     s.stabilizer = crate::problem::config::StabilizerSpec {
         s2: Some(st.s2),
@@ -163,7 +168,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
         .as_ref()
         .map_or_else(|_| simulation.engine().measures().area, |a| *a);
     let resolved = resolved_scene(scene, a0, &problem.mirror);
-    let mut recorder = Recorder::to_file(scene.record_every(), &opts.out.join("timeseries.csv"))?;
+    let mut recorder = Recorder::to_file(scene.records(), &opts.out.join("timeseries.csv"))?;
     match area_target {
         Err(e) => {
             simulation.run(&StopRules::steps(0), &mut [&mut recorder])?;
@@ -215,12 +220,13 @@ pub fn resume(
         .restore(&mut checkpoint.engine, checkpoint.clock.t)
         .map_err(|m| Error::config("checkpoint", m))?;
     let clock = checkpoint.clock;
-    // The engine holds the state now: the checkpoint's copy is not kept through the run.
-    drop(checkpoint);
     let mut simulation = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
     simulation.clock = clock;
+    simulation.timers = checkpoint.timers;
+    // The engine holds the state now: the checkpoint's copy is not kept through the run.
+    drop(checkpoint.engine);
     let (series, history) = TimeSeries::resume(&dir.join("timeseries.csv"), clock.step)?;
-    let recorder = Recorder::resuming(scene.record_every(), series, history);
+    let recorder = Recorder::resuming(scene.records(), series, history);
     eprintln!(
         "{}\n  resuming at step {} t = {:.6e}",
         describe(scene, &problem, simulation.engine().name()),
@@ -236,16 +242,45 @@ pub fn resume(
 }
 
 /// Top-level keys a resumed run may change.
-const RESUMABLE: [&str; 5] = ["max_steps", "t_end", "stop_residual", "threads", "output"];
+const RESUMABLE: [&str; 6] = [
+    "max_steps",
+    "t_end",
+    "stop_residual",
+    "max_wall_minutes",
+    "threads",
+    "output",
+];
+
+/// The two forms of each output's schedule: setting a key of one form on resume removes the
+/// keys of the other.
+const OUTPUT_FORMS: [(&str, &[&str]); 3] = [
+    ("records", &["record_every"]),
+    ("snapshots", &["snapshot_every"]),
+    ("checkpoints", &["checkpoint_every", "checkpoint_minutes"]),
+];
 
 /// The checkpoint's scene with `overrides` applied, each to a key of [`RESUMABLE`]
-/// (`max_steps` counts every step since the start of the run).
+/// (`max_steps` counts every step since the start of the run). An output schedule set in one
+/// form (`output.snapshots`) replaces the other (`output.snapshot_every`), which the checkpoint's
+/// resolved scene may hold.
 ///
 /// # Errors
 /// `Error::Config` naming a key that cannot change on resume, or an invalid value.
 pub fn resumed_scene(mut value: serde_json::Value, overrides: &[String]) -> Result<Scene> {
     for o in overrides {
         let key = o.split('=').next().unwrap_or_default();
+        for (new, old) in OUTPUT_FORMS {
+            let replaced: &[&str] = if key.strip_prefix("output.") == Some(new) {
+                old
+            } else if old.iter().any(|k| key.strip_prefix("output.") == Some(k)) {
+                &[new]
+            } else {
+                &[]
+            };
+            for k in replaced {
+                config::apply_override(&mut value, &format!("output.{k}=null"))?;
+            }
+        }
         let top = key.split('.').next().unwrap_or_default();
         if !RESUMABLE.contains(&top) {
             return Err(Error::config(
@@ -275,18 +310,9 @@ fn drive(
 ) -> Result<Outcome> {
     let rules = StopRules::of(resolved);
     let mut progress = Progress::new(rules, opts.progress);
-    let mut snapshots = Snapshots::new(
-        &opts.out.join("snapshots"),
-        grid,
-        resolved,
-        resolved.output.snapshot_every,
-    );
-    let mut checkpoints = Checkpointer::new(
-        &opts.out,
-        resolved.resolved_value(),
-        resolved.output.checkpoint_every,
-        resolved.output.checkpoint_minutes,
-    );
+    let mut snapshots = Snapshots::new(&opts.out.join("snapshots"), grid, resolved);
+    let mut checkpoints =
+        Checkpointer::new(&opts.out, resolved.resolved_value(), resolved.checkpoints());
     let mut interrupts = Interrupts::install();
     let result = simulation.run(
         &rules,
@@ -412,6 +438,9 @@ fn stop_text(scene: &Scene) -> String {
     }
     if let Some(m) = scene.max_steps {
         parts.push(format!("{m} steps"));
+    }
+    if let Some(m) = scene.max_wall_minutes {
+        parts.push(format!("{m} min of wall time"));
     }
     parts.join(" or ")
 }

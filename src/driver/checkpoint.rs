@@ -1,5 +1,5 @@
-//! Checkpoints: everything needed to continue a run exactly (the resolved scene, the clock and
-//! the engine's saved state), in one file written atomically.
+//! Checkpoints: everything needed to continue a run exactly (the resolved scene, the clock, the
+//! observers' schedule timers and the engine's saved state), in one file written atomically.
 //!
 //! Layout of `checkpoint.bin`:
 //!
@@ -18,6 +18,7 @@
 //! version before anything is used: a truncated, corrupted or foreign file is refused with a
 //! message, never half-loaded.
 
+use crate::driver::schedule::{self, Timer};
 use crate::driver::simulation::Clock;
 use crate::engines::{Saved, SavedArray};
 use crate::error::{Error, Result};
@@ -44,6 +45,9 @@ pub struct Checkpoint<'a> {
     pub scene: Value,
     /// The simulation clock.
     pub clock: Clock,
+    /// The observers' timers (scalars `schedule.<name>.<field>`; none in a checkpoint that
+    /// has no such scalars).
+    pub timers: Vec<Timer>,
     /// The engine's state.
     pub engine: Saved<'a>,
 }
@@ -104,6 +108,12 @@ impl Checkpoint<'_> {
     fn write_to(&self, out: &mut impl Write, after_chunk: fn()) -> std::io::Result<()> {
         let mut names: Vec<String> = CLOCK.iter().map(|s| s.to_string()).collect();
         let mut values: Vec<f64> = clock_values(&self.clock).to_vec();
+        for timer in &self.timers {
+            for (field, v) in schedule::SAVED.iter().zip(timer.saved()) {
+                names.push(format!("schedule.{}.{field}", timer.name));
+                values.push(v);
+            }
+        }
         for (n, v) in &self.engine.scalars {
             names.push(format!("engine.{n}"));
             values.push(*v);
@@ -233,6 +243,24 @@ impl Checkpoint<'_> {
             rejected: count(clock_value(CLOCK[5])?, CLOCK[5])?,
             wall_seconds: clock_value(CLOCK[6])?,
         };
+        let mut timers = Vec::new();
+        for (n, _) in &scalars {
+            let Some(name) = n
+                .strip_prefix("schedule.")
+                .and_then(|r| r.strip_suffix(schedule::SAVED[0]))
+                .and_then(|r| r.strip_suffix('.'))
+            else {
+                continue;
+            };
+            let mut v = [0.0; 6];
+            for (slot, field) in v.iter_mut().zip(schedule::SAVED) {
+                *slot = clock_value(&format!("schedule.{name}.{field}"))?;
+            }
+            timers.push(
+                Timer::from_saved(name, v)
+                    .ok_or_else(|| bad(format!("the schedule `{name}` is not a schedule's")))?,
+            );
+        }
         let mut engine = Saved::default();
         for (n, v) in &scalars {
             if let Some(name) = n.strip_prefix("engine.") {
@@ -283,6 +311,7 @@ impl Checkpoint<'_> {
             version: header.version,
             scene: header.scene,
             clock,
+            timers,
             engine,
         })
     }
@@ -431,9 +460,11 @@ mod tests {
         let mut clock = Clock::new(0.5);
         clock.step = 12;
         clock.t = 3.25;
+        let snapshots = crate::problem::config::Schedule::time(0.75);
         Checkpoint {
             version: env!("CARGO_PKG_VERSION").into(),
             scene: serde_json::json!({"dim": 2}),
+            timers: vec![Timer::new("snapshots", snapshots, &clock)],
             clock,
             engine: saved,
         }
@@ -448,6 +479,8 @@ mod tests {
         let back = Checkpoint::from_bytes(&bytes, Path::new("x")).unwrap();
         assert_eq!(back.to_bytes(), bytes);
         assert_eq!(back.clock.step, 12);
+        assert_eq!(back.timers, c.timers);
+        assert_eq!(back.timers[0].next_time(), Some(4.0));
         assert!(back.engine.get("dt_next").unwrap().is_nan());
         assert_eq!(back.engine.arrays, c.engine.arrays);
     }

@@ -1,21 +1,22 @@
 //! Observers of a [`Simulation`](crate::driver::simulation::Simulation): the time-series recorder, the
-//! progress bar, the snapshot writer and the checkpoint writer.
+//! progress bar, the snapshot writer and the checkpoint writer, each called on its
+//! [`Schedule`] (the driver keeps the schedules' state and lands steps on their due times).
 
 use crate::driver::checkpoint::Checkpoint;
 use crate::driver::record::{Record, TimeSeries};
 use crate::driver::simulation::{Ending, Flow, Now, Observer, StopRules};
 use crate::error::Result;
 use crate::output;
-use crate::problem::config::Scene;
+use crate::problem::config::{Scene, Schedule};
 use crate::problem::grid::Grid;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
 
-/// Keeps a row every `every` steps, the first state and the last one, in memory and (when
-/// given a file) in `timeseries.csv`. A state is kept once even when several calls of
-/// `Simulation::run` see it.
+/// Keeps a row on its schedule, the first state and the last one, in memory and (when given a
+/// file) in `timeseries.csv`. A state is kept once even when several calls of `Simulation::run`
+/// see it.
 pub struct Recorder {
-    every: usize,
+    schedule: Schedule,
     file: Option<TimeSeries>,
     /// The rows kept so far.
     pub history: Vec<Record>,
@@ -23,9 +24,9 @@ pub struct Recorder {
 
 impl Recorder {
     /// Rows in memory only.
-    pub fn in_memory(every: usize) -> Self {
+    pub fn in_memory(schedule: Schedule) -> Self {
         Recorder {
-            every: every.max(1),
+            schedule,
             file: None,
             history: Vec::new(),
         }
@@ -35,17 +36,17 @@ impl Recorder {
     ///
     /// # Errors
     /// `Error::Io` if the file cannot be created.
-    pub fn to_file(every: usize, path: &Path) -> Result<Self> {
+    pub fn to_file(schedule: Schedule, path: &Path) -> Result<Self> {
         Ok(Recorder {
             file: Some(TimeSeries::create(path)?),
-            ..Self::in_memory(every)
+            ..Self::in_memory(schedule)
         })
     }
 
     /// Continue a time series already holding `history` (a resumed run).
-    pub fn resuming(every: usize, file: TimeSeries, history: Vec<Record>) -> Self {
+    pub fn resuming(schedule: Schedule, file: TimeSeries, history: Vec<Record>) -> Self {
         Recorder {
-            every: every.max(1),
+            schedule,
             file: Some(file),
             history,
         }
@@ -74,10 +75,12 @@ impl Observer for Recorder {
     }
 
     fn step(&mut self, now: &Now) -> Result<Flow> {
-        if now.record.step.is_multiple_of(self.every) {
-            self.keep(&now.record)?;
-        }
+        self.keep(&now.record)?;
         Ok(Flow::Continue)
+    }
+
+    fn schedule(&self) -> Option<(&'static str, Schedule)> {
+        Some(("records", self.schedule))
     }
 
     fn finish(&mut self, now: &Now, _ending: Ending) -> Result<()> {
@@ -89,7 +92,11 @@ impl Observer for Recorder {
     }
 }
 
-/// A progress bar on stderr (drawn only on a terminal): step, t, Δt, residual and an ETA from
+/// Seconds between two updates of the progress bar's text.
+const PROGRESS_SECONDS: f64 = 0.25;
+
+/// A progress bar on stderr (drawn only on a terminal), updated every [`PROGRESS_SECONDS`] of
+/// wall time: step, t, Δt, residual and an ETA from
 /// whichever stop rule is nearest (for `stop_residual`, the fraction of the way in
 /// log(residual) from the first state's residual to the tolerance).
 pub struct Progress {
@@ -162,6 +169,15 @@ impl Observer for Progress {
         Ok(Flow::Continue)
     }
 
+    fn schedule(&self) -> Option<(&'static str, Schedule)> {
+        let every = if self.bar.is_hidden() {
+            Schedule::NEVER
+        } else {
+            Schedule::minutes(PROGRESS_SECONDS / 60.0)
+        };
+        Some(("progress", every))
+    }
+
     fn finish(&mut self, _now: &Now, ending: Ending) -> Result<()> {
         match ending {
             Ending::Stopped(_) => self.bar.finish_and_clear(),
@@ -171,23 +187,21 @@ impl Observer for Progress {
     }
 }
 
-/// Writes φ of the full box every `every` steps to `DIR/snapshots/phi_<step>.npy` (and `.vti`,
-/// `.png` when the scene asks for them).
+/// Writes φ of the full box on the scene's snapshot schedule to
+/// `DIR/snapshots/phi_<step>.npy` (and `.vti`, `.png` when the scene asks for them).
 pub struct Snapshots<'a> {
     dir: PathBuf,
     grid: &'a Grid,
     scene: &'a Scene,
-    every: usize,
 }
 
 impl<'a> Snapshots<'a> {
-    /// Snapshots of a run of `scene` on `grid` into `dir`; none when `every` is 0.
-    pub fn new(dir: &Path, grid: &'a Grid, scene: &'a Scene, every: usize) -> Self {
+    /// Snapshots of a run of `scene` on `grid` into `dir`, on [`Scene::snapshots`].
+    pub fn new(dir: &Path, grid: &'a Grid, scene: &'a Scene) -> Self {
         Snapshots {
             dir: dir.to_path_buf(),
             grid,
             scene,
-            every,
         }
     }
 }
@@ -212,48 +226,40 @@ impl Snapshots<'_> {
 }
 
 impl Observer for Snapshots<'_> {
+    fn schedule(&self) -> Option<(&'static str, Schedule)> {
+        Some(("snapshots", self.scene.snapshots()))
+    }
+
     /// The initial state (step 0) of a new run, so that a movie starts at t = 0; a resumed run
     /// starts from a state whose snapshot, if due, was written before it stopped.
     fn start(&mut self, now: &Now) -> Result<()> {
-        if self.every > 0 && now.record.step == 0 {
+        if !self.scene.snapshots().is_never() && now.record.step == 0 {
             self.write(now)?;
         }
         Ok(())
     }
 
     fn step(&mut self, now: &Now) -> Result<Flow> {
-        if self.every > 0 && now.record.step.is_multiple_of(self.every) {
-            self.write(now)?;
-        }
+        self.write(now)?;
         Ok(Flow::Continue)
     }
 }
 
-/// Writes `checkpoint.bin` into a run folder every `every_steps` steps (0: never by count),
-/// every `every_seconds` of wall time, and at the end (also after a failed step: the engine
-/// then holds the last good state).
+/// Writes `checkpoint.bin` into a run folder on its schedule and at the end (also after a
+/// failed step: the engine then holds the last good state).
 pub struct Checkpointer {
     dir: PathBuf,
     scene: serde_json::Value,
-    every_steps: usize,
-    every_seconds: f64,
-    last_wall: f64,
+    schedule: Schedule,
 }
 
 impl Checkpointer {
     /// Checkpoints of a run of the resolved `scene` (its JSON value) into `dir`.
-    pub fn new(
-        dir: &Path,
-        scene: serde_json::Value,
-        every_steps: usize,
-        every_minutes: f64,
-    ) -> Self {
+    pub fn new(dir: &Path, scene: serde_json::Value, schedule: Schedule) -> Self {
         Checkpointer {
             dir: dir.to_path_buf(),
             scene,
-            every_steps,
-            every_seconds: 60.0 * every_minutes,
-            last_wall: 0.0,
+            schedule,
         }
     }
 
@@ -262,26 +268,20 @@ impl Checkpointer {
             version: env!("CARGO_PKG_VERSION").to_string(),
             scene: self.scene.clone(),
             clock: now.clock,
+            timers: now.timers.to_vec(),
             engine: now.engine.save(),
         }
-        .write(&self.dir)?;
-        self.last_wall = now.clock.wall_seconds;
-        Ok(())
+        .write(&self.dir)
     }
 }
 
 impl Observer for Checkpointer {
-    fn start(&mut self, now: &Now) -> Result<()> {
-        self.last_wall = now.clock.wall_seconds;
-        Ok(())
+    fn schedule(&self) -> Option<(&'static str, Schedule)> {
+        Some(("checkpoints", self.schedule))
     }
 
     fn step(&mut self, now: &Now) -> Result<Flow> {
-        let by_count = self.every_steps > 0 && now.clock.step.is_multiple_of(self.every_steps);
-        let by_time = now.clock.wall_seconds - self.last_wall >= self.every_seconds;
-        if by_count || by_time {
-            self.write(now)?;
-        }
+        self.write(now)?;
         Ok(Flow::Continue)
     }
 

@@ -101,7 +101,7 @@ pub fn relax(sim: &mut Simulation, tol: f64, max_steps: usize) -> Option<usize> 
     let rules = StopRules {
         stop_residual: Some(tol),
         max_steps: Some(max_steps),
-        t_end: None,
+        ..StopRules::default()
     };
     let stopped = sim.run(&rules, &mut []).expect("no blow-up");
     (stopped == Stopped::Stationary).then_some(sim.clock.step)

@@ -55,6 +55,13 @@ pub struct DiagramArgs {
     pub force: bool,
 }
 
+impl DiagramArgs {
+    /// Cases run at once: `--jobs`, else every core.
+    pub fn jobs(&self) -> usize {
+        self.jobs.unwrap_or_else(crate::cpu::cores).max(1)
+    }
+}
+
 /// Run the command.
 ///
 /// # Errors
@@ -186,10 +193,7 @@ fn sweep(spec: &DiagramSpec, cases: &[Case], out: &Path, args: &DiagramArgs) -> 
         .collect();
     order.sort_by_key(|&(_, points)| std::cmp::Reverse(points));
     let (next, done) = (AtomicUsize::new(0), AtomicUsize::new(0));
-    let jobs = args
-        .jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
+    let jobs = args.jobs();
     // Plain threads, each taking the next case and running it on a pool of one thread: a
     // rayon pool here would start more cases while one waits on its own pool.
     let worker = || -> Result<()> {

@@ -134,10 +134,72 @@ pub fn scene(value: &Value, patches: &[Value], field: &str, dir: &Path) -> Resul
     Ok(s)
 }
 
+/// Worker threads of the study `name` in the file at `path` (`--quick` applied if `quick`):
+/// the largest `threads` its scenes (the values of its `scene` keys, inline or files) set, else
+/// all cores. Each run's engine splits its work by its own scene's `threads`.
+///
+/// # Errors
+/// As [`load`]; a scene file that cannot be read is left to the study to report.
+pub fn threads(path: &Path, name: &str, quick: bool) -> Result<usize> {
+    fn scenes<'v>(v: &'v Value, found: &mut Vec<&'v Value>) {
+        match v {
+            Value::Object(o) => {
+                for (k, inner) in o {
+                    if k == "scene" {
+                        found.push(inner);
+                    } else {
+                        scenes(inner, found);
+                    }
+                }
+            }
+            Value::Array(a) => a.iter().for_each(|inner| scenes(inner, found)),
+            _ => {}
+        }
+    }
+    let study: Value = load(path, name, quick)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut found = Vec::new();
+    scenes(&study, &mut found);
+    let set = found.into_iter().filter_map(|v| {
+        let file: Value;
+        let scene = match v {
+            Value::String(p) => {
+                file = serde_json::from_str(&std::fs::read_to_string(dir.join(p)).ok()?).ok()?;
+                &file
+            }
+            other => other,
+        };
+        scene.get("threads")?.as_u64().map(|k| k as usize)
+    });
+    Ok(set.max().unwrap_or_else(crate::cpu::cores).max(1))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use serde_json::json;
+
+    /// The `threads` of a study's scenes, inline or in a file, the largest of them; all cores
+    /// when none sets it.
+    #[test]
+    fn threads_come_from_the_scenes() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("base.json"), r#"{"dim": 2, "threads": 3}"#).unwrap();
+        let study = |v: Value| {
+            let p = dir.path().join("s.json");
+            std::fs::write(&p, v.to_string()).unwrap();
+            threads(&p, "x", false).unwrap()
+        };
+        assert_eq!(study(json!({"study": "x", "scene": "base.json"})), 3);
+        assert_eq!(
+            study(json!({"study": "x", "a": {"scene": {"threads": 5}}, "scene": "base.json"})),
+            5
+        );
+        assert_eq!(
+            study(json!({"study": "x", "scene": {"dim": 2}})),
+            crate::cpu::cores()
+        );
+    }
 
     /// Objects merge key by key, `null` removes, scalars and arrays replace.
     #[test]

@@ -207,7 +207,7 @@ fn stationary(
     let reference_rules = StopRules {
         stop_residual: Some(spec.reference_residual),
         max_steps: Some(spec.max_steps),
-        t_end: None,
+        ..StopRules::default()
     };
     let s = at(std::slice::from_ref(&relax))?;
     let e_of = energy(&s);
@@ -217,7 +217,7 @@ fn stationary(
     let rules = StopRules {
         stop_residual: Some(spec.final_residual),
         max_steps: Some(spec.max_steps),
-        t_end: None,
+        ..StopRules::default()
     };
     let mut configs = Vec::new();
     let mut run = |name: String, patch: Value, rules: &StopRules| -> Result<Vec<Point>> {

@@ -218,7 +218,7 @@ fn route(
     let rules = StopRules {
         stop_residual: Some(TIGHTEST),
         max_steps: Some(max_steps),
-        t_end: None,
+        ..StopRules::default()
     };
     sim.run(&rules, &mut [&mut probe])
         .map_err(|e| e.within(kind.name))?;

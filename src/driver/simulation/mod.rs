@@ -1,9 +1,10 @@
-//! The simulation driver: the one owner of the step loop. A [`Simulation`] holds an engine and
-//! its [`Clock`]; [`Simulation::run`] steps until one of the [`StopRules`] fires, the engine
-//! stalls, an [`Observer`] asks to stop, or a step fails, landing exactly on `t_end`.
+//! The simulation driver: the one owner of the step loop. A [`Simulation`] holds an engine, its
+//! [`Clock`] and its observers' [`Timer`]s; [`Simulation::run`] steps until one of the
+//! [`StopRules`] fires, the engine stalls, an [`Observer`] asks to stop, or a step fails, landing
+//! exactly on `t_end` and on every due time of an observer's schedule on simulated time.
 //! Observers (the time-series recorder, the progress bar, snapshot and checkpoint writers, the
-//! studies' probes) see the initial state, every accepted step and the end; the driver itself
-//! does no I/O.
+//! studies' probes) see the initial state, every accepted step on which their schedule is due
+//! (every step when they have none) and the end; the driver itself does no I/O.
 //!
 //! ```no_run
 //! use vesicle::driver::simulation::{Simulation, StopRules};
@@ -22,8 +23,10 @@ pub use stop::{StopRules, Stopped};
 
 use crate::driver::awake::KeepAwake;
 use crate::driver::record::Record;
+use crate::driver::schedule::Timer;
 use crate::engines::{Diverged, Engine, StepReport};
 use crate::error::{Error, Result};
+use crate::problem::config::Schedule;
 use std::time::Instant;
 
 /// Where a simulation is: accepted steps, time, the step to offer next, and counters.
@@ -60,7 +63,8 @@ impl Clock {
     }
 }
 
-/// What observers see: the record of the current state and the engine holding it.
+/// What observers see: the record of the current state, the engine holding it, and the state
+/// of every timer.
 pub struct Now<'a> {
     /// The clock (with the step to offer next, which the record lacks).
     pub clock: Clock,
@@ -70,6 +74,8 @@ pub struct Now<'a> {
     pub engine: &'a dyn Engine,
     /// The step that produced the state (`None` for the state a run starts from).
     pub report: Option<StepReport>,
+    /// The observers' timers, moved past this state (what a checkpoint keeps).
+    pub timers: &'a [Timer],
 }
 
 /// An observer's answer after a step.
@@ -99,12 +105,17 @@ pub trait Observer {
     fn start(&mut self, _now: &Now) -> Result<()> {
         Ok(())
     }
-    /// After every accepted step.
+    /// After every accepted step on which [`Observer::schedule`] is due.
     ///
     /// # Errors
     /// As [`Observer::start`].
     fn step(&mut self, _now: &Now) -> Result<Flow> {
         Ok(Flow::Continue)
+    }
+    /// When [`Observer::step`] is called, under a name unique among a run's observers (a
+    /// checkpoint keeps the schedule's state under it); `None`: after every step.
+    fn schedule(&self) -> Option<(&'static str, Schedule)> {
+        None
     }
     /// Once at the end of a [`Simulation::run`] call, with the last good state.
     ///
@@ -121,6 +132,9 @@ pub struct Simulation {
     engine: Box<dyn Engine + Send>,
     /// Where the simulation is.
     pub clock: Clock,
+    /// The timers of the scheduled observers of the runs so far (a resumed run's from its
+    /// checkpoint): a later run whose observer has the same name and schedule continues it.
+    pub timers: Vec<Timer>,
     dim: usize,
     eps: f64,
 }
@@ -131,6 +145,7 @@ impl Simulation {
         Simulation {
             engine,
             clock: Clock::new(dt),
+            timers: Vec::new(),
             dim,
             eps,
         }
@@ -163,7 +178,9 @@ impl Simulation {
 
     /// Step until a rule of `rules` fires, the engine stalls, an observer asks to stop, or a
     /// step fails. The clock carries on from where an earlier call left it, so successive calls
-    /// with growing `t_end` advance one simulation through a sequence of times.
+    /// with growing `t_end` advance one simulation through a sequence of times. Each step is
+    /// shortened to land on `t_end` and on the next due time of every observer's schedule on
+    /// simulated time.
     ///
     /// # Errors
     /// `Error::Blowup` (step, t and reason) when a step fails: the engine then still holds the
@@ -176,11 +193,12 @@ impl Simulation {
     ) -> Result<Stopped> {
         let wall_before = self.clock.wall_seconds;
         let started = Instant::now();
+        let slots = self.attach(observers);
         let now = self.now(None);
         for o in observers.iter_mut() {
             o.start(&now)?;
         }
-        let ending = self.step_loop(rules, observers, wall_before, started);
+        let ending = self.step_loop(rules, observers, &slots, wall_before, started);
         self.clock.wall_seconds = wall_before + started.elapsed().as_secs_f64();
         let now = self.now(None);
         let result = match ending {
@@ -207,13 +225,39 @@ impl Simulation {
             record: self.record(),
             engine: self.engine(),
             report,
+            timers: &self.timers,
         }
+    }
+
+    /// The index in [`Simulation::timers`] of each observer's timer (`None`: unscheduled): the
+    /// timer of the same name and schedule if there is one, else a new one started now.
+    fn attach(&mut self, observers: &[&mut dyn Observer]) -> Vec<Option<usize>> {
+        observers
+            .iter()
+            .map(|o| {
+                let (name, schedule) = o.schedule()?;
+                let at = self.timers.iter().position(|t| t.name == name);
+                let fresh = Timer::new(name, schedule, &self.clock);
+                Some(match at {
+                    Some(i) if self.timers[i].schedule == schedule => i,
+                    Some(i) => {
+                        self.timers[i] = fresh;
+                        i
+                    }
+                    None => {
+                        self.timers.push(fresh);
+                        self.timers.len() - 1
+                    }
+                })
+            })
+            .collect()
     }
 
     fn step_loop(
         &mut self,
         rules: &StopRules,
         observers: &mut [&mut dyn Observer],
+        slots: &[Option<usize>],
         wall_before: f64,
         started: Instant,
     ) -> Result<Stopped> {
@@ -221,14 +265,28 @@ impl Simulation {
         if let Some(s) = rules.check(c.t, c.last_dt, c.step, self.engine.residual()) {
             return Ok(s);
         }
+        let mut due = vec![false; observers.len()];
+        let mut longest_step = 0.0f64;
         // The pool's other workers wait for each step's parallel regions without sleeping.
         let _awake = KeepAwake::start();
         loop {
-            let report = self.advance(rules.t_end)?;
-            self.clock.wall_seconds = wall_before + started.elapsed().as_secs_f64();
+            let land = slots
+                .iter()
+                .flatten()
+                .filter_map(|&i| self.timers[i].next_time())
+                .chain(rules.t_end)
+                .reduce(f64::min);
+            let before = started.elapsed().as_secs_f64();
+            let report = self.advance(land)?;
+            let elapsed = started.elapsed().as_secs_f64();
+            longest_step = longest_step.max(elapsed - before);
+            self.clock.wall_seconds = wall_before + elapsed;
+            for (d, slot) in due.iter_mut().zip(slots) {
+                *d = slot.is_none_or(|i| self.timers[i].due(&self.clock));
+            }
             let now = self.now(Some(report));
             let mut flow = Flow::Continue;
-            for o in observers.iter_mut() {
+            for (o, _) in observers.iter_mut().zip(&due).filter(|(_, d)| **d) {
                 if let Flow::Stop(why) = o.step(&now)? {
                     flow = Flow::Stop(why);
                 }
@@ -242,17 +300,21 @@ impl Simulation {
             match (stop, flow) {
                 (Some(s), _) => return Ok(s),
                 (None, Flow::Stop(why)) => return Ok(Stopped::Requested(why)),
+                (None, Flow::Continue) if rules.wall_time_up(elapsed, longest_step) => {
+                    return Ok(Stopped::WallTime)
+                }
                 (None, Flow::Continue) => {}
             }
         }
     }
 
-    /// One accepted step, shortened to land on `t_end`; after a shortened step the next one is
-    /// offered the engine's proposal from before the shortening.
-    fn advance(&mut self, t_end: Option<f64>) -> Result<StepReport> {
+    /// One accepted step, shortened to land on `land` (the nearest of `t_end` and the
+    /// observers' due times); after a shortened step the next one is offered the engine's
+    /// proposal from before the shortening.
+    fn advance(&mut self, land: Option<f64>) -> Result<StepReport> {
         let c = &mut self.clock;
         let proposal = self.engine.next_dt(c.dt);
-        let dt = t_end.map_or(proposal, |te| proposal.min(te - c.t));
+        let dt = land.map_or(proposal, |te| proposal.min(te - c.t));
         let report = self
             .engine
             .step(c.t, dt)

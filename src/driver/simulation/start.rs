@@ -65,7 +65,9 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
     let phi = problem.phi.clone();
     let bad = |d: Diverged| Error::config("initial", d.0);
     let mut engine: Box<dyn Engine + Send> = match (scene.method, scene.dynamics) {
-        (Method::Fd, _) => Box::new(FdEngine::new(grid, scene.eps, c0, phi, 0.0).map_err(bad)?),
+        (Method::Fd, _) => {
+            Box::new(FdEngine::new(grid, scene.eps, c0, phi, 0.0, scene.threads()).map_err(bad)?)
+        }
         (Method::Spectral, Dynamics::Conserved) => {
             Box::new(SpectralEngine::new(scene, grid, c0, phi).map_err(bad)?)
         }

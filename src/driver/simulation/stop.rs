@@ -12,15 +12,20 @@ pub struct StopRules {
     pub max_steps: Option<usize>,
     /// Stop when the stationarity residual RMS(μ − μ̄) falls below this.
     pub stop_residual: Option<f64>,
+    /// Stop before this call of `Simulation::run` would step for more than this many minutes
+    /// of wall time (after one step at least).
+    pub max_wall_minutes: Option<f64>,
 }
 
 impl StopRules {
-    /// The rules a scene file sets (`t_end`, `max_steps`, `stop_residual`).
+    /// The rules a scene file sets (`t_end`, `max_steps`, `stop_residual`,
+    /// `max_wall_minutes`).
     pub fn of(scene: &Scene) -> Self {
         StopRules {
             t_end: scene.t_end,
             max_steps: scene.max_steps,
             stop_residual: scene.stop_residual,
+            max_wall_minutes: scene.max_wall_minutes,
         }
     }
 
@@ -38,6 +43,13 @@ impl StopRules {
             max_steps: Some(max_steps),
             ..Self::default()
         }
+    }
+
+    /// Whether `max_wall_minutes` would be passed by one more step: `elapsed` seconds of
+    /// stepping so far in this call plus its `longest_step` exceed it.
+    pub fn wall_time_up(&self, elapsed: f64, longest_step: f64) -> bool {
+        self.max_wall_minutes
+            .is_some_and(|m| elapsed + longest_step > 60.0 * m)
     }
 
     /// Which rule, if any, a state at time `t`, after `step` steps, with `residual` meets.
@@ -67,6 +79,8 @@ pub enum Stopped {
     MaxSteps,
     /// The engine could make no further progress (round-off floor).
     Stalled,
+    /// One more step would pass `max_wall_minutes`.
+    WallTime,
     /// An observer asked to stop, for the reason given.
     Requested(&'static str),
 }
@@ -79,6 +93,7 @@ impl Stopped {
             Stopped::TimeEnd => "t_end",
             Stopped::MaxSteps => "max_steps",
             Stopped::Stalled => "stalled",
+            Stopped::WallTime => "wall_time",
             Stopped::Requested(why) => why,
         }
     }
@@ -94,6 +109,7 @@ mod tests {
             t_end: Some(1.0),
             max_steps: Some(10),
             stop_residual: Some(1e-6),
+            max_wall_minutes: None,
         };
         assert_eq!(r.check(0.5, 0.1, 3, 1e-3), None);
         assert_eq!(r.check(1.0, 0.1, 10, 1e-7), Some(Stopped::Stationary));
@@ -103,5 +119,17 @@ mod tests {
         assert_eq!(r.check(0.9, 0.1, 10, 1e-3), Some(Stopped::MaxSteps));
         // A NaN residual never counts as stationary.
         assert_eq!(r.check(0.5, 0.1, 3, f64::NAN), None);
+    }
+
+    /// One minute: 50 s stepped and steps of 9 s leave room for one more, of 11 s not.
+    #[test]
+    fn wall_time_is_up_when_one_more_step_would_pass_it() {
+        let r = StopRules {
+            max_wall_minutes: Some(1.0),
+            ..StopRules::default()
+        };
+        assert!(!r.wall_time_up(50.0, 9.0));
+        assert!(r.wall_time_up(50.0, 11.0));
+        assert!(!StopRules::default().wall_time_up(1e9, 1e9));
     }
 }

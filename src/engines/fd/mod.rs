@@ -82,11 +82,19 @@ pub struct FdEngine {
 }
 
 impl FdEngine {
-    /// Engine at time `t` holding `phi`, with no area constraint.
+    /// Engine at time `t` holding `phi`, with no area constraint, its sweeps split among
+    /// `threads` workers.
     ///
     /// # Errors
     /// [`Diverged`] if `phi` is not finite.
-    pub fn new(grid: Grid, eps: f64, c0: C0, phi: Array3<f64>, t: f64) -> Result<Self, Diverged> {
+    pub fn new(
+        grid: Grid,
+        eps: f64,
+        c0: C0,
+        phi: Array3<f64>,
+        t: f64,
+        threads: usize,
+    ) -> Result<Self, Diverged> {
         let zeros = grid.zeros();
         let mut e = FdEngine {
             eps,
@@ -97,7 +105,7 @@ impl FdEngine {
             mu: zeros.clone(),
             mu_mean: 0.0,
             work: zeros,
-            sweep: Sweep::new(&grid, rayon::current_num_threads()),
+            sweep: Sweep::new(&grid, threads),
             sigma: 0.0,
             area: AreaConstraint::none(),
             measures: Measures::default(),
@@ -558,10 +566,10 @@ mod tests {
     }
 
     /// The engine of `scene` at t = 0 with the Lagrangian update towards 1.02 A(φ⁰) (so σ moves).
-    fn engine(scene: &Value) -> FdEngine {
+    fn engine(scene: &Value, threads: usize) -> FdEngine {
         let s = config::from_value(scene.clone()).expect("scene");
         let p = setup::build(&s).expect("problem");
-        let mut e = FdEngine::new(p.grid, s.eps, p.c0, p.phi, 0.0).expect("engine");
+        let mut e = FdEngine::new(p.grid, s.eps, p.c0, p.phi, 0.0, threads).expect("engine");
         let target = 1.02 * e.measures().area;
         e.set_area(AreaConstraint {
             method: AreaMethod::Lagrangian,
@@ -620,7 +628,7 @@ mod tests {
 
     /// 12 steps of each path from the same state of `scene`, compared.
     fn compare(scene: &Value, threads: usize) {
-        let (mut fused, mut multi) = (engine(scene), engine(scene));
+        let (mut fused, mut multi) = (engine(scene, threads), engine(scene, threads));
         let dt = scene["dt"].as_f64().unwrap();
         for n in 0..12 {
             let t = n as f64 * dt;
@@ -659,10 +667,13 @@ mod tests {
     /// was, bit for bit.
     #[test]
     fn rejected_fused_step_keeps_the_state() {
-        let mut e = engine(&json!({
-            "dim": 3, "n": [16, 16, 16], "h": 1.0, "eps": 1.0, "method": "fd", "dt": 4e-4,
-            "initial": {"shape": "spheroid", "reduced_volume": 0.9, "r0": 3.0}
-        }));
+        let mut e = engine(
+            &json!({
+                "dim": 3, "n": [16, 16, 16], "h": 1.0, "eps": 1.0, "method": "fd", "dt": 4e-4,
+                "initial": {"shape": "spheroid", "reduced_volume": 0.9, "r0": 3.0}
+            }),
+            1,
+        );
         e.step(0.0, 4e-4).unwrap();
         let (phi, mu) = (e.phi.clone(), e.mu.clone());
         let (m, s, r) = (e.measures(), e.sigma(), e.residual());

@@ -230,10 +230,7 @@ impl Sweep {
             })
             .collect();
         let edges = (0..count).map(|_| Private::new(4 * plane, 0.0)).collect();
-        #[cfg(target_arch = "x86_64")]
-        let avx2 = is_x86_feature_detected!("avx2");
-        #[cfg(not(target_arch = "x86_64"))]
-        let avx2 = false;
+        let avx2 = crate::cpu::has_avx2();
         Sweep {
             layout,
             pipes,
@@ -302,7 +299,7 @@ impl Pipe {
     fn run(&mut self, s: &Slab, avx2: bool, phase: Phase) {
         #[cfg(target_arch = "x86_64")]
         if avx2 {
-            // SAFETY: `avx2` is true only when `is_x86_feature_detected!("avx2")` found the
+            // SAFETY: `avx2` is true only when `crate::cpu::has_avx2()` found the
             // instructions on this CPU (`Sweep::new`). Measured on the full-box bench, one
             // thread, interleaved runs: 2.3–3.0 ms against 3.0–4.5 ms (SSE2 build) at 64³,
             // 21–25 ms against 27–28 ms at 128³.

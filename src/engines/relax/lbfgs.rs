@@ -158,7 +158,14 @@ impl RelaxEngine {
     pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
         let metric = Metric::new(scene.eps);
         let explicit = ExplicitTerm::Gradient(metric);
-        let mut ev = Evaluator::new(grid, scene.eps, c0, scene.laplacian, explicit);
+        let mut ev = Evaluator::new(
+            grid,
+            scene.eps,
+            c0,
+            scene.laplacian,
+            explicit,
+            scene.threads(),
+        );
         let cur = ev.state_of(&phi, 0.0)?;
         let zeros = Array3::zeros(cur.hat.raw_dim());
         let memory = scene.lbfgs_memory.min(MAX_MEMORY);

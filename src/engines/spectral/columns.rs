@@ -76,7 +76,7 @@ impl ColumnFft {
     /// The plan for columns of length `n`, if `n > 1` is a product of 2s, 3s and 5s and the CPU has
     /// AVX2 and FMA (the kernels' instructions); `None` otherwise.
     pub fn new(n: usize) -> Option<Self> {
-        if !super::kernels::has_avx2_fma() {
+        if !crate::cpu::has_avx2_fma() {
             return None;
         }
         let radices = radices(n)?;
@@ -749,7 +749,7 @@ mod tests {
     /// block, as a column range of wider rows (the columns outside untouched).
     #[test]
     fn columns_match_the_naive_dft() {
-        if !super::super::kernels::has_avx2_fma() {
+        if !crate::cpu::has_avx2_fma() {
             return;
         }
         for n in [
@@ -793,7 +793,7 @@ mod tests {
     /// place, or a twiddle's sign or pair changed, misses by O(1).
     #[test]
     fn dct_columns_match_the_naive_dct() {
-        if !super::super::kernels::has_avx2_fma() {
+        if !crate::cpu::has_avx2_fma() {
             return;
         }
         for n in [

@@ -319,6 +319,7 @@ impl SpectralEngine {
             c0,
             scene.laplacian,
             ExplicitTerm::ConservedRhs,
+            scene.threads(),
         );
         let cur = ev.state_of(&phi, 0.0)?;
         let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {

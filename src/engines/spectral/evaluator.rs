@@ -170,9 +170,16 @@ pub struct Evaluator {
 }
 
 impl Evaluator {
-    /// Plan the transforms and tables for `grid`.
-    pub fn new(grid: Grid, eps: f64, c0: C0, laplacian: Laplacian, explicit: ExplicitTerm) -> Self {
-        let transform = Transform::new(grid.shape, grid.kinds, rayon::current_num_threads());
+    /// Plan the transforms and tables for `grid`, with scratch for `threads` workers.
+    pub fn new(
+        grid: Grid,
+        eps: f64,
+        c0: C0,
+        laplacian: Laplacian,
+        explicit: ExplicitTerm,
+        threads: usize,
+    ) -> Self {
+        let transform = Transform::new(grid.shape, grid.kinds, threads);
         Evaluator {
             symbols: Symbols::new(&transform, &grid, eps, laplacian),
             spare: Array3::zeros(transform.spectral_shape()),
@@ -704,6 +711,7 @@ mod tests {
                     c0.clone(),
                     Laplacian::Spectral,
                     ExplicitTerm::ConservedRhs,
+                    threads,
                 );
                 let mut s = ev.state_of(&phi, 1.0).expect("finite");
                 let change = ev

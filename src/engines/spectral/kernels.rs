@@ -8,15 +8,6 @@
 /// Partial sums per reduction: one AVX2 register of f64.
 pub const LANES: usize = 4;
 
-/// Whether the CPU has AVX2 and FMA (the check is cached by the standard library).
-#[inline(always)]
-pub fn has_avx2_fma() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
-}
-
 /// Defines a function whose body is compiled twice, for AVX2/FMA and as it is, and runs the
 /// first when the CPU has those instructions: the body's element-wise loops are then vectorised
 /// four values wide. Plain `a * b + c` is never fused into an FMA by the compiler, so both
@@ -38,7 +29,7 @@ macro_rules! wide_fn {
                 body $(::<$($c),*>)? ($($arg),*)
             }
             #[cfg(target_arch = "x86_64")]
-            if $crate::engines::spectral::kernels::has_avx2_fma() {
+            if $crate::cpu::has_avx2_fma() {
                 // SAFETY: the CPU has AVX2 and FMA (checked just now).
                 return unsafe { avx2 $(::<$($c),*>)? ($($arg),*) };
             }
@@ -70,7 +61,7 @@ pub fn pair_sums(s: &[f32], y: &[f32], v: [&[f64]; 4]) -> [f64; 6] {
     let n = s.len();
     assert!(y.len() == n && v.iter().all(|v| v.len() == n));
     #[cfg(target_arch = "x86_64")]
-    if has_avx2_fma() {
+    if crate::cpu::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked above); the lengths are equal (asserted).
         return unsafe { avx2::pair_sums(s, y, v) };
     }
@@ -101,7 +92,7 @@ pub fn pointwise_sums(phi: &[f64], old: &[f64], big: &[f64]) -> [f64; 4] {
     let n = phi.len();
     assert!(old.len() == n && big.len() == n);
     #[cfg(target_arch = "x86_64")]
-    if has_avx2_fma() {
+    if crate::cpu::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked above); the lengths are equal (asserted).
         return unsafe { avx2::pointwise_sums(phi, old, big) };
     }

@@ -42,7 +42,7 @@ pub struct RealRows {
 impl RealRows {
     /// The plan for rows of length `n`, if `n ≥ 2` is even and the CPU has AVX2 and FMA.
     pub fn new(planner: &mut FftPlanner<f64>, n: usize) -> Option<Self> {
-        if n < 2 || !n.is_multiple_of(2) || !super::kernels::has_avx2_fma() {
+        if n < 2 || !n.is_multiple_of(2) || !crate::cpu::has_avx2_fma() {
             return None;
         }
         let m = n / 2;

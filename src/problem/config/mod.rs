@@ -9,14 +9,17 @@
 mod c0;
 mod ignored;
 mod scene;
+mod schedule;
 mod shapes;
 mod validation;
 
 pub use c0::{C0Ball, C0Band, C0Cap, C0Field, C0File, C0Spec, Pole};
 pub use scene::{
     axis_index, AdaptiveSettings, AdaptiveSpec, AreaMethod, AreaSpec, AutoTag, Dynamics, Laplacian,
-    Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, RECORD_ROWS,
+    Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, CHECKPOINT_MINUTES,
+    RECORD_ROWS, SERIAL_BELOW,
 };
+pub use schedule::Schedule;
 pub use shapes::{
     Axisym, AxisymBranch, Capsule, Cup, Difference, Ellipsoid, Initial, Shape, Sphere, Spheroid,
     SpheroidKind, Union,
@@ -192,6 +195,19 @@ fn objects_where_objects(scene: &Value) -> Result<()> {
                 key,
                 format!("must be an object of named fields, got {}", kind(v)),
             ));
+        }
+    }
+    if let Some(Value::Object(output)) = top.get("output") {
+        for key in ["records", "snapshots", "checkpoints"] {
+            if let Some(v @ Value::Array(_)) = output.get(key) {
+                return Err(Error::config(
+                    format!("output.{key}"),
+                    format!(
+                        "must be a schedule object such as {{\"every_steps\": 100}}, got {}",
+                        kind(v)
+                    ),
+                ));
+            }
         }
     }
     if let Some(initial) = top.get("initial") {

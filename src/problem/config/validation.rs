@@ -63,14 +63,54 @@ impl Scene {
         if let Initial::Shape(s) = &self.initial {
             validate_shape(s, "initial", self.dim)?;
         }
-        if self.output.checkpoint_minutes <= 0.0 {
-            return Err(Error::config(
-                "output.checkpoint_minutes",
-                "must be positive (checkpoints are always written at the end)",
-            ));
+        if let Some(m) = self.max_wall_minutes {
+            positive("max_wall_minutes", m)?;
         }
-        if self.output.record_every == Some(0) {
+        self.validate_output()?;
+        Ok(())
+    }
+
+    /// Each output given in one form (a schedule or the step-count keys), every interval
+    /// positive.
+    fn validate_output(&self) -> Result<()> {
+        let o = &self.output;
+        if let Some(m) = o.checkpoint_minutes {
+            if !(m > 0.0 && m.is_finite()) {
+                return Err(Error::config(
+                    "output.checkpoint_minutes",
+                    "must be positive (checkpoints are always written at the end)",
+                ));
+            }
+        }
+        if o.record_every == Some(0) {
             return Err(Error::config("output.record_every", "must be at least 1"));
+        }
+        let both = |new: &str, old: &str| {
+            Error::config(
+                format!("output.{new}"),
+                format!("give either output.{new} or output.{old}, not both"),
+            )
+        };
+        if let Some(s) = &o.records {
+            if o.record_every.is_some() {
+                return Err(both("records", "record_every"));
+            }
+            s.validate("output.records")?;
+        }
+        if let Some(s) = &o.snapshots {
+            if o.snapshot_every != 0 {
+                return Err(both("snapshots", "snapshot_every"));
+            }
+            s.validate("output.snapshots")?;
+        }
+        if let Some(s) = &o.checkpoints {
+            if o.checkpoint_every != 0 {
+                return Err(both("checkpoints", "checkpoint_every"));
+            }
+            if o.checkpoint_minutes.is_some() {
+                return Err(both("checkpoints", "checkpoint_minutes"));
+            }
+            s.validate("output.checkpoints")?;
         }
         Ok(())
     }

@@ -4,6 +4,8 @@ use std::f64::consts::PI;
 
 use rustfft::num_complex::Complex64;
 
+use crate::cpu::has_avx;
+
 /// Makhoul's reordering for the DCT through an FFT: data index `i` goes to lane position
 /// `i/2` when even and `m − 1 − (i−1)/2` when odd.
 pub(in crate::engines::spectral) fn makhoul_positions(m: usize) -> Vec<usize> {
@@ -103,15 +105,6 @@ pub(super) fn dct_twiddles<const POST: bool>(
         };
         twiddle_lane(lane, w, from, pair);
     }
-}
-
-/// Whether the CPU has AVX (cached by the standard library).
-#[inline(always)]
-pub(super) fn has_avx() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return is_x86_feature_detected!("avx");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
 }
 
 /// i z.

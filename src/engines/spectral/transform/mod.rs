@@ -39,8 +39,9 @@ mod strided;
 #[cfg(test)]
 mod tests;
 
+use crate::cpu::has_avx;
 pub(super) use dct::{dct_twiddle_table, makhoul_positions};
-use dct::{dct_twiddles, has_avx, makhoul_position};
+use dct::{dct_twiddles, makhoul_position};
 use lanes::LaneKernel;
 use rows::LastAxis;
 use strided::{strided_piece, Strided};
