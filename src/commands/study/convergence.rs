@@ -657,11 +657,13 @@ fn with_fit(
 }
 
 /// Slope guides of the orders `ps` on a log-log figure: through a point a factor 3 below the
-/// lowest error at the coarsest x, spanning the figure's x range; each its own grey.
+/// lowest error at the coarsest x of the fitted series (those drawn as markers only; not a
+/// control at its floor), spanning the figure's x range; each its own grey.
 fn guides(fig: &mut Figure, ps: &[f64]) {
     let pts: Vec<(f64, f64)> = fig
         .series
         .iter()
+        .filter(|s| matches!(s.mark, Mark::Points(_)))
         .flat_map(|s| s.points.iter().copied())
         .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
         .collect();
