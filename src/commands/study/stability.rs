@@ -686,7 +686,7 @@ fn charts(
         .map(|h| (h, fd_bound(dim, h * eps, eps)))
         .collect();
     map.push(Series::new(
-        "FD bound (DESIGN.md §2)",
+        "FD bound 1/(λ(2 + ε²λ)²), λ = 4d/h²",
         curve,
         [0, 0, 0],
         Mark::Dashed,
