@@ -257,9 +257,11 @@ fn reference_start_needs_fewer_iterations_than_a_spheroid() {
     }
 }
 
-/// Build time of a 96³ field (R0 = 30ε, the §7 scale), printed; must stay within a few seconds.
+/// A 96³ field (R0 = 30ε, the §7 scale) is built, its φ = 0 surface reproducing the requested
+/// v to 0.01 (as at R0 = 12 above, with a smaller h/R0); its build time is printed, not
+/// asserted (a wall-clock bound fails on a loaded machine).
 #[test]
-fn field_of_96_cubed_builds_in_seconds() {
+fn field_of_96_cubed_builds() {
     let s = scene(json!({
         "dim": 3, "n": [96, 96, 96], "h": 1.0, "eps": 1.0, "dt": 1.0, "max_steps": 1,
         "initial": {"shape": "axisym", "branch": "stomatocyte", "reduced_volume": 0.6, "r0": 30.0},
@@ -270,5 +272,11 @@ fn field_of_96_cubed_builds_in_seconds() {
     let secs = t.elapsed().as_secs_f64();
     eprintln!("96³ stomatocyte field (solve + distance): {secs:.2} s");
     assert_eq!(p.phi.len(), 96 * 96 * 96);
-    assert!(secs < 10.0, "{secs} s");
+    let full = p.grid.unfold(&p.phi).into_owned();
+    let ls = levelset::measure(&full, 3, 1.0);
+    assert!(
+        (ls.reduced_volume - 0.6).abs() < 0.01,
+        "v = {}",
+        ls.reduced_volume
+    );
 }

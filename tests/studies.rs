@@ -252,8 +252,8 @@ fn stability_quick_study_classifies_the_runs() {
 }
 
 /// `study precision --quick` on the 3D prolate: SBDF2's transient error falls by at least 3×
-/// per halving of Δt (second order: 4×; measured 6.5 and 3.7), L-BFGS is the fastest spectral
-/// route to the stationary energy at 1e-6, and a row per error level is written.
+/// per halving of Δt (second order: 4×; measured 6.5 and 3.7), and a row per error level is
+/// written.
 #[test]
 fn precision_quick_study_runs() {
     let (_tmp, out, stdout) = quick_study("precision");
@@ -270,13 +270,28 @@ fn precision_quick_study_runs() {
         .collect();
     assert_eq!(sbdf2.len(), 3);
     assert!(sbdf2.windows(2).all(|w| w[0] / w[1] > 3.0), "{sbdf2:?}");
-    let levels = std::fs::read_to_string(out.join("levels.csv")).unwrap();
+    let levels = csv_fields(&out.join("levels.csv"));
+    assert_eq!(levels.len(), 6, "a row per transient level");
+    charts_exist(&out, &["precision_transient"]);
+}
+
+/// `study stationary runs/studies/stationary.json --quick` on the 3D prolate: L-BFGS is the
+/// fastest spectral route to the stationary energy at 1e-6, and the Pareto chart is written.
+#[test]
+fn stationary_quick_study_runs() {
+    let (_tmp, out, stdout) = quick_study("stationary");
+    assert!(stdout.contains("spectral/FD"));
+    let levels = csv_fields(&out.join("levels.csv"));
     let at_1e6 = levels
-        .lines()
-        .find(|l| l.starts_with("stationary,0.000001,"))
+        .iter()
+        .find(|r| r[0] == "stationary" && r[1].parse::<f64>().unwrap() == 1e-6)
         .expect("a row for level 1e-6");
-    assert!(at_1e6.contains("L-BFGS"), "{at_1e6}");
-    charts_exist(&out, &["precision_stationary", "precision_transient"]);
+    assert!(at_1e6[2].contains("L-BFGS"), "{at_1e6:?}");
+    assert_eq!(
+        header(&out.join("traces.csv")),
+        "family,config,t,wall_seconds,error,residual"
+    );
+    charts_exist(&out, &["stationary_pareto"]);
 }
 
 /// A study file with an unknown key, or for another study, is refused with exit 2 naming the

@@ -221,22 +221,27 @@ enum Study {
         after_help = "Examples:\n  vesicle study convergence runs/studies/convergence.json --out out/convergence\n  vesicle study convergence runs/studies/convergence.json --quick"
     )]
     Convergence(StudyArgs),
-    /// What `stop_residual` buys per engine: L-BFGS (the reference; run three times, the run of
-    /// median wall time tabulated), conserved SBDF1 and SBDF2 with adaptive steps, each run to
-    /// residual 1e-8; steps, wall time and energy error at every tolerance from 1e-4 to 1e-8,
-    /// and FD at its bound (extrapolated).
+    /// What each engine and `stop_residual` buy on the way to a stationary state. On a scene
+    /// file: L-BFGS (the reference; run three times, the run of median wall time tabulated),
+    /// conserved SBDF1 and SBDF2 with adaptive steps, each run to residual 1e-8, and FD at its
+    /// bound (extrapolated); on a study file (`"study": "stationary"`) the routes it lists.
+    /// Steps, wall time and energy error at every tolerance, the fastest route to each error
+    /// level, and the Pareto chart of energy error against wall time.
     #[command(
-        after_help = "Example:\n  vesicle study stationary runs/prolate3d.json --out out/stationary"
+        after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stationary runs/studies/stationary.json --quick"
     )]
     Stationary {
         #[command(flatten)]
         scene: SceneArgs,
+        /// The quick variant of a study file (its "quick" block).
+        #[arg(long)]
+        quick: bool,
         #[command(flatten)]
         output: OutArgs,
     },
-    /// Speed against accuracy on the 3D prolate: stationary energy error and transient φ error
-    /// against wall time for FD, conserved SBDF1/SBDF2 (fixed and adaptive) and L-BFGS; Pareto
-    /// charts and the spectral/FD wall-time ratio at each error level.
+    /// Speed against accuracy on a transient (the 3D prolate): the error in φ at a fixed time
+    /// against wall time for FD and spectral SBDF1/SBDF2; the Pareto chart and the spectral/FD
+    /// wall-time ratio at each error level (the stationary side is `study stationary`).
     #[command(
         after_help = "Example:\n  vesicle study precision runs/studies/precision.json --out out/precision [--quick]"
     )]
@@ -348,13 +353,40 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Stationary {
             scene: args,
+            quick,
             output,
         }) => {
-            let scene = load(&args)?;
-            let out = output.folder(&args.scene, "-stationary");
-            with_threads(&scene, || {
-                crate::commands::study::stationary::stationary(&scene, &out, output.force)
-            })?;
+            let suffix = if quick {
+                "-stationary-quick"
+            } else {
+                "-stationary"
+            };
+            let out = output.folder(&args.scene, suffix);
+            if crate::commands::study::file::is_study_file(&args.scene) {
+                if !args.set.is_empty() {
+                    return Err(Error::config(
+                        "--set",
+                        "applies to a scene file; a study file sets its scene's keys itself",
+                    ));
+                }
+                crate::commands::study::stationary::stationary_file(
+                    &args.scene,
+                    quick,
+                    &out,
+                    output.force,
+                )?;
+            } else {
+                if quick {
+                    return Err(Error::config(
+                        "--quick",
+                        "applies to a study file (one with a \"study\" key), not a scene file",
+                    ));
+                }
+                let scene = load(&args)?;
+                with_threads(&scene, || {
+                    crate::commands::study::stationary::stationary(&scene, &out, output.force)
+                })?;
+            }
             Ok(0)
         }
         Command::Study(Study::Precision(args)) => {

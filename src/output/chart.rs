@@ -5,6 +5,11 @@
 //! minor ticks between. A [`Figure`] is a title, two [`Axis`] and a list of [`Series`]; each
 //! series has a colour, a [`Mark`] and an optional legend entry. [`Figure::write`] draws it to
 //! `STEM.png` and `STEM.svg`.
+//!
+//! A line is broken where a measure does not exist (a non-finite point, or one ≤ 0 on a log
+//! axis): the gap shows, no straight segment is drawn across it. [`style`] hands out the
+//! `(colour, mark)` pairs of a chart's series so that no two look alike, and [`slope_guide`]
+//! draws the reference slope of an order on a log-log convergence chart.
 
 use super::{ensure_font, write_rgb_png, OutputError, FONT_FAMILY};
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
@@ -73,12 +78,16 @@ pub enum Shape {
 pub enum Mark {
     /// A solid line through the points.
     Line,
-    /// A dashed line (fitted slopes, bounds).
+    /// A dashed line (fitted laws, bounds).
     Dashed,
+    /// A dotted line (slope guides).
+    Dotted,
     /// Markers only.
     Points(Shape),
     /// A solid line with markers.
     LinePoints(Shape),
+    /// A dashed line with markers.
+    DashedPoints(Shape),
 }
 
 /// One series: points, colour, how it is drawn, legend text (`None`: not in the legend).
@@ -130,6 +139,26 @@ pub fn colour(i: usize) -> [u8; 3] {
         [23, 190, 207],
     ];
     P[i % P.len()]
+}
+
+/// The `i`-th line style of a chart with many line series: the palette's colours as solid
+/// lines, then as dashed lines, then as dotted lines; no two of the first 24 alike.
+pub fn style(i: usize) -> ([u8; 3], Mark) {
+    const MARKS: [Mark; 3] = [Mark::Line, Mark::Dashed, Mark::Dotted];
+    (colour(i), MARKS[(i / 8) % MARKS.len()])
+}
+
+/// Grey of the slope guides.
+pub const GUIDE: [u8; 3] = [120, 120, 120];
+
+/// The guide of slope `p` on a log-log chart: the line y = y0 (x/x0)^p over `[lo, hi]`
+/// through `(x0, y0)`, dotted grey, named `slope p`.
+pub fn slope_guide(p: f64, (x0, y0): (f64, f64), lo: f64, hi: f64, colour: [u8; 3]) -> Series {
+    let line = [lo, hi]
+        .iter()
+        .map(|&x| (x, y0 * (x / x0).powf(p)))
+        .collect();
+    Series::new(format!("slope {p}"), line, colour, Mark::Dotted)
 }
 
 /// Where the legend goes.
@@ -223,17 +252,16 @@ impl Figure {
         std::fs::write(path, text).map_err(|e| OutputError::io(path, e))
     }
 
-    /// The drawable points of every series (finite; positive on a log axis).
-    fn drawable(&self) -> Vec<Vec<(f64, f64)>> {
+    /// The drawable runs of every series: its points split where one is not drawable
+    /// (non-finite; ≤ 0 on a log axis), so that a line shows the gap.
+    fn drawable(&self) -> Vec<Vec<Vec<(f64, f64)>>> {
         let ok = |v: f64, s: Scale| v.is_finite() && (s == Scale::Linear || v > 0.0);
         self.series
             .iter()
             .map(|s| {
-                s.points
-                    .iter()
-                    .copied()
-                    .filter(|&(x, y)| ok(x, self.x.scale) && ok(y, self.y.scale))
-                    .collect()
+                runs(&s.points, |&(x, y)| {
+                    ok(x, self.x.scale) && ok(y, self.y.scale)
+                })
             })
             .collect()
     }
@@ -243,8 +271,8 @@ impl Figure {
         root: &DrawingArea<DB, plotters::coord::Shift>,
     ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         let data = self.drawable();
-        let xr = axis_range(data.iter().flatten().map(|p| p.0), self.x.scale);
-        let yr = axis_range(data.iter().flatten().map(|p| p.1), self.y.scale);
+        let xr = axis_range(data.iter().flatten().flatten().map(|p| p.0), self.x.scale);
+        let yr = axis_range(data.iter().flatten().flatten().map(|p| p.1), self.y.scale);
         match (self.x.scale, self.y.scale) {
             (Scale::Linear, Scale::Linear) => self.draw(root, &data, xr, yr),
             (Scale::Linear, Scale::Log) => self.draw(root, &data, xr, yr.log_scale()),
@@ -256,7 +284,7 @@ impl Figure {
     fn draw<DB, X, Y>(
         &self,
         root: &DrawingArea<DB, plotters::coord::Shift>,
-        data: &[Vec<(f64, f64)>],
+        data: &[Vec<Vec<(f64, f64)>>],
         xs: X,
         ys: Y,
     ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
@@ -291,33 +319,54 @@ impl Figure {
             .bold_line_style(RGBColor(200, 200, 200))
             .draw()?;
         let mut listed = false;
-        for (s, pts) in self.series.iter().zip(data) {
+        for (s, segments) in self.series.iter().zip(data) {
             let c = RGBColor(s.colour[0], s.colour[1], s.colour[2]);
             let line = c.stroke_width(2);
-            if matches!(s.mark, Mark::Line | Mark::LinePoints(_)) {
-                let anno = chart.draw_series(LineSeries::new(pts.iter().copied(), line))?;
-                if let Some(name) = &s.name {
-                    listed = true;
-                    anno.label(name.as_str())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], line));
-                }
-            }
-            if s.mark == Mark::Dashed {
-                let dashes = DashedLineSeries::new(pts.iter().copied(), 8, 5, line);
-                let anno = chart.draw_series(dashes)?;
-                if let Some(name) = &s.name {
-                    listed = true;
-                    anno.label(name.as_str()).legend(move |(x, y)| {
-                        EmptyElement::at((x, y))
-                            + PathElement::new(vec![(0, 0), (9, 0)], line)
-                            + PathElement::new(vec![(15, 0), (24, 0)], line)
-                    });
+            let dashes = match s.mark {
+                Mark::Line | Mark::LinePoints(_) => Some((0, 0)),
+                Mark::Dashed | Mark::DashedPoints(_) => Some((8, 5)),
+                Mark::Dotted => Some((2, 4)),
+                Mark::Points(_) => None,
+            };
+            if let Some((on, off)) = dashes {
+                // One drawing per run; the legend entry hangs on the first (an empty run when
+                // the series has nothing to draw).
+                let empty = vec![Vec::new()];
+                let runs = if segments.is_empty() {
+                    &empty
+                } else {
+                    segments
+                };
+                for (k, pts) in runs.iter().enumerate() {
+                    let anno = if on == 0 {
+                        chart.draw_series(LineSeries::new(pts.iter().copied(), line))?
+                    } else {
+                        chart.draw_series(DashedLineSeries::new(
+                            pts.iter().copied(),
+                            on,
+                            off,
+                            line,
+                        ))?
+                    };
+                    if let (0, Some(name)) = (k, &s.name) {
+                        listed = true;
+                        let seg = legend_dashes(on, off);
+                        anno.label(name.as_str()).legend(move |(x, y)| {
+                            let part =
+                                |(a, b): (i32, i32)| PathElement::new(vec![(a, 0), (b, 0)], line);
+                            EmptyElement::at((x, y))
+                                + part(seg[0])
+                                + part(seg[1])
+                                + part(seg[2])
+                                + part(seg[3])
+                        });
+                    }
                 }
             }
             let shape = match s.mark {
                 Mark::Points(shape) => shape,
-                Mark::LinePoints(shape) => shape,
-                Mark::Line | Mark::Dashed => continue,
+                Mark::LinePoints(shape) | Mark::DashedPoints(shape) => shape,
+                Mark::Line | Mark::Dashed | Mark::Dotted => continue,
             };
             // A line-and-marker series is listed once, by its line.
             let name = match s.mark {
@@ -325,7 +374,8 @@ impl Figure {
                 _ => None,
             };
             listed |= name.is_some();
-            markers(&mut chart, pts, shape, c, name)?;
+            let pts: Vec<(f64, f64)> = segments.iter().flatten().copied().collect();
+            markers(&mut chart, &pts, shape, c, name)?;
         }
         if listed {
             chart
@@ -343,6 +393,42 @@ impl Figure {
         }
         Ok(())
     }
+}
+
+/// Four pieces of a 24-pixel legend line: contiguous for a solid line (`on` = 0), else dashes
+/// `on` long with gaps `off`.
+fn legend_dashes(on: u32, off: u32) -> [(i32, i32); 4] {
+    let (on, off) = (on as i32, off as i32);
+    if on == 0 {
+        return [(0, 6), (6, 12), (12, 18), (18, 24)];
+    }
+    let mut seg = [(24, 24); 4];
+    for (k, s) in seg.iter_mut().enumerate() {
+        let a = k as i32 * (on + off);
+        if a < 24 {
+            *s = (a, (a + on).min(24));
+        }
+    }
+    seg
+}
+
+/// The maximal runs of consecutive points of `pts` that are `ok`, in order (the points that are
+/// not split them and are dropped).
+fn runs(pts: &[(f64, f64)], ok: impl Fn(&(f64, f64)) -> bool) -> Vec<Vec<(f64, f64)>> {
+    let mut out: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut open = false;
+    for p in pts {
+        if ok(p) {
+            if !open {
+                out.push(Vec::new());
+                open = true;
+            }
+            out.last_mut().expect("opened").push(*p);
+        } else {
+            open = false;
+        }
+    }
+    out
 }
 
 /// Markers of `shape` and colour `c` at `pts`, listed in the legend as `name` if given.
@@ -506,6 +592,58 @@ mod tests {
         assert_eq!(f(&1e-5), "1e-5");
         assert_eq!(f(&100.0), "1e2");
         assert_eq!(f(&3e-5), "");
+    }
+
+    /// A line is broken at a missing value (NaN) and, on a log axis, at a value ≤ 0: three
+    /// runs, none spanning a gap.
+    #[test]
+    fn lines_break_at_missing_values() {
+        let fig = {
+            let mut f = Figure::new("t", Axis::linear("x"), Axis::log("y"));
+            f.push(Series::new(
+                "s",
+                vec![
+                    (0.0, 1.0),
+                    (1.0, 2.0),
+                    (2.0, f64::NAN),
+                    (3.0, 1.0),
+                    (4.0, 0.0),
+                    (5.0, 3.0),
+                ],
+                colour(0),
+                Mark::Line,
+            ));
+            f
+        };
+        let d = fig.drawable();
+        assert_eq!(
+            d[0],
+            vec![
+                vec![(0.0, 1.0), (1.0, 2.0)],
+                vec![(3.0, 1.0)],
+                vec![(5.0, 3.0)]
+            ]
+        );
+    }
+
+    /// The first 24 styles are pairwise distinct in colour and dash together.
+    #[test]
+    fn styles_do_not_repeat() {
+        let all: Vec<_> = (0..24).map(style).collect();
+        for i in 0..all.len() {
+            for j in 0..i {
+                assert_ne!(all[i], all[j], "styles {i} and {j}");
+            }
+        }
+    }
+
+    /// A slope guide of order 2 through (0.1, 1e-3) passes 1e-5 at 0.01.
+    #[test]
+    fn slope_guides_have_their_slope() {
+        let g = slope_guide(2.0, (0.1, 1e-3), 0.01, 0.1, GUIDE);
+        assert_eq!(g.points[1], (0.1, 1e-3));
+        assert!((g.points[0].1 / 1e-5 - 1.0).abs() < 1e-12);
+        assert_eq!(g.mark, Mark::Dotted);
     }
 
     /// Both files are written, and the SVG holds the axis label and a legend entry.

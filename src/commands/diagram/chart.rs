@@ -1,6 +1,7 @@
 //! Pictures of a merged diagram: `diagram.png` (e against v: the reference branches as lines,
 //! the extrapolated points filled, the finest resolution's raw points hollow, the reference
-//! transitions as dashed lines) and `thumbnails.png` (the cases' shape pictures side by side).
+//! transitions between lowest-energy branches as dashed lines, crossings of metastable branches
+//! dotted and lighter) and `thumbnails.png` (the cases' shape pictures side by side).
 
 use super::reference::Reference;
 use crate::analysis::axisym::Branch;
@@ -28,6 +29,9 @@ pub struct Transition {
     pub reference: f64,
     /// Where the extrapolated phase-field branches cross, `(v, e)` (a black cross).
     pub crossing: Option<(f64, f64)>,
+    /// Between the lowest-energy branches (a transition, dashed) or two metastable ones (a
+    /// crossing, dotted and lighter).
+    pub ground: bool,
 }
 
 /// Write the diagram chart: `extrapolated` and `finest` are per branch of [`Branch::ALL`],
@@ -132,18 +136,23 @@ fn draw(
             .label(format!("{}: phase field, finest ε/R0 (raw)", b.name()))
             .legend(move |(x, y)| Circle::new((x + 12, y), 7, colour.stroke_width(1)));
     }
-    let grey = RGBColor(110, 110, 110);
     for (k, t) in transitions.iter().enumerate() {
         let v = t.reference;
         if !v.is_finite() || !vs.contains(&v) {
             continue;
         }
+        // A transition dashed in dark grey; a crossing of metastable branches dotted, lighter.
+        let (grey, pieces, what) = if t.ground {
+            (RGBColor(110, 110, 110), 40, "transition")
+        } else {
+            (RGBColor(165, 165, 165), 120, "metastable crossing")
+        };
         let (lo, hi) = (es.start, es.end);
-        let dashes: Vec<PathElement<(f64, f64)>> = (0..40)
+        let dashes: Vec<PathElement<(f64, f64)>> = (0..pieces)
             .filter(|i| i % 2 == 0)
             .map(|i| {
-                let a = lo + (hi - lo) * i as f64 / 40.0;
-                let b = lo + (hi - lo) * (i + 1) as f64 / 40.0;
+                let a = lo + (hi - lo) * i as f64 / pieces as f64;
+                let b = lo + (hi - lo) * (i + 1) as f64 / pieces as f64;
                 PathElement::new(vec![(v, a), (v, b)], grey.stroke_width(1))
             })
             .collect();
@@ -153,7 +162,7 @@ fn draw(
             .crossing
             .map_or(String::new(), |(x, _)| format!(", phase field {x:.4}"));
         chart.draw_series(std::iter::once(Text::new(
-            format!(" {}: reference v = {v:.4}{found}", t.name),
+            format!(" {} {what}: reference v = {v:.4}{found}", t.name),
             (v, y),
             (FONT_FAMILY, 14).into_font().color(&grey),
         )))?;
@@ -165,7 +174,7 @@ fn draw(
                 .iter()
                 .map(|&p| Cross::new(p, 7, BLACK.stroke_width(2))),
         )?
-        .label("phase-field crossings (extrapolated branches)")
+        .label("phase-field crossings of the extrapolated branches")
         .legend(|(x, y)| Cross::new((x + 12, y), 6, BLACK.stroke_width(2)));
     chart
         .configure_series_labels()

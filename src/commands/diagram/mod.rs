@@ -266,7 +266,8 @@ fn merge(cases: &[Case], out: &Path, force: bool) -> Result<()> {
     let transitions: Vec<chart::Transition> = report::transitions(&points, &reference)
         .into_iter()
         .zip(reference::TRANSITIONS)
-        .map(|((name, t), (a, _))| {
+        .zip(report::kinds(&reference))
+        .map(|(((name, t), (a, _)), kind)| {
             let branch = &extrapolated[axisym::Branch::ALL
                 .iter()
                 .position(|b| *b == a)
@@ -277,6 +278,7 @@ fn merge(cases: &[Case], out: &Path, force: bool) -> Result<()> {
                 name,
                 reference: t[0],
                 crossing,
+                ground: kind == report::Kind::Transition,
             }
         })
         .collect();

@@ -65,4 +65,43 @@ impl Reference {
     pub fn transition(&self, a: Branch, b: Branch) -> Vec<f64> {
         crossings(self.curve(a), self.curve(b))
     }
+
+    /// Whether the crossing of `a` and `b` at `v` is a transition: the two branches are the
+    /// lowest in energy there (no other branch computed at `v` lies below them). Otherwise it is
+    /// a crossing of two metastable branches (prolate/stomatocyte at v ≈ 0.617, below the
+    /// oblate branch) and no shape changes there.
+    pub fn is_transition(&self, a: Branch, b: Branch, v: f64) -> bool {
+        let e = 0.5 * (self.e(a, v) + self.e(b, v));
+        e.is_finite()
+            && Branch::ALL
+                .iter()
+                .filter(|c| **c != a && **c != b)
+                .all(|&c| self.e(c, v).partial_cmp(&e) != Some(std::cmp::Ordering::Less))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// At c0 = 0 (Seifert, Berndl & Lipowsky 1991) the prolate/oblate crossing (v ≈ 0.652) and
+    /// the oblate/stomatocyte one (v ≈ 0.592) are transitions between the lowest branches; the
+    /// prolate and stomatocyte branches cross (v ≈ 0.617) above the oblate one, which is the
+    /// ground state there: a crossing of metastable branches, not a transition.
+    #[test]
+    fn only_crossings_of_the_lowest_branches_are_transitions() {
+        let r = Reference::new(0.57, 0.68);
+        let one = |a, b| match r.transition(a, b).as_slice() {
+            [v] => *v,
+            other => panic!("{a:?}/{b:?} crossings {other:?}"),
+        };
+        let po = one(Branch::Prolate, Branch::Oblate);
+        let os = one(Branch::Oblate, Branch::Stomatocyte);
+        let ps = one(Branch::Prolate, Branch::Stomatocyte);
+        assert!((po - 0.652).abs() < 0.005 && (os - 0.592).abs() < 0.005);
+        assert!((ps - 0.617).abs() < 0.005, "prolate/stomatocyte at {ps}");
+        assert!(r.is_transition(Branch::Prolate, Branch::Oblate, po));
+        assert!(r.is_transition(Branch::Oblate, Branch::Stomatocyte, os));
+        assert!(!r.is_transition(Branch::Prolate, Branch::Stomatocyte, ps));
+    }
 }

@@ -35,7 +35,38 @@ pub fn branch_points(points: &[Point], coords: fn(&Point) -> (f64, f64)) -> Vec<
         .collect()
 }
 
-/// The transition volumes of the reference, of the extrapolated points and of the finest
+/// What a crossing of two branches is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Between the two lowest-energy branches: the ground state changes shape.
+    Transition,
+    /// Between two branches that a third lies below: both metastable, nothing changes.
+    Metastable,
+}
+
+impl Kind {
+    /// In tables and CSV files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Kind::Transition => "transition",
+            Kind::Metastable => "metastable crossing",
+        }
+    }
+}
+
+/// The kind of each pair of [`TRANSITIONS`], at the reference crossing (a transition when the
+/// curves do not cross on the computed range: nothing to judge it by).
+pub fn kinds(reference: &Reference) -> Vec<Kind> {
+    TRANSITIONS
+        .iter()
+        .map(|&(a, b)| match reference.transition(a, b).as_slice() {
+            [v] if !reference.is_transition(a, b, *v) => Kind::Metastable,
+            _ => Kind::Transition,
+        })
+        .collect()
+}
+
+/// The crossing volumes of the reference, of the extrapolated points and of the finest
 /// resolution, per pair of [`TRANSITIONS`] (NaN where the curves do not cross once).
 pub fn transitions(points: &[Point], reference: &Reference) -> Vec<(String, [f64; 3])> {
     let extrapolated = branch_points(points, |p| (p.v, p.e));
@@ -132,9 +163,12 @@ pub fn write_csv(
     }
     write(out, "cases.csv", &s)?;
 
-    let mut s = String::from("transition,reference,extrapolated,finest\n");
-    for (name, [r, e, f]) in transitions(points, reference) {
-        let _ = writeln!(s, "{name},{r:.5},{e:.5},{f:.5}");
+    let mut s = String::from("transition,reference,extrapolated,finest,kind\n");
+    for ((name, [r, e, f]), kind) in transitions(points, reference)
+        .into_iter()
+        .zip(kinds(reference))
+    {
+        let _ = writeln!(s, "{name},{r:.5},{e:.5},{f:.5},{}", kind.as_str());
     }
     write(out, "transitions.csv", &s)?;
 
@@ -213,10 +247,21 @@ pub fn table(
         100.0 * worst_ext.0,
         worst_ext.1
     );
-    for (name, [r, e, f]) in transitions(points, reference) {
+    for ((name, [r, e, f]), kind) in transitions(points, reference)
+        .into_iter()
+        .zip(kinds(reference))
+    {
+        let what = match kind {
+            Kind::Transition => "transition",
+            Kind::Metastable => "crossing",
+        };
+        let note = match kind {
+            Kind::Transition => "",
+            Kind::Metastable => "  (two metastable branches: a third is lower; not a transition)",
+        };
         let _ = writeln!(
             s,
-            "transition {name:<20} reference {r:.4}  extrapolated {e:.4} ({:+.4})  finest {f:.4} ({:+.4})",
+            "{what} {name:<20} reference {r:.4}  extrapolated {e:.4} ({:+.4})  finest {f:.4} ({:+.4}){note}",
             e - r,
             f - r
         );
@@ -239,38 +284,47 @@ pub fn table(
     s
 }
 
-/// `errors.png`: the relative error `e / e_ref(v) − 1` in percent against v, per branch, of the
-/// finest resolution's raw points and of the extrapolated ones.
+/// `errors.png`: the relative error `e / e_ref(v) − 1` in percent against v, per branch (in
+/// the diagram's colours), of the extrapolated points (solid line, filled circles) and of the
+/// finest resolution's raw points (dashed line, squares); a line breaks where the reference
+/// does not reach v.
 ///
 /// # Errors
 /// `Error::Output` if drawing or writing fails.
 pub fn write_error_chart(out: &Path, points: &[Point], reference: &Reference) -> Result<()> {
-    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    for b in Branch::ALL {
-        let mine: Vec<&Point> = points.iter().filter(|p| p.branch == b.name()).collect();
+    use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
+    let mut fig = Figure::new(
+        "Phase-field error against the axisymmetric reference, per branch",
+        Axis::linear("reduced volume v"),
+        Axis::linear("e / e_reference(v) − 1  [%]"),
+    );
+    fig.legend = Corner::UpperRight;
+    for (i, b) in Branch::ALL.into_iter().enumerate() {
         let pct = |v: f64, e: f64| 100.0 * (e / reference.e(b, v) - 1.0);
-        series.push((
-            format!("{}, finest ε/R0 (raw)", b.name()),
-            mine.iter()
-                .map(|p| (p.finest().v, pct(p.finest().v, p.finest().e)))
-                .collect(),
-        ));
-        series.push((
+        let mine: Vec<&Point> = points.iter().filter(|p| p.branch == b.name()).collect();
+        let sorted = |mut pts: Vec<(f64, f64)>| {
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pts
+        };
+        // The diagram's branch colours are the palette's first three.
+        fig.push(Series::new(
             format!("{}, extrapolated ε/R0 → 0", b.name()),
-            mine.iter().map(|p| (p.v, pct(p.v, p.e))).collect(),
+            sorted(mine.iter().map(|p| (p.v, pct(p.v, p.e))).collect()),
+            colour(i),
+            Mark::LinePoints(Shape::Circle),
+        ));
+        fig.push(Series::new(
+            format!("{}, finest ε/R0 (raw)", b.name()),
+            sorted(
+                mine.iter()
+                    .map(|p| (p.finest().v, pct(p.finest().v, p.finest().e)))
+                    .collect(),
+            ),
+            colour(i),
+            Mark::DashedPoints(Shape::Square),
         ));
     }
-    let named: Vec<(&str, Vec<(f64, f64)>)> = series
-        .iter()
-        .map(|(n, p)| (n.as_str(), p.clone()))
-        .collect();
-    crate::output::chart::write_timeseries_png(
-        &out.join("errors.png"),
-        &named,
-        "reduced volume v",
-        "e / e_reference(v) − 1  [%]",
-        false,
-    )?;
+    fig.write_png(&out.join("errors.png"))?;
     Ok(())
 }
 

@@ -58,6 +58,13 @@ pub enum Class {
     BlownUp,
 }
 
+impl serde::Serialize for Class {
+    /// As its name ([`Class::as_str`]).
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
 impl Class {
     /// All classes, best first.
     pub const ALL: [Class; 4] = [

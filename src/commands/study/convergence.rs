@@ -17,15 +17,14 @@
 //!   Fits: |e − e_ref| = C x^p; e = e0 + c x^p (the extrapolated limit; also for v); for the
 //!   sphere |e − 1| = C exp(b R0/ε).
 
-use super::file;
-use super::fit;
-use crate::commands::run;
+use super::harness::{self, Report, Study};
+use super::{file, fit};
 use crate::driver::simulation::{Simulation, StopRules};
 use crate::error::{Error, Result};
-use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
-use crate::problem::config::Scene;
+use crate::output::chart::{colour, slope_guide, Axis, Corner, Figure, Mark, Series, Shape, GUIDE};
+use crate::problem::config::{AdaptiveSpec, Laplacian, Scene, Scheme};
 use crate::problem::setup::{self, Problem};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -112,8 +111,9 @@ pub struct ShapeSpec {
     pub scene: Option<Value>,
 }
 
-/// One measured point: `(part, series, x, error)` and what else was measured.
-#[derive(Clone, Debug)]
+/// One measured point: `(part, series, x, error)` and what else was measured; a row of
+/// `convergence.csv`.
+#[derive(Clone, Debug, Serialize)]
 pub struct Row {
     /// `time`, `space`, `eps`.
     pub part: &'static str,
@@ -126,6 +126,7 @@ pub struct Row {
     /// Reduced energy (space, eps), NaN otherwise.
     pub e: f64,
     /// Reduced volume of the φ = 0 surface (eps), NaN otherwise.
+    #[serde(rename = "v_levelset")]
     pub v: f64,
     /// The reference e_ref (space, eps), NaN otherwise.
     pub e_ref: f64,
@@ -134,11 +135,12 @@ pub struct Row {
     /// Steps (iterations) of the run.
     pub steps: usize,
     /// Wall seconds of the run.
+    #[serde(rename = "wall_seconds")]
     pub wall: f64,
 }
 
-/// A fit quoted by the study.
-#[derive(Clone, Debug)]
+/// A fit quoted by the study; a row of `fits.csv`.
+#[derive(Clone, Debug, Serialize)]
 pub struct Quoted {
     /// Part and series it belongs to.
     pub part: &'static str,
@@ -154,28 +156,39 @@ pub struct Quoted {
     pub text: String,
 }
 
+/// The study: `convergence.txt`, `convergence.csv`, `fits.csv` and the charts
+/// `convergence_time`, `convergence_space`, `convergence_space_semilog`, `convergence_eps`,
+/// `convergence_sphere`.
+pub struct Convergence;
+
+impl Study for Convergence {
+    const NAME: &'static str = "convergence";
+    type Spec = Spec;
+    type Output = Vec<Row>;
+
+    fn measure(spec: &Spec, dir: &Path) -> Result<(Vec<Row>, Report)> {
+        let mut rows = time_part(&spec.time, dir)?;
+        rows.extend(space_part(&spec.space, dir)?);
+        rows.extend(eps_part(&spec.eps, dir)?);
+        let fits = fits(&rows);
+        let mut report = Report {
+            text: table(&rows, &fits),
+            ..Report::default()
+        };
+        report.table("convergence.csv", &rows)?;
+        report.table("fits.csv", &fits)?;
+        charts(&mut report, &rows);
+        Ok((rows, report))
+    }
+}
+
 /// Run the study of `path` (quick variant if `quick`) into `out`.
 ///
 /// # Errors
 /// `Error::Config` for a bad study file (naming the key) or an existing `out` without `force`;
 /// `Error::Blowup` if a run diverges.
 pub fn convergence(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Vec<Row>> {
-    let spec: Spec = file::load(path, "convergence", quick)?;
-    let dir = path.parent().unwrap_or(Path::new("."));
-    run::check_out_dir(out, force)?;
-    let started = Instant::now();
-    let mut rows = time_part(&spec.time, dir)?;
-    rows.extend(space_part(&spec.space, dir)?);
-    rows.extend(eps_part(&spec.eps, dir)?);
-    let fits = fits(&rows);
-    run::make_out_dir(out, force)?;
-    let text = table(&rows, &fits, started.elapsed().as_secs_f64());
-    println!("{text}");
-    super::write_text(out, "convergence.txt", &text)?;
-    super::write_text(out, "convergence.csv", &csv(&rows))?;
-    super::write_text(out, "fits.csv", &fits_csv(&fits))?;
-    charts(out, &rows)?;
-    Ok(rows)
+    harness::run::<Convergence>(path, quick, out, force)
 }
 
 /// Run `s` from `problem.phi` until its stop rules: the simulation, steps and wall seconds.
@@ -195,26 +208,26 @@ fn time_part(spec: &TimeSpec, dir: &Path) -> Result<Vec<Row>> {
         if prepared {
             problem.phi = super::prepared_field(&base, &problem)?;
         }
-        let at = |scheme: &str, dt: f64| {
-            file::scene(
-                &spec.scene,
-                &[
-                    json!({"scheme": scheme, "dt": dt, "adaptive": false, "prepare_steps": 0,
-                        "t_end": spec.t, "max_steps": null, "stop_residual": null}),
-                ],
-                field,
-                dir,
-            )
+        let at = |scheme: Scheme, dt: f64| {
+            harness::variant(&base, field, |s| {
+                s.scheme = scheme;
+                s.dt = dt;
+                s.adaptive = AdaptiveSpec::Flag(false);
+                s.prepare_steps = 0;
+                s.t_end = Some(spec.t);
+                s.max_steps = None;
+                s.stop_residual = None;
+            })
         };
         let rules = StopRules::until(spec.t);
-        let (reference, _) = settle(&at("sbdf2", spec.reference_dt)?, &problem, &rules)?;
-        for scheme in ["sbdf1", "sbdf2"] {
+        let (reference, _) = settle(&at(Scheme::Sbdf2, spec.reference_dt)?, &problem, &rules)?;
+        for (name, scheme) in [("SBDF1", Scheme::Sbdf1), ("SBDF2", Scheme::Sbdf2)] {
             for level in 0..spec.levels {
                 let dt = spec.dt / 2f64.powi(level as i32);
                 let (sim, wall) = settle(&at(scheme, dt)?, &problem, &rules)?;
                 rows.push(Row {
                     part: "time",
-                    series: format!("{} from the {start} field", scheme.to_uppercase()),
+                    series: format!("{name} from the {start} field"),
                     x: dt,
                     error: crate::problem::model::max_abs_diff(
                         sim.engine().phi(),
@@ -262,21 +275,19 @@ fn relaxed(s: &Scene) -> Result<Relaxed> {
 
 fn space_part(spec: &SpaceSpec, dir: &Path) -> Result<Vec<Row>> {
     let field = "space.scene";
-    let at = |h: f64, laplacian: &str| -> Result<Scene> {
-        let base = file::scene(&spec.scene, &[], field, dir)?;
-        let n = vec![points(spec.length, h); base.dim];
-        file::scene(
-            &spec.scene,
-            &[json!({"h": h, "n": n, "laplacian": laplacian})],
-            field,
-            dir,
-        )
+    let base = file::scene(&spec.scene, &[], field, dir)?;
+    let at = |h: f64, laplacian: Laplacian| -> Result<Scene> {
+        harness::variant(&base, field, |s| {
+            s.h = h;
+            s.n = vec![points(spec.length, h); s.dim];
+            s.laplacian = laplacian;
+        })
     };
-    let e_ref = relaxed(&at(spec.reference_h, "spectral")?)?.e;
+    let e_ref = relaxed(&at(spec.reference_h, Laplacian::Spectral)?)?.e;
     let mut rows = Vec::new();
     for (series, laplacian, hs) in [
-        ("FD (stencil symbol)", "fd", &spec.fd_h),
-        ("spectral", "spectral", &spec.spectral_h),
+        ("FD (stencil symbol)", Laplacian::Fd, &spec.fd_h),
+        ("spectral", Laplacian::Spectral, &spec.spectral_h),
     ] {
         for &h in hs {
             let s = at(h, laplacian)?;
@@ -413,6 +424,25 @@ fn column(rs: &[&Row], f: impl Fn(&Row) -> f64) -> Vec<f64> {
     rs.iter().map(|r| f(r)).collect()
 }
 
+/// The points of a series above its floor ([`fit::resolved`]), coarse to fine (x falling):
+/// `(x, error)` with the error taken by `err`; the laws are fitted to these only.
+fn resolved(rs: &[&Row], err: impl Fn(&Row) -> f64) -> (Vec<f64>, Vec<f64>) {
+    let mut pts: Vec<(f64, f64)> = rs.iter().map(|r| (r.x, err(r))).collect();
+    pts.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let keep = fit::resolved(&pts.iter().map(|p| p.1).collect::<Vec<_>>());
+    pts.truncate(keep);
+    pts.into_iter().unzip()
+}
+
+/// Points fitted, for the quoted text: `, 4 of 6 points above the floor` when some were left.
+fn floor_note(kept: usize, all: usize) -> String {
+    if kept < all {
+        format!("; {kept} of {all} points above the floor fitted")
+    } else {
+        String::new()
+    }
+}
+
 fn fits(rows: &[Row]) -> Vec<Quoted> {
     let mut q = Vec::new();
     let mut push = |part, series: &str, law, value, spread, text: String| {
@@ -426,19 +456,22 @@ fn fits(rows: &[Row]) -> Vec<Quoted> {
         })
     };
     for (name, rs) in series_of(rows, "time") {
-        if let Some(f) = fit::power(&column(&rs, |r| r.x), &column(&rs, |r| r.error)) {
+        let (x, e) = resolved(&rs, |r| r.error);
+        if let Some(f) = fit::power(&x, &e) {
+            let note = floor_note(x.len(), rs.len());
             push(
                 "time",
                 name,
                 "power",
                 f.order(),
                 f.line.slope_error,
-                f.to_string(),
+                format!("{f}{note}"),
             );
         }
     }
     for (name, rs) in series_of(rows, "space") {
-        let (x, e) = (column(&rs, |r| r.x), column(&rs, |r| r.error));
+        let (x, e) = resolved(&rs, |r| r.error);
+        let note = floor_note(x.len(), rs.len());
         if name.starts_with("FD") {
             if let Some(f) = fit::power(&x, &e) {
                 push(
@@ -447,7 +480,7 @@ fn fits(rows: &[Row]) -> Vec<Quoted> {
                     "power",
                     f.order(),
                     f.line.slope_error,
-                    f.to_string(),
+                    format!("{f}{note}"),
                 );
             }
         } else {
@@ -459,42 +492,44 @@ fn fits(rows: &[Row]) -> Vec<Quoted> {
                     "exponential",
                     f.line.slope,
                     f.line.slope_error,
-                    format!("{f} with x = eps/h"),
+                    format!("{f} with x = eps/h{note}"),
                 );
             }
         }
     }
     for (name, rs) in series_of(rows, "eps") {
-        let x = column(&rs, |r| r.x);
-        let err = column(&rs, |r| r.error.abs());
+        let (x, err) = resolved(&rs, |r| r.error.abs());
+        let note = floor_note(x.len(), rs.len());
         if name == "sphere" {
             let inv: Vec<f64> = x.iter().map(|v| 1.0 / v).collect();
-            if let Some(f) = fit::exponential(&inv, &err) {
+            // Three points above the floor at least: with two, a line fits any pair.
+            if let Some(f) = fit::exponential(&inv, &err).filter(|_| x.len() >= 3) {
                 push(
                     "eps",
                     name,
                     "exponential",
                     f.line.slope,
                     f.line.slope_error,
-                    format!("|e - 1|: {f} with x = R0/eps"),
+                    format!("|e - 1|: {f} with x = R0/eps{note}"),
                 );
             }
             continue;
         }
-        if let Some(f) = fit::power(&x, &err) {
+        if let Some(f) = fit::power(&x, &err).filter(|_| x.len() >= 3) {
             push(
                 "eps",
                 name,
                 "power",
                 f.order(),
                 f.line.slope_error,
-                format!("|e - e_ref(v)|: {f}"),
+                format!("|e - e_ref(v)|: {f}{note}"),
             );
         }
-        if let Some(f) = fit::limit(&x, &column(&rs, |r| r.e)) {
+        let all_x = column(&rs, |r| r.x);
+        if let Some(f) = fit::limit(&all_x, &column(&rs, |r| r.e)) {
             push("eps", name, "limit e", f.e0, f.p, format!("e: {f}"));
         }
-        if let Some(f) = fit::limit(&x, &column(&rs, |r| r.v)) {
+        if let Some(f) = fit::limit(&all_x, &column(&rs, |r| r.v)) {
             push(
                 "eps",
                 name,
@@ -508,7 +543,20 @@ fn fits(rows: &[Row]) -> Vec<Quoted> {
     q
 }
 
-fn table(rows: &[Row], fits: &[Quoted], wall: f64) -> String {
+/// A series' floor, for the table: where the error stopped falling, if it did.
+fn floor_line(rs: &[&Row], err: impl Fn(&Row) -> f64) -> Option<String> {
+    let (x, _) = resolved(rs, &err);
+    (x.len() < rs.len()).then(|| {
+        let lo = rs.iter().map(|r| err(r)).fold(f64::INFINITY, f64::min);
+        format!(
+            "  floor: the error stops falling after {} of {} points (smallest {lo:.2e}); no law is fitted through the rest",
+            x.len(),
+            rs.len()
+        )
+    })
+}
+
+fn table(rows: &[Row], fits: &[Quoted]) -> String {
     let mut s = String::new();
     let heads = [
         ("time", "dt", "max|phi - phi_ref| at t"),
@@ -523,12 +571,15 @@ fn table(rows: &[Row], fits: &[Quoted], wall: f64) -> String {
                 "{name}\n  {xname:>10} {ename:>24} {:>12} {:>10} {:>12} {:>9} {:>8} {:>9}",
                 "e", "v (phi=0)", "e_ref", "residual", "steps", "wall [s]"
             );
-            for r in rs {
+            for r in &rs {
                 let _ = writeln!(
                     s,
                     "  {:>10.4e} {:>24.4e} {:>12.7} {:>10.5} {:>12.7} {:>9.1e} {:>8} {:>9.2}",
                     r.x, r.error, r.e, r.v, r.e_ref, r.residual, r.steps, r.wall
                 );
+            }
+            if let Some(line) = floor_line(&rs, |r| r.error.abs()) {
+                let _ = writeln!(s, "{line}");
             }
             for f in fits.iter().filter(|f| f.part == part && f.series == name) {
                 let _ = writeln!(s, "  fit: {}", f.text);
@@ -564,51 +615,37 @@ fn table(rows: &[Row], fits: &[Quoted], wall: f64) -> String {
             );
         }
     }
-    let _ = writeln!(s, "study wall time {wall:.1} s");
-    s
-}
-
-fn csv(rows: &[Row]) -> String {
-    let mut s =
-        String::from("part,series,x,error,e,v_levelset,e_ref,residual,steps,wall_seconds\n");
-    for r in rows {
-        let _ = writeln!(
-            s,
-            "{},\"{}\",{},{},{},{},{},{},{},{}",
-            r.part, r.series, r.x, r.error, r.e, r.v, r.e_ref, r.residual, r.steps, r.wall
-        );
-    }
-    s
-}
-
-fn fits_csv(fits: &[Quoted]) -> String {
-    let mut s = String::from("part,series,law,value,spread,text\n");
-    for f in fits {
-        let _ = writeln!(
-            s,
-            "{},\"{}\",{},{},{},\"{}\"",
-            f.part,
-            f.series,
-            f.law,
-            f.value,
-            f.spread,
-            f.text.replace('"', "'")
-        );
-    }
     s
 }
 
 /// A fitted law's legend text and its function.
 type Law = Option<(String, Box<dyn Fn(f64) -> f64>)>;
 
-/// A marker series for the points of `rs` and the fitted law drawn dashed over their x range.
-fn with_fit(fig: &mut Figure, i: usize, name: &str, pts: Vec<(f64, f64)>, law: Law) {
-    let shapes = [Shape::Circle, Shape::Square, Shape::Triangle, Shape::Cross];
+/// The marker shape of the `i`-th series.
+fn shape(i: usize) -> Shape {
+    [
+        Shape::Circle,
+        Shape::Square,
+        Shape::Triangle,
+        Shape::Diamond,
+    ][i % 4]
+}
+
+/// Markers for `pts` and the fitted law drawn dashed in the same colour over `fitted` (the x
+/// range of the points above the floor: the law is not drawn through the floor).
+fn with_fit(
+    fig: &mut Figure,
+    i: usize,
+    name: &str,
+    pts: Vec<(f64, f64)>,
+    fitted: &[f64],
+    law: Law,
+) {
     if let Some((label, f)) = law {
-        let (lo, hi) = pts
+        let (lo, hi) = fitted
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                (a.min(p.0), b.max(p.0))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(*x), b.max(*x))
             });
         let line = (0..=20)
             .map(|k| lo * (hi / lo).powf(k as f64 / 20.0))
@@ -616,15 +653,52 @@ fn with_fit(fig: &mut Figure, i: usize, name: &str, pts: Vec<(f64, f64)>, law: L
             .collect();
         fig.push(Series::new(label, line, colour(i), Mark::Dashed));
     }
-    fig.push(Series::new(
-        name,
-        pts,
-        colour(i),
-        Mark::Points(shapes[i % shapes.len()]),
-    ));
+    fig.push(Series::new(name, pts, colour(i), Mark::Points(shape(i))));
 }
 
-fn charts(out: &Path, rows: &[Row]) -> Result<()> {
+/// Slope guides of the orders `ps` on a log-log figure: through a point a factor 3 below the
+/// lowest error at the coarsest x of the fitted series (those drawn as markers only; not a
+/// control at its floor), spanning the figure's x range; each its own grey.
+fn guides(fig: &mut Figure, ps: &[f64]) {
+    let pts: Vec<(f64, f64)> = fig
+        .series
+        .iter()
+        .filter(|s| matches!(s.mark, Mark::Points(_)))
+        .flat_map(|s| s.points.iter().copied())
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
+        .collect();
+    let (lo, hi) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+        (a.min(p.0), b.max(p.0))
+    });
+    let y = pts
+        .iter()
+        .filter(|p| p.0 >= hi * (1.0 - 1e-9))
+        .fold(f64::INFINITY, |m, p| m.min(p.1));
+    if !(lo < hi && y.is_finite()) {
+        return;
+    }
+    let greys = [GUIDE, [40, 40, 40], [170, 170, 170]];
+    for (k, &p) in ps.iter().enumerate() {
+        fig.push(slope_guide(
+            p,
+            (hi, y / 3.0),
+            lo,
+            hi,
+            greys[k % greys.len()],
+        ));
+    }
+}
+
+fn power_law(x: &[f64], e: &[f64]) -> Law {
+    fit::power(x, e).map(|f| {
+        (
+            format!("fit: slope {:.2}", f.order()),
+            Box::new(move |x| f.at(x)) as Box<dyn Fn(f64) -> f64>,
+        )
+    })
+}
+
+fn charts(report: &mut Report, rows: &[Row]) {
     let mut time = Figure::new(
         "Temporal convergence: error at fixed t against dt",
         Axis::log("dt [time units]"),
@@ -633,16 +707,11 @@ fn charts(out: &Path, rows: &[Row]) -> Result<()> {
     time.legend = Corner::LowerRight;
     for (i, (name, rs)) in series_of(rows, "time").into_iter().enumerate() {
         let pts: Vec<(f64, f64)> = rs.iter().map(|r| (r.x, r.error)).collect();
-        let f = fit::power(&column(&rs, |r| r.x), &column(&rs, |r| r.error));
-        let law = f.map(|f| {
-            (
-                format!("fit: slope {:.2}", f.order()),
-                Box::new(move |x| f.at(x)) as Box<dyn Fn(f64) -> f64>,
-            )
-        });
-        with_fit(&mut time, i, name, pts, law);
+        let (x, e) = resolved(&rs, |r| r.error);
+        with_fit(&mut time, i, name, pts, &x, power_law(&x, &e));
     }
-    time.write(&out.join("convergence_time"))?;
+    guides(&mut time, &[1.0, 2.0]);
+    report.chart("convergence_time", time);
 
     let mut space = Figure::new(
         "Spatial convergence at fixed eps: stationary e",
@@ -657,23 +726,17 @@ fn charts(out: &Path, rows: &[Row]) -> Result<()> {
     );
     semilog.legend = Corner::UpperRight;
     for (i, (name, rs)) in series_of(rows, "space").into_iter().enumerate() {
-        let (x, e) = (column(&rs, |r| r.x), column(&rs, |r| r.error));
-        let pts: Vec<(f64, f64)> = x.iter().copied().zip(e.iter().copied()).collect();
+        let pts: Vec<(f64, f64)> = rs.iter().map(|r| (r.x, r.error)).collect();
+        let semi: Vec<(f64, f64)> = pts.iter().map(|&(h, e)| (1.0 / h, e)).collect();
+        let (x, e) = resolved(&rs, |r| r.error);
         let inv: Vec<f64> = x.iter().map(|h| 1.0 / h).collect();
-        let semi: Vec<(f64, f64)> = inv.iter().copied().zip(e.iter().copied()).collect();
         if name.starts_with("FD") {
-            let law = fit::power(&x, &e).map(|f| {
-                (
-                    format!("fit: slope {:.2}", f.order()),
-                    Box::new(move |x| f.at(x)) as Box<dyn Fn(f64) -> f64>,
-                )
-            });
-            with_fit(&mut space, i, name, pts, law);
+            with_fit(&mut space, i, name, pts, &x, power_law(&x, &e));
             semilog.push(Series::new(
                 name,
                 semi,
                 colour(i),
-                Mark::LinePoints(Shape::Square),
+                Mark::LinePoints(shape(i)),
             ));
         } else {
             let law = fit::exponential(&inv, &e).map(|f| {
@@ -682,17 +745,18 @@ fn charts(out: &Path, rows: &[Row]) -> Result<()> {
                     Box::new(move |x| f.at(x)) as Box<dyn Fn(f64) -> f64>,
                 )
             });
-            with_fit(&mut semilog, i, name, semi, law);
+            with_fit(&mut semilog, i, name, semi, &inv, law);
             space.push(Series::new(
                 name,
                 pts,
                 colour(i),
-                Mark::LinePoints(Shape::Circle),
+                Mark::LinePoints(shape(i)),
             ));
         }
     }
-    space.write(&out.join("convergence_space"))?;
-    semilog.write(&out.join("convergence_space_semilog"))?;
+    guides(&mut space, &[2.0]);
+    report.chart("convergence_space", space);
+    report.chart("convergence_space_semilog", semilog);
 
     let mut eps = Figure::new(
         "Phase-field error against eps/R0 (v on the phi = 0 surface)",
@@ -701,41 +765,40 @@ fn charts(out: &Path, rows: &[Row]) -> Result<()> {
     );
     eps.legend = Corner::LowerRight;
     let mut sphere = Figure::new(
-        "Control: sphere, c0 = 0",
+        "Control: sphere, c0 = 0 (|e - 1| at the stop tolerance's floor: no law fitted)",
         Axis::linear("R0 / eps"),
         Axis::log("|e - 1|"),
     );
     sphere.legend = Corner::UpperRight;
     for (i, (name, rs)) in series_of(rows, "eps").into_iter().enumerate() {
-        let (x, e) = (column(&rs, |r| r.x), column(&rs, |r| r.error.abs()));
+        let pts: Vec<(f64, f64)> = rs.iter().map(|r| (r.x, r.error.abs())).collect();
+        let (x, e) = resolved(&rs, |r| r.error.abs());
+        let enough = x.len() >= 3;
         if name == "sphere" {
             let inv: Vec<f64> = x.iter().map(|v| 1.0 / v).collect();
-            let pts = inv.iter().copied().zip(e.iter().copied()).collect();
-            let law = fit::exponential(&inv, &e).map(|f| {
+            let semi = pts.iter().map(|&(x, e)| (1.0 / x, e)).collect();
+            let law = fit::exponential(&inv, &e).filter(|_| enough).map(|f| {
                 (
                     format!("fit: exp({:.2} R0/eps)", f.line.slope),
                     Box::new(move |x| f.at(x)) as Box<dyn Fn(f64) -> f64>,
                 )
             });
-            with_fit(&mut sphere, i, name, pts, law);
+            if law.is_some() {
+                sphere.title = "Control: sphere, c0 = 0".into();
+            }
+            with_fit(&mut sphere, i, name, semi, &inv, law);
             eps.push(Series::new(
                 name,
-                x.iter().copied().zip(e.iter().copied()).collect(),
+                pts,
                 colour(i),
                 Mark::LinePoints(Shape::Cross),
             ));
         } else {
-            let pts = x.iter().copied().zip(e.iter().copied()).collect();
-            let law = fit::power(&x, &e).map(|f| {
-                (
-                    format!("fit: slope {:.2}", f.order()),
-                    Box::new(move |x| f.at(x)) as Box<dyn Fn(f64) -> f64>,
-                )
-            });
-            with_fit(&mut eps, i, name, pts, law);
+            let law = if enough { power_law(&x, &e) } else { None };
+            with_fit(&mut eps, i, name, pts, &x, law);
         }
     }
-    eps.write(&out.join("convergence_eps"))?;
-    sphere.write(&out.join("convergence_sphere"))?;
-    Ok(())
+    guides(&mut eps, &[1.0, 2.0]);
+    report.chart("convergence_eps", eps);
+    report.chart("convergence_sphere", sphere);
 }

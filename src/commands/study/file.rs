@@ -13,6 +13,15 @@ use serde::de::DeserializeOwned;
 use serde_json::Value;
 use std::path::Path;
 
+/// Whether `path` holds a study file: a JSON object with a `"study"` key (a scene file never
+/// has one). Unreadable or invalid files are not, and are reported by whoever reads them.
+pub fn is_study_file(path: &Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
+        .is_some_and(|v| v.get("study").is_some())
+}
+
 /// Read the study file at `path` for the study `name`, `--quick` applied if `quick`.
 ///
 /// # Errors

@@ -7,6 +7,8 @@
 //!   the sphere's phase-field error in R0/ε).
 //! * [`limit`]: e(x) = e0 + c x^p, the extrapolated limit e0: linear in (e0, c) at each p, the
 //!   p with the least residual kept (the fit of [`crate::analysis::curves`], shared with the diagram).
+//! * [`resolved`]: how many of a refinement's errors lie above its floor (round-off, or the
+//!   reference's own error): the error laws are fitted to those only.
 
 use std::fmt;
 
@@ -209,6 +211,26 @@ pub fn limit(x: &[f64], e: &[f64]) -> Option<Limit> {
     })
 }
 
+/// Factor by which an error must fall from one refinement to the next to count as resolved.
+pub const FALL: f64 = 0.9;
+
+/// The number of leading errors of `e` (ordered coarse to fine) that are above the floor: the
+/// run over which each error is finite, positive and at most [`FALL`] × the previous one. From
+/// the first that is not (the error has stopped falling: round-off, a stop tolerance, or the
+/// reference's own error), the points are on the floor, and a law fitted through them would
+/// measure the floor, not the scheme.
+pub fn resolved(e: &[f64]) -> usize {
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    match e.first() {
+        Some(&v) if ok(v) => {}
+        _ => return 0,
+    }
+    1 + e
+        .windows(2)
+        .take_while(|w| ok(w[1]) && w[1] <= FALL * w[0])
+        .count()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -256,6 +278,17 @@ mod tests {
         let f = limit(&x, &e).unwrap();
         assert!((f.p - 2.0).abs() < 1e-9 && (f.e0 - 1.2).abs() < 1e-9, "{f}");
         assert!(limit(&x[..2], &e[..2]).is_none());
+    }
+
+    /// A law that falls then flattens (round-off at 1e-12) is resolved up to its last falling
+    /// point; a series that never falls (the sphere's |e − 1| at the stop tolerance) has one
+    /// resolved point, so nothing to fit.
+    #[test]
+    fn the_floor_is_left_out() {
+        assert_eq!(resolved(&[1e-2, 1e-4, 1e-8, 1e-12, 1.1e-12, 0.9e-12]), 4);
+        assert_eq!(resolved(&[3.2e-6, 1.7e-6, 3.2e-6, 3.3e-8]), 2);
+        assert_eq!(resolved(&[1e-3, f64::NAN, 1e-5]), 1);
+        assert_eq!(resolved(&[]), 0);
     }
 
     /// Fewer than two usable points give no fit; non-positive errors are left out.

@@ -9,6 +9,7 @@ pub mod classify;
 pub mod convergence;
 pub mod file;
 pub mod fit;
+pub mod harness;
 pub mod precision;
 pub mod stability;
 pub mod stationary;

@@ -22,20 +22,21 @@
 //! charts `stability_map`, `stability_alpha` (PNG and SVG).
 
 use super::classify::{classify, Class, Criteria, StepSample};
+use super::harness::{self, Report, Study};
 use super::{file, fit};
-use crate::commands::run;
 use crate::driver::simulation::{Flow, Now, Probe, Simulation, StopRules};
 use crate::engines::fd;
 use crate::engines::AreaConstraint;
 use crate::error::{Error, Result};
-use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
-use crate::problem::config::Scene;
+use crate::output::chart::{Axis, Corner, Figure, Mark, Series, Shape};
+use crate::problem::config::{
+    AdaptiveSettings, AdaptiveSpec, AreaMethod, Laplacian, Method, Scene, Scheme, StabilizerSpec,
+};
 use crate::problem::setup::{self, Problem};
-use serde::Deserialize;
-use serde_json::{json, Value};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 /// The study file's keys.
 #[derive(Deserialize, Debug)]
@@ -94,14 +95,15 @@ pub struct AlphaSweep {
     pub steps: usize,
 }
 
-/// One classified run.
-#[derive(Clone, Debug)]
+/// One classified run; a row of `stability.csv`.
+#[derive(Clone, Debug, Serialize)]
 pub struct Run {
     /// `fixed`, `adaptive` or `alpha`.
     pub sweep: &'static str,
     /// Method name.
     pub method: &'static str,
     /// h/ε.
+    #[serde(rename = "h_over_eps")]
     pub h: f64,
     /// Δt (fixed), or the median accepted Δt (adaptive).
     pub dt: f64,
@@ -114,45 +116,89 @@ pub struct Run {
     /// Rejected attempts (adaptive).
     pub rejected: usize,
     /// Largest max|φ| seen.
+    #[serde(rename = "max_abs_phi")]
     pub max_phi: f64,
     /// Largest |A − A0|/A0 seen.
+    #[serde(rename = "max_area_error")]
     pub area_error: f64,
-    /// Δt of each rejected attempt (adaptive).
+    /// Δt of each rejected attempt (adaptive; in the table and the map, not the CSV).
+    #[serde(skip)]
     pub rejected_dts: Vec<f64>,
 }
 
-/// The fixed-Δt methods: name, marker and the scene patch.
-fn methods() -> Vec<(&'static str, Shape, Value)> {
-    let none = json!({"s2": 0.0, "s4": 0.0});
-    vec![
-        (
-            "FD explicit Euler",
-            Shape::Circle,
-            json!({"method": "fd", "scheme": null, "stabilizer": null, "laplacian": null,
-                   "area": {"method": "projection"}}),
-        ),
-        (
-            "SBDF1, S = 0",
-            Shape::Square,
-            json!({"method": "spectral", "scheme": "sbdf1", "stabilizer": none}),
-        ),
-        (
-            "SBDF1, default S",
-            Shape::Triangle,
-            json!({"method": "spectral", "scheme": "sbdf1", "stabilizer": null}),
-        ),
-        (
-            "SBDF2, S = 0",
-            Shape::Cross,
-            json!({"method": "spectral", "scheme": "sbdf2", "stabilizer": none}),
-        ),
-        (
-            "SBDF2, default S",
-            Shape::Diamond,
-            json!({"method": "spectral", "scheme": "sbdf2", "stabilizer": null}),
-        ),
-    ]
+/// A fixed-Δt method: its name, its marker on the map, and what it sets in the scene.
+pub struct FixedMethod {
+    /// Name in the tables.
+    pub name: &'static str,
+    /// Marker on the map.
+    pub shape: Shape,
+    /// The engine and scheme (`None`: FD explicit Euler).
+    pub scheme: Option<Scheme>,
+    /// Whether the stabiliser is S = 0 (else the scheme's default).
+    pub no_stabiliser: bool,
 }
+
+impl FixedMethod {
+    /// Set the method in `s`: FD with the exact area projection (so that the map is the time
+    /// stepper's), or spectral with its scheme and stabiliser.
+    fn apply(&self, s: &mut Scene) {
+        match self.scheme {
+            None => {
+                s.method = Method::Fd;
+                s.scheme = Scheme::default();
+                s.stabilizer = StabilizerSpec::default();
+                s.laplacian = Laplacian::default();
+                s.area.method = Some(AreaMethod::Projection);
+            }
+            Some(scheme) => {
+                s.method = Method::Spectral;
+                s.scheme = scheme;
+                s.stabilizer = if self.no_stabiliser {
+                    StabilizerSpec {
+                        s2: Some(0.0),
+                        s4: Some(0.0),
+                    }
+                } else {
+                    StabilizerSpec::default()
+                };
+            }
+        }
+    }
+}
+
+/// The fixed-Δt methods.
+pub const METHODS: [FixedMethod; 5] = [
+    FixedMethod {
+        name: "FD explicit Euler",
+        shape: Shape::Circle,
+        scheme: None,
+        no_stabiliser: false,
+    },
+    FixedMethod {
+        name: "SBDF1, S = 0",
+        shape: Shape::Square,
+        scheme: Some(Scheme::Sbdf1),
+        no_stabiliser: true,
+    },
+    FixedMethod {
+        name: "SBDF1, default S",
+        shape: Shape::Triangle,
+        scheme: Some(Scheme::Sbdf1),
+        no_stabiliser: false,
+    },
+    FixedMethod {
+        name: "SBDF2, S = 0",
+        shape: Shape::Cross,
+        scheme: Some(Scheme::Sbdf2),
+        no_stabiliser: true,
+    },
+    FixedMethod {
+        name: "SBDF2, default S",
+        shape: Shape::Diamond,
+        scheme: Some(Scheme::Sbdf2),
+        no_stabiliser: false,
+    },
+];
 
 /// Geometric sweep with `per_decade` values per decade from `lo` to `hi`.
 fn sweep(lo: f64, hi: f64, per_decade: f64) -> Vec<f64> {
@@ -162,13 +208,43 @@ fn sweep(lo: f64, hi: f64, per_decade: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The study: `stability.txt`, `stability.csv` (every run), `frontier.csv` and the charts
+/// `stability_map`, `stability_alpha`.
+pub struct Stability;
+
+impl Study for Stability {
+    const NAME: &'static str = "stability";
+    type Spec = Spec;
+    type Output = Vec<Run>;
+
+    fn measure(spec: &Spec, dir: &Path) -> Result<(Vec<Run>, Report)> {
+        let base = file::scene(&spec.scene, &[], "scene", dir)?;
+        let (runs, bounds) = sweeps(spec, &base)?;
+        let frontier = frontier(&runs, &spec.h);
+        let mut report = Report {
+            text: table(&runs, &frontier, &bounds, spec),
+            ..Report::default()
+        };
+        report.table("stability.csv", &runs)?;
+        report.table("frontier.csv", &frontier_rows(&frontier, &bounds))?;
+        charts(&mut report, &runs, &frontier, &bounds, (base.dim, base.eps));
+        Ok((runs, report))
+    }
+}
+
 /// Run the study of `path` (quick variant if `quick`) into `out`.
 ///
 /// # Errors
 /// `Error::Config` for a bad study file (naming the key) or an existing `out` without `force`.
 pub fn stability(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Vec<Run>> {
-    let spec: Spec = file::load(path, "stability", quick)?;
-    let dir = path.parent().unwrap_or(Path::new("."));
+    harness::run::<Stability>(path, quick, out, force)
+}
+
+/// The FD bound at each h: `(h/ε, Δt bound)`.
+type Bounds = Vec<(f64, f64)>;
+
+/// Every run of the three sweeps, and the FD bound at each h.
+fn sweeps(spec: &Spec, base: &Scene) -> Result<(Vec<Run>, Bounds)> {
     if !(spec.dt_min > 0.0 && spec.dt_max > spec.dt_min && spec.per_decade > 0.0) {
         return Err(Error::config(
             "dt_min",
@@ -178,51 +254,50 @@ pub fn stability(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Ve
     if spec.h.is_empty() || spec.h.iter().any(|h| h.is_nan() || *h <= 0.0) {
         return Err(Error::config("h", "need at least one h > 0"));
     }
-    run::check_out_dir(out, force)?;
-    let started = Instant::now();
-    let base = file::scene(&spec.scene, &[], "scene", dir)?;
     let criteria = Criteria::default();
     let mut runs = Vec::new();
     let mut bounds = Vec::new();
     for &h in &spec.h {
-        let n: Vec<usize> = base
-            .n
-            .iter()
-            .map(|&m| (m as f64 / h).round() as usize)
-            .collect();
-        let grid_patch = json!({"h": h * base.eps, "n": n, "prepare_steps": 0, "allow_unstable": true,
-                                "adaptive": null, "t_end": null, "stop_residual": null});
-        let prep = file::scene(
-            &spec.scene,
-            &[
-                grid_patch.clone(),
-                json!({"method": "spectral", "scheme": "sbdf1", "prepare_steps": base.prepare_steps, "allow_unstable": false}),
-            ],
-            "scene",
-            dir,
-        )?;
+        // The grid at h: the box kept, no preparation (the field is prepared once), the
+        // study's stop rules only.
+        let grid = |s: &mut Scene| {
+            s.h = h * base.eps;
+            s.n = base
+                .n
+                .iter()
+                .map(|&m| (m as f64 / h).round() as usize)
+                .collect();
+            s.prepare_steps = 0;
+            s.allow_unstable = true;
+            s.adaptive = AdaptiveSpec::Flag(false);
+            s.t_end = None;
+            s.stop_residual = None;
+        };
+        let prep = harness::variant(base, "scene", |s| {
+            grid(s);
+            s.method = Method::Spectral;
+            s.scheme = Scheme::Sbdf1;
+            s.prepare_steps = base.prepare_steps;
+            s.allow_unstable = false;
+        })?;
         let mut problem = setup::build(&prep)?;
         problem.phi = super::prepared_field(&prep, &problem)?;
         bounds.push((h, fd::stability_bound(&problem.grid, base.eps, 0.0)));
-        for (name, _, patch) in methods() {
+        for m in &METHODS {
             let mut blown = 0;
             for dt in sweep(spec.dt_min, spec.dt_max, spec.per_decade) {
-                let s = file::scene(
-                    &spec.scene,
-                    &[
-                        grid_patch.clone(),
-                        patch.clone(),
-                        json!({"dt": dt, "max_steps": spec.steps}),
-                    ],
-                    "scene",
-                    dir,
-                )?;
+                let s = harness::variant(base, "scene", |s| {
+                    grid(s);
+                    m.apply(s);
+                    s.dt = dt;
+                    s.max_steps = Some(spec.steps);
+                })?;
                 let r = fixed_run(&s, &problem, &criteria, None)?;
                 let failed = matches!(r.0, Class::BlownUp | Class::ConstraintLost);
                 blown = if failed { blown + 1 } else { 0 };
                 runs.push(Run {
                     sweep: "fixed",
-                    method: name,
+                    method: m.name,
                     h,
                     dt,
                     alpha: f64::NAN,
@@ -240,38 +315,38 @@ pub fn stability(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Ve
             }
         }
         for &ea in &spec.adaptive.energy_alpha {
-            let s = file::scene(
-                &spec.scene,
-                &[
-                    grid_patch.clone(),
-                    json!({"method": "spectral", "scheme": "sbdf1", "allow_unstable": false,
-                           "dt": spec.adaptive.dt, "t_end": spec.adaptive.t_end, "max_steps": null,
-                           "adaptive": {"energy_alpha": ea, "dt_max": spec.adaptive.dt_max}}),
-                ],
-                "adaptive",
-                dir,
-            )?;
+            let s = harness::variant(base, "adaptive", |s| {
+                grid(s);
+                s.method = Method::Spectral;
+                s.scheme = Scheme::Sbdf1;
+                s.allow_unstable = false;
+                s.dt = spec.adaptive.dt;
+                s.t_end = Some(spec.adaptive.t_end);
+                s.max_steps = None;
+                s.adaptive = AdaptiveSpec::Settings(AdaptiveSettings {
+                    energy_alpha: ea,
+                    dt_max: Some(spec.adaptive.dt_max),
+                    ..AdaptiveSettings::default()
+                });
+            })?;
             runs.push(adaptive_run(&s, &problem, h, ea)?);
         }
         if h == spec.h[0] {
+            let bound = bounds[0].1;
             for &frac in &spec.alpha.dt_fractions {
-                let bound = bounds[0].1;
                 for alpha in sweep(
                     spec.alpha.alpha_min,
                     spec.alpha.alpha_max,
                     spec.alpha.per_decade,
                 ) {
-                    let s = file::scene(
-                        &spec.scene,
-                        &[
-                            grid_patch.clone(),
-                            methods()[0].2.clone(),
-                            json!({"dt": frac * bound, "max_steps": spec.alpha.steps,
-                                   "area": {"method": "lagrangian", "alpha": alpha}}),
-                        ],
-                        "alpha",
-                        dir,
-                    )?;
+                    let s = harness::variant(base, "alpha", |s| {
+                        grid(s);
+                        METHODS[0].apply(s);
+                        s.dt = frac * bound;
+                        s.max_steps = Some(spec.alpha.steps);
+                        s.area.method = Some(AreaMethod::Lagrangian);
+                        s.area.alpha = Some(alpha);
+                    })?;
                     let lagrangian = Criteria {
                         rise: f64::INFINITY,
                         area: 10.0 * ALPHA_OFFSET,
@@ -295,21 +370,7 @@ pub fn stability(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Ve
             }
         }
     }
-    run::make_out_dir(out, force)?;
-    let frontier = frontier(&runs, &spec.h);
-    let text = table(
-        &runs,
-        &frontier,
-        &bounds,
-        &spec,
-        started.elapsed().as_secs_f64(),
-    );
-    println!("{text}");
-    super::write_text(out, "stability.txt", &text)?;
-    super::write_text(out, "stability.csv", &csv(&runs))?;
-    super::write_text(out, "frontier.csv", &frontier_csv(&frontier, &bounds))?;
-    charts(out, &runs, &frontier, &bounds, (base.dim, base.eps))?;
-    Ok(runs)
+    Ok((runs, bounds))
 }
 
 /// The area target's offset below the prepared area in the α sweep.
@@ -411,7 +472,7 @@ type Frontier = Vec<(&'static str, f64, Option<f64>, Option<(f64, Class)>)>;
 
 fn frontier(runs: &[Run], hs: &[f64]) -> Frontier {
     let mut f = Vec::new();
-    for (name, ..) in methods() {
+    for name in METHODS.map(|m| m.name) {
         for &h in hs {
             let rs: Vec<&Run> = runs
                 .iter()
@@ -435,7 +496,7 @@ fn largest(f: &Frontier, name: &str, h: f64) -> Option<f64> {
     f.iter().find(|x| x.0 == name && x.1 == h).and_then(|x| x.2)
 }
 
-fn table(runs: &[Run], f: &Frontier, bounds: &[(f64, f64)], spec: &Spec, wall: f64) -> String {
+fn table(runs: &[Run], f: &Frontier, bounds: &[(f64, f64)], spec: &Spec) -> String {
     let mut s = format!(
         "{} fixed steps per run, dt from {:.1e} to {:.1e} ({} per decade), from the prepared field\n\
          classes: stable (and energy-decreasing); energy rising (F_eff at the step's sigma rose > 1e-10 relative); \
@@ -457,7 +518,7 @@ fn table(runs: &[Run], f: &Frontier, bounds: &[(f64, f64)], spec: &Spec, wall: f
         );
     }
     let _ = writeln!(s, "\nspectral / FD largest stable dt:");
-    for (name, ..) in methods().into_iter().skip(1) {
+    for name in METHODS.map(|m| m.name).into_iter().skip(1) {
         let mut hs = Vec::new();
         let mut ratios = Vec::new();
         for &h in &spec.h {
@@ -475,7 +536,7 @@ fn table(runs: &[Run], f: &Frontier, bounds: &[(f64, f64)], spec: &Spec, wall: f
             fit::power(&hs, &ratios).map_or(String::new(), |p| format!("; ratio ∝ h^p, {p}"));
         let _ = writeln!(s, "  {name:<18} {}{scaling}", list.join(", "));
     }
-    for (name, ..) in methods() {
+    for name in METHODS.map(|m| m.name) {
         let (hs, dts): (Vec<f64>, Vec<f64>) = spec
             .h
             .iter()
@@ -539,51 +600,31 @@ fn table(runs: &[Run], f: &Frontier, bounds: &[(f64, f64)], spec: &Spec, wall: f
             "  dt = {dt:.3e} ({frac} of the bound): largest stable alpha {best}"
         );
     }
-    let _ = writeln!(s, "study wall time {wall:.1} s");
     s
 }
 
-fn csv(runs: &[Run]) -> String {
-    let mut s = String::from(
-        "sweep,method,h_over_eps,dt,alpha,class,steps,rejected,max_abs_phi,max_area_error\n",
-    );
-    for r in runs {
-        let _ = writeln!(
-            s,
-            "{},\"{}\",{},{},{},{},{},{},{},{}",
-            r.sweep,
-            r.method,
-            r.h,
-            r.dt,
-            r.alpha,
-            r.class.as_str(),
-            r.steps,
-            r.rejected,
-            r.max_phi,
-            r.area_error
-        );
-    }
-    s
+/// A row of `frontier.csv`.
+#[derive(Serialize)]
+struct FrontierRow {
+    method: &'static str,
+    h_over_eps: f64,
+    largest_stable_dt: f64,
+    first_failure_dt: f64,
+    first_failure_class: &'static str,
+    fd_bound: f64,
 }
 
-fn frontier_csv(f: &Frontier, bounds: &[(f64, f64)]) -> String {
-    let mut s = String::from(
-        "method,h_over_eps,largest_stable_dt,first_failure_dt,first_failure_class,fd_bound\n",
-    );
-    for x in f {
-        let bound = bounds.iter().find(|b| b.0 == x.1).map_or(f64::NAN, |b| b.1);
-        let _ = writeln!(
-            s,
-            "\"{}\",{},{},{},{},{}",
-            x.0,
-            x.1,
-            x.2.unwrap_or(f64::NAN),
-            x.3.map_or(f64::NAN, |p| p.0),
-            x.3.map_or("none", |p| p.1.as_str()),
-            bound
-        );
-    }
-    s
+fn frontier_rows(f: &Frontier, bounds: &[(f64, f64)]) -> Vec<FrontierRow> {
+    f.iter()
+        .map(|x| FrontierRow {
+            method: x.0,
+            h_over_eps: x.1,
+            largest_stable_dt: x.2.unwrap_or(f64::NAN),
+            first_failure_dt: x.3.map_or(f64::NAN, |p| p.0),
+            first_failure_class: x.3.map_or("none", |p| p.1.as_str()),
+            fd_bound: bounds.iter().find(|b| b.0 == x.1).map_or(f64::NAN, |b| b.1),
+        })
+        .collect()
 }
 
 /// Colour of a class on the map.
@@ -596,35 +637,37 @@ fn class_colour(c: Class) -> [u8; 3] {
     }
 }
 
+/// Colours of the measured frontiers: none of them a class's colour.
+const FRONTIER: [[u8; 3]; 3] = [[31, 119, 180], [140, 86, 75], [23, 190, 207]];
+
 fn charts(
-    out: &Path,
+    report: &mut Report,
     runs: &[Run],
     f: &Frontier,
     bounds: &[(f64, f64)],
     (dim, eps): (usize, f64),
-) -> Result<()> {
+) {
     let mut map = Figure::new(
         "Stability map: fixed dt against h (markers by method, colour by class)",
         Axis::log("h / eps (methods offset sideways)"),
         Axis::log("dt [time units]"),
     );
     map.legend = Corner::LowerRight;
-    let ms = methods();
-    let offset = |i: usize| 1.12f64.powf(i as f64 - (ms.len() as f64 - 1.0) / 2.0);
-    for (i, (name, shape, _)) in ms.iter().enumerate() {
+    let offset = |i: usize| 1.12f64.powf(i as f64 - (METHODS.len() as f64 - 1.0) / 2.0);
+    for (i, m) in METHODS.iter().enumerate() {
         for class in Class::ALL {
             let pts: Vec<(f64, f64)> = runs
                 .iter()
-                .filter(|r| r.sweep == "fixed" && r.method == *name && r.class == class)
+                .filter(|r| r.sweep == "fixed" && r.method == m.name && r.class == class)
                 .map(|r| (r.h * offset(i), r.dt))
                 .collect();
-            map.push(Series::new("", pts, class_colour(class), Mark::Points(*shape)).unlisted());
+            map.push(Series::new("", pts, class_colour(class), Mark::Points(m.shape)).unlisted());
         }
         map.push(Series::new(
-            *name,
+            m.name,
             Vec::new(),
             [90, 90, 90],
-            Mark::Points(*shape),
+            Mark::Points(m.shape),
         ));
     }
     for class in Class::ALL {
@@ -643,7 +686,7 @@ fn charts(
         .map(|h| (h, fd_bound(dim, h * eps, eps)))
         .collect();
     map.push(Series::new(
-        "FD bound (DESIGN.md §2)",
+        "FD bound 1/(λ(2 + ε²λ)²), λ = 4d/h²",
         curve,
         [0, 0, 0],
         Mark::Dashed,
@@ -660,7 +703,7 @@ fn charts(
         map.push(Series::new(
             format!("measured frontier, {name}"),
             pts,
-            colour(4 + i),
+            FRONTIER[i],
             Mark::Line,
         ));
     }
@@ -675,7 +718,7 @@ fn charts(
         [0, 0, 0],
         Mark::Points(Shape::Cross),
     ));
-    map.write(&out.join("stability_map"))?;
+    report.chart("stability_map", map);
 
     let mut alpha = Figure::new(
         "Lagrangian area update (FD): stable alpha against dt",
@@ -696,8 +739,7 @@ fn charts(
             Mark::Points(Shape::Circle),
         ));
     }
-    alpha.write(&out.join("stability_alpha"))?;
-    Ok(())
+    report.chart("stability_alpha", alpha);
 }
 
 /// The FD bound of DESIGN.md §2 at σ = 0: Δt = 1 / (λ (2 + ε²λ)²), λ = 4d/h² (the curve on

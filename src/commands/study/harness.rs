@@ -1,0 +1,194 @@
+//! What every study shares: read the study file (`--quick` applied), refuse an existing output
+//! folder without `--force` before anything is computed, time the study, and write what it
+//! produced — the printed table (also `NAME.txt`, closed by the study's wall time), its CSV
+//! files (typed rows through `csv` and serde) and its charts (PNG and SVG).
+//!
+//! A study is a [`Study`]: a name, a spec read from its file, and a `measure` that turns the
+//! spec into a [`Report`]. [`run`] does the rest.
+
+use super::file;
+use crate::commands::run as run_cmd;
+use crate::error::{Error, Result};
+use crate::output::chart::Figure;
+use crate::problem::config::Scene;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A study: its name (the file's `"study"`, the command, the `.txt` file's stem), its spec and
+/// what it measures.
+pub trait Study {
+    /// `"convergence"`, `"stability"`, …
+    const NAME: &'static str;
+    /// The study file's keys.
+    type Spec: DeserializeOwned;
+    /// What the study returns to its caller (the rows, for tests and the library).
+    type Output;
+    /// Run the measurements of `spec` (scene paths relative to `dir`).
+    ///
+    /// # Errors
+    /// `Error::Config` naming the study key; `Error::Blowup` if a run diverges.
+    fn measure(spec: &Self::Spec, dir: &Path) -> Result<(Self::Output, Report)>;
+}
+
+/// What a study writes: the table, the CSV files, the charts.
+#[derive(Default)]
+pub struct Report {
+    /// The printed table (the study's wall time is appended).
+    pub text: String,
+    /// `(file name, CSV bytes)`, from [`csv_of`].
+    pub tables: Vec<(String, Vec<u8>)>,
+    /// `(file stem, figure)`: each written as `stem.png` and `stem.svg`.
+    pub charts: Vec<(String, Figure)>,
+}
+
+impl Report {
+    /// Add the CSV file `name` holding `rows` (a header from the row type's field names).
+    ///
+    /// # Errors
+    /// `Error::Config` if a row cannot be serialised (a bug).
+    pub fn table<T: Serialize>(&mut self, name: &str, rows: &[T]) -> Result<()> {
+        self.tables.push((name.to_string(), csv_of(rows)?));
+        Ok(())
+    }
+
+    /// Add the chart `stem`.
+    pub fn chart(&mut self, stem: &str, figure: Figure) {
+        self.charts.push((stem.to_string(), figure));
+    }
+}
+
+/// `rows` as CSV: a header of the field names, one record per row; a field quoted only where
+/// it holds a comma or a quote; numbers in the shortest form that reads back exactly.
+///
+/// # Errors
+/// `Error::Config` if a row cannot be serialised.
+pub fn csv_of<T: Serialize>(rows: &[T]) -> Result<Vec<u8>> {
+    let bug = |e: csv::Error| Error::config("(csv)", e.to_string());
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(bug)?;
+    }
+    w.into_inner()
+        .map_err(|e| Error::config("(csv)", e.to_string()))
+}
+
+/// An output folder, checked before a study starts and created when it has a result.
+pub struct Session {
+    out: PathBuf,
+    force: bool,
+    started: Instant,
+}
+
+impl Session {
+    /// Refuse `out` if it exists without `force`; start the study's clock.
+    ///
+    /// # Errors
+    /// `Error::Config` (field `--out`) for an existing folder without `force`.
+    pub fn open(out: &Path, force: bool) -> Result<Self> {
+        run_cmd::check_out_dir(out, force)?;
+        Ok(Session {
+            out: out.to_path_buf(),
+            force,
+            started: Instant::now(),
+        })
+    }
+
+    /// Create the folder and write `report` into it as the study `name`: print the table with
+    /// the wall time since [`Session::open`], write `name.txt`, the CSV files and the charts.
+    ///
+    /// # Errors
+    /// I/O and drawing errors.
+    pub fn finish(self, name: &str, report: Report) -> Result<()> {
+        run_cmd::make_out_dir(&self.out, self.force)?;
+        let mut text = report.text;
+        if !text.ends_with('\n') {
+            text.push('\n');
+        }
+        text.push_str(&format!(
+            "study wall time {:.1} s\n",
+            self.started.elapsed().as_secs_f64()
+        ));
+        print!("{text}");
+        super::write_text(&self.out, &format!("{name}.txt"), &text)?;
+        for (file, bytes) in &report.tables {
+            let path = self.out.join(file);
+            std::fs::write(&path, bytes).map_err(|source| Error::Io { path, source })?;
+        }
+        for (stem, figure) in &report.charts {
+            figure.write(&self.out.join(stem))?;
+        }
+        println!("-> {}", self.out.display());
+        Ok(())
+    }
+}
+
+/// Run the study `S` of the file `path` (its quick variant if `quick`) into `out`.
+///
+/// # Errors
+/// `Error::Config` for a bad study file (naming the key) or an existing `out` without `force`;
+/// `Error::Blowup` if a run diverges.
+pub fn run<S: Study>(path: &Path, quick: bool, out: &Path, force: bool) -> Result<S::Output> {
+    let spec: S::Spec = file::load(path, S::NAME, quick)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let session = Session::open(out, force)?;
+    let (output, report) = S::measure(&spec, dir)?;
+    session.finish(S::NAME, report)?;
+    Ok(output)
+}
+
+/// A variant of `base`: `edit` applied to a copy, then validated as a scene file would be and
+/// checked against the memory available; errors name `field.<scene key>` (the study key that
+/// holds the scene).
+///
+/// # Errors
+/// `Error::Config` for a variant that is not a valid scene.
+pub fn variant(base: &Scene, field: &str, edit: impl FnOnce(&mut Scene)) -> Result<Scene> {
+    let mut s = base.clone();
+    edit(&mut s);
+    let within = |e: Error| match e {
+        Error::Config { field: f, reason } => Error::config(format!("{field}.{f}"), reason),
+        other => other,
+    };
+    s.validate().map_err(within)?;
+    crate::problem::memory::check(&s).map_err(within)?;
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Serialize)]
+    struct Row {
+        series: String,
+        x: f64,
+        steps: usize,
+    }
+
+    /// The header is the field names; a comma inside a field is quoted; NaN reads `NaN`; a
+    /// float reads back to the same bits.
+    #[test]
+    fn rows_become_csv() {
+        let rows = [
+            Row {
+                series: "FD, h = 1".into(),
+                x: 0.1 + 0.2,
+                steps: 3,
+            },
+            Row {
+                series: "spectral".into(),
+                x: f64::NAN,
+                steps: 0,
+            },
+        ];
+        let text = String::from_utf8(csv_of(&rows).unwrap()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "series,x,steps");
+        assert_eq!(lines[1], "\"FD, h = 1\",0.30000000000000004,3");
+        assert_eq!(lines[2], "spectral,NaN,0");
+        let back: f64 = lines[1].split(',').nth(2).unwrap().parse().unwrap();
+        assert_eq!(back, 0.1 + 0.2);
+    }
+}
