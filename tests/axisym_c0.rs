@@ -60,8 +60,8 @@ fn c0_zero_reproduces_the_symmetric_diagram() {
     let find = |lo: Branch, hi: Branch| {
         s.transitions
             .iter()
-            .find(|t| t.1 == lo && t.2 == hi)
-            .map(|t| t.0)
+            .find(|t| t.below == lo && t.above == hi && t.crossing)
+            .map(|t| t.v)
             .unwrap_or_else(|| panic!("no {lo:?}/{hi:?} change in {:?}", s.transitions))
     };
     let po = find(Branch::Oblate, Branch::Prolate);

@@ -65,20 +65,13 @@ impl Tracker {
     }
 
     /// Solve from the start shape of the branch; `v_hint` is where the symmetric branches
-    /// start (capped at 0.99). `false` if the start does not converge (or, for the pear, if the
-    /// prolate has no pear bifurcation above `v = 0.3`).
+    /// start (capped at 0.99). `false` if the start does not converge (always for the pear,
+    /// which [`super::pear::follow_pear`] follows by arclength).
     pub(super) fn start(&mut self, v_hint: f64) -> bool {
         self.last.clear();
         let (a0, v0) = match self.branch {
-            Branch::Pear => {
-                return match super::pear::pear_start(&self.opts) {
-                    Some(states) => {
-                        self.last = states;
-                        true
-                    }
-                    None => false,
-                };
-            }
+            // Not followed in v (it folds): see `follow_pear`.
+            Branch::Pear => return false,
             Branch::Prolate | Branch::Oblate => {
                 let v0 = v_hint.clamp(0.99, 1.0);
                 (self.one_mode(v0), v0)
@@ -264,7 +257,8 @@ fn check(v: f64, opts: &Options) -> Result<()> {
 ///
 /// # Errors
 /// `Error::Config` (field `v`) if `v ∉ (0, 1]` or the branch does not reach `v` (beyond the
-/// stomatocyte's limit point, or where the continuation fails); field `nodes` for too coarse a
+/// stomatocyte's limit point, or where the continuation fails; always for [`Branch::Pear`],
+/// which folds in `v`: use [`super::pear::follow_pear`]); field `nodes` for too coarse a
 /// discretisation.
 pub fn solve(branch: Branch, v: f64, opts: &Options) -> Result<Solution> {
     check(v, opts)?;

@@ -13,17 +13,22 @@
 //! the pear's direction.
 //!
 //! **Leaving the prolate.** At a pitchfork the branch is a graph over the amplitude
-//! `s = φ·(a − a_b)`, not over `v` (`v − v_b ∝ s²`). The first pear shapes solve the KKT
-//! system with `v` free and `φ·(a − a_b) = s` in its place, for `s = S1, 2 S1`; from there the
-//! branch is followed in `v` like the stomatocyte (every mode, closure held by its multiplier)
-//! until the narrowest neck falls below [`Options::neck_min`] or the continuation fails (a
-//! limit point in `v`).
+//! `s = φ·(a − a_b)`, not over `v` (`v − v_b ∝ s²`). The first pear shape solves the KKT
+//! system with `v` free and `φ·(a − a_b) = S1` in its place; from there [`follow_pear`]
+//! continues by pseudo-arclength in the coefficients (every mode, closure held by its
+//! multiplier), so that the branch may fold in `v` (a subcritical pitchfork rises in `v`
+//! first), until the narrowest neck falls below [`Options::neck_min`].
+//!
+//! **Without a bifurcation** the pear branch could still exist detached from the prolate;
+//! [`follow_pear`] then descends from sphere-with-bud shapes (bud radius 0.7 … 0.3 of the
+//! mother's) at fixed `v` and follows the first that stays up–down asymmetric.
 
 use super::branches::Tracker;
 use super::eigen::symmetric_eigen;
 use super::functional::{Basis, Eval};
-use super::solver::{lu_solve, Converged, NewtonSettings};
+use super::solver::{lu_solve, minimise, newton, Converged, NewtonSettings};
 use super::{solution, Branch, Options, Solution};
+use std::f64::consts::PI;
 
 /// The amplitude of the first pear shape along `φ` (radians of `ψ`, `φ` a unit vector of
 /// coefficients): large enough to leave the prolate, small enough that `v − v_b ∝ s²` holds.
@@ -318,62 +323,8 @@ fn newton_amplitude(
     None
 }
 
-/// The last two pear states of a continuation in the amplitude `s = k S1`, `k = 1, 2, …`, off
-/// the bifurcation, stopped once `|v − v_b| ≥ LEAVE_DV` (where the secant predictor in `v`
-/// takes over), for a tracker on the pear branch; `None` if there is no bifurcation or Newton
-/// fails.
-pub(super) fn pear_start(opts: &Options) -> Option<Vec<Converged>> {
-    start_from(&onset(opts)?, opts)
-}
-
-/// Distance in `v` from the bifurcation at which the amplitude continuation hands over.
-const LEAVE_DV: f64 = 0.005;
-
-/// Most amplitude steps before the hand-over.
-const MAX_AMPLITUDE_STEPS: usize = 40;
-
-/// [`pear_start`] from a computed onset.
-fn start_from(o: &Onset, opts: &Options) -> Option<Vec<Converged>> {
-    let full = full_basis(opts);
-    let set = o.prolate.set;
-    let v_b = o.prolate.current().eval.v;
-    let lv0 = o.prolate.current().lambda_v;
-    let mut states: Vec<Converged> = Vec::new();
-    for step in 1..=MAX_AMPLITUDE_STEPS {
-        let s = step as f64 * S1;
-        let (a0, lv, lg) = match states.as_slice() {
-            [] => {
-                let a: Vec<f64> = o.a.iter().zip(&o.phi).map(|(ab, p)| ab + s * p).collect();
-                (a, lv0, 0.0)
-            }
-            // Pitchfork: a − a_b grows ∝ s to first order.
-            [c] => {
-                let a: Vec<f64> =
-                    o.a.iter()
-                        .zip(&c.a)
-                        .map(|(ab, ac)| ab + 2.0 * (ac - ab))
-                        .collect();
-                (a, c.lambda_v, c.lambda_g)
-            }
-            [.., c0, c1] => {
-                let a: Vec<f64> = c1.a.iter().zip(&c0.a).map(|(x, y)| 2.0 * x - y).collect();
-                (
-                    a,
-                    2.0 * c1.lambda_v - c0.lambda_v,
-                    2.0 * c1.lambda_g - c0.lambda_g,
-                )
-            }
-        };
-        let c = newton_amplitude(&full, &o.a, &o.phi, s, (&a0, lv, lg), &set)?;
-        let far = (c.eval.v - v_b).abs() >= LEAVE_DV;
-        states.push(c);
-        if far && states.len() >= 2 {
-            break;
-        }
-    }
-    let n = states.len();
-    Some(states.split_off(n - 2))
-}
+/// A point of the continuation: coefficients, `λ_v`, `λ_G`.
+type State = (Vec<f64>, f64, f64);
 
 /// First arclength step (Euclidean norm of the coefficient change).
 const H0: f64 = 0.02;
@@ -384,7 +335,8 @@ const H_MIN: f64 = 1e-4;
 /// Most arclength steps.
 const MAX_STEPS: usize = 400;
 
-/// Follow the pear branch from its bifurcation by pseudo-arclength continuation in the
+/// Follow the pear branch from its bifurcation (or, without one, from a sphere-with-bud start
+/// that stays asymmetric, see the module docs) by pseudo-arclength continuation in the
 /// coefficients: from the last two states `a_{i−1}`, `a_i`, the secant direction
 /// `d = (a_i − a_{i−1})/|a_i − a_{i−1}|`, the predictor `p = a_i + h d`, and the corrector
 /// solves the KKT system with `v` free and `d·(a − p) = 0` (so the branch may turn in `v`: a
@@ -400,7 +352,17 @@ pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
         last: None,
         end: None,
     };
+    let full = full_basis(opts);
+    let set = NewtonSettings {
+        tol: opts.tol,
+        max_iter: opts.max_iter,
+        max_step: 0.5,
+    };
     let Some(o) = onset(opts) else {
+        // No bifurcation: a pear branch detached from the prolate, if one exists here.
+        if let Some((prev, cur)) = bud_start(&full, &set) {
+            arclength(&full, &set, prev, cur, v_floor, opts, &mut out);
+        }
         return out;
     };
     let prolate = o.prolate.solution();
@@ -409,8 +371,6 @@ pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
         e: prolate.e,
         prolate,
     });
-    let full = full_basis(opts);
-    let set = o.prolate.set;
     let v_b = o.prolate.current().eval.v;
     let lv0 = o.prolate.current().lambda_v;
     // The first state: amplitude S1 along φ.
@@ -420,13 +380,34 @@ pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
         return out;
     };
     // The bifurcation point itself is the state before it (the prolate, in the full basis).
-    let mut prev = (o.a.clone(), lv0, 0.0);
-    let mut cur = first;
+    arclength(
+        &full,
+        &set,
+        (o.a.clone(), lv0, 0.0),
+        first,
+        v_floor,
+        opts,
+        &mut out,
+    );
+    out
+}
+
+/// The pseudo-arclength continuation of [`follow_pear`] from the states `prev` (coefficients
+/// and multipliers) and `cur`, appending to `out.shapes` and setting `out.end`, `out.last`.
+fn arclength(
+    full: &Basis,
+    set: &NewtonSettings,
+    mut prev: State,
+    mut cur: Converged,
+    v_floor: f64,
+    opts: &Options,
+    out: &mut PearBranch,
+) {
     let mut h = H0;
-    out.end = Some(PearEnd::Stalled { v: v_b });
+    out.end = Some(PearEnd::Stalled { v: cur.eval.v });
     let mut steps = 0;
     loop {
-        let s = solution(Branch::Pear, &full, &cur);
+        let s = solution(Branch::Pear, full, &cur);
         if let Some(neck) = s.neck().filter(|r| *r < opts.neck_min) {
             out.end = Some(PearEnd::Neck { v: s.v, neck });
             out.last = Some(s.clone());
@@ -453,7 +434,7 @@ pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
             let f = h / norm;
             let lv = cur.lambda_v + f * (cur.lambda_v - prev.1);
             let lg = cur.lambda_g + f * (cur.lambda_g - prev.2);
-            let solved = newton_amplitude(&full, &p, &d, 0.0, (&p, lv, lg), &set).filter(|c| {
+            let solved = newton_amplitude(full, &p, &d, 0.0, (&p, lv, lg), set).filter(|c| {
                 c.a.iter()
                     .zip(&p)
                     .all(|(a, q)| (a - q).abs() <= 0.5 * h.max(0.02))
@@ -481,5 +462,67 @@ pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
     if out.last.is_none() {
         out.last = out.shapes.last().cloned();
     }
-    out
+}
+
+/// A start on a pear branch that does not bifurcate from the prolate: a sphere with a bud
+/// (outer arc of radius 1 for `ψ ∈ [0, π − β]`, a neck arc of radius `b` turning back to
+/// `ψ = γ`, a bud arc of radius `R2` up to `ψ = π`; `sin γ = (1 + b) sin β / (R2 + b)` closes
+/// it), projected on the modes and descended to a local minimum at its own `v` (about 0.8);
+/// then a second state at `v − 0.005`, so that the secant heads towards the closing neck.
+/// `None` if the descent ends on an up–down symmetric shape (no pear minimum there) or fails.
+fn bud_start(full: &Basis, set: &NewtonSettings) -> Option<(State, Converged)> {
+    BUD_RADII
+        .iter()
+        .find_map(|&r2| bud_start_with(full, set, r2))
+}
+
+/// Bud radii (mother radius 1) tried by [`bud_start`], in order.
+const BUD_RADII: [f64; 4] = [0.7, 0.5, 0.4, 0.3];
+
+/// [`bud_start`] with bud radius `r2`.
+fn bud_start_with(full: &Basis, set: &NewtonSettings, r2: f64) -> Option<(State, Converged)> {
+    let (r1, b, beta) = (1.0f64, 0.15f64, 0.3f64);
+    let gamma = ((r1 + b) * beta.sin() / (r2 + b)).asin();
+    let l1 = r1 * (PI - beta);
+    let l2 = b * (PI - beta - gamma);
+    let l3 = r2 * (PI - gamma);
+    let len = l1 + l2 + l3;
+    let psi = |t: f64| {
+        let s = t * len;
+        if s < l1 {
+            s / r1
+        } else if s < l1 + l2 {
+            PI - beta - (s - l1) / b
+        } else {
+            gamma + (s - l1 - l2) / r2
+        }
+    };
+    let a0 = project_modes(&full.modes, psi);
+    let v0 = full.eval(&a0)?.v;
+    let first = minimise(full, &a0, v0, true, set);
+    let first = first?;
+    let odd = first.a.iter().step_by(2).map(|x| x * x).sum::<f64>().sqrt();
+    if odd < 1e-3 {
+        return None;
+    }
+    let second = newton(full, &first.a, first.eval.v - 0.005, true, set)?;
+    Some(((first.a.clone(), first.lambda_v, first.lambda_g), second))
+}
+
+/// `a_k = 2 ∫_0^1 (ψ − πt) sin(kπt) dt` for the listed `k` (midpoint rule on 8192 cells).
+fn project_modes(modes: &[usize], psi: impl Fn(f64) -> f64) -> Vec<f64> {
+    let cells = 8192;
+    let h = 1.0 / cells as f64;
+    modes
+        .iter()
+        .map(|&k| {
+            2.0 * h
+                * (0..cells)
+                    .map(|i| {
+                        let t = (i as f64 + 0.5) * h;
+                        (psi(t) - PI * t) * (k as f64 * PI * t).sin()
+                    })
+                    .sum::<f64>()
+        })
+        .collect()
 }

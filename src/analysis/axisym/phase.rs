@@ -18,6 +18,20 @@ use std::time::Instant;
 /// Odd-mode size `√Σ_{k odd} a_k²` above which a shape counts as up–down asymmetric.
 const ASYMMETRIC: f64 = 1e-6;
 
+/// A change of the lowest-energy branch between two grid values.
+#[derive(Clone, Copy, Debug)]
+pub struct Transition {
+    /// Where: the crossing of the two energies, or the midpoint of the grid interval when they
+    /// do not cross there (one branch ends, as the prolate at its pinch).
+    pub v: f64,
+    /// Lowest below `v`.
+    pub below: Branch,
+    /// Lowest above `v`.
+    pub above: Branch,
+    /// Whether `v` is an energy crossing (else a grid midpoint).
+    pub crossing: bool,
+}
+
 /// Everything computed at one c̄0.
 #[derive(Clone, Debug)]
 pub struct Slice {
@@ -29,8 +43,8 @@ pub struct Slice {
     pub pear: PearBranch,
     /// The lowest-energy branch at each grid value `(v, branch)` where any branch exists.
     pub lowest: Vec<(f64, Branch)>,
-    /// Where the lowest-energy branch changes: `(v, below, above)`.
-    pub transitions: Vec<(f64, Branch, Branch)>,
+    /// Where the lowest-energy branch changes.
+    pub transitions: Vec<Transition>,
     /// Upper limit point of the stomatocyte branch, if found.
     pub stomatocyte_end: Option<f64>,
     /// First self-contact of the oblate branch, if found.
@@ -144,15 +158,19 @@ pub fn slice(c0: f64, vs: &[f64], opts: &Options) -> Slice {
             continue;
         }
         let mid = 0.5 * (v0 + v1);
-        let v = crossings(
+        let cross = crossings(
             &points_near(b0, mid, &curves, &pieces),
             &points_near(b1, mid, &curves, &pieces),
         )
         .into_iter()
         .filter(|x| *x >= v0 - 1e-9 && *x <= v1 + 1e-9)
-        .min_by(|a, b| (a - mid).abs().total_cmp(&(b - mid).abs()))
-        .unwrap_or(mid);
-        transitions.push((v, b0, b1));
+        .min_by(|a, b| (a - mid).abs().total_cmp(&(b - mid).abs()));
+        transitions.push(Transition {
+            v: cross.unwrap_or(mid),
+            below: b0,
+            above: b1,
+            crossing: cross.is_some(),
+        });
     }
     let end_of = |b: Branch| {
         let i = Branch::ALL.iter().position(|x| *x == b).expect("listed");
@@ -294,13 +312,22 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
                     fmt(neck, 5)
                 )
             };
-        for (v, lo, hi) in &s.transitions {
+        for t in &s.transitions {
+            let how = if t.crossing {
+                "energies cross"
+            } else {
+                "grid midpoint: a branch ends"
+            };
             row(
                 "lowest branch changes",
-                Some(*v),
+                Some(t.v),
                 None,
                 None,
-                &format!("{} below / {} above", lo.name(), hi.name()),
+                &format!(
+                    "{} below / {} above ({how})",
+                    t.below.name(),
+                    t.above.name()
+                ),
             )
             .map_err(&err)?;
         }
@@ -452,11 +479,13 @@ fn print_slice(s: &Slice) {
             );
         }
     }
-    for (v, lo, hi) in &s.transitions {
+    for t in &s.transitions {
         println!(
-            "  lowest: {} below / {} above v = {v:.4}",
-            lo.name(),
-            hi.name()
+            "  lowest: {} below / {} above v = {:.4}{}",
+            t.below.name(),
+            t.above.name(),
+            t.v,
+            if t.crossing { "" } else { " (grid midpoint)" }
         );
     }
     match &s.pear.bifurcation {
