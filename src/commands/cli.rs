@@ -103,10 +103,11 @@ enum Command {
         after_help = "Examples:\n  vesicle study stationary runs/prolate3d.json --out out/stationary\n  vesicle study stability runs/studies/stability.json --out out/stability"
     )]
     Study(Study),
-    /// Shape diagram at c0 = 0 from the axisymmetric (sharp-interface) reference solver:
-    /// prolate, oblate and stomatocyte branches, e against v, and the transition volumes.
+    /// Shape diagram from the axisymmetric (sharp-interface) reference solver: prolate, oblate
+    /// and stomatocyte branches, e against v, and the transition volumes; with --c0 LIST the
+    /// (v, c0) diagram of the spontaneous-curvature model with the pear branch.
     #[command(
-        after_help = "Example:\n  vesicle axisym --out out/axisym --v-min 0.5 --v-max 0.99 --dv 0.01"
+        after_help = "Examples:\n  vesicle axisym --out out/axisym --v-min 0.5 --v-max 0.99 --dv 0.01\n  vesicle axisym --out out/axisym_c0 --c0=-1,0,1 --dv 0.01"
     )]
     Axisym(crate::analysis::axisym::diagram::DiagramArgs),
     /// Shape diagram from the phase-field model: every branch and reduced volume of FILE at

@@ -21,16 +21,16 @@ use std::f64::consts::PI;
 const MAX_JUMP: f64 = 0.3;
 
 /// A branch being followed: the discretisation and the last (at most two) solutions.
-struct Tracker {
-    branch: Branch,
-    basis: Basis,
-    set: NewtonSettings,
-    opts: Options,
-    last: Vec<Converged>,
+pub(super) struct Tracker {
+    pub(super) branch: Branch,
+    pub(super) basis: Basis,
+    pub(super) set: NewtonSettings,
+    pub(super) opts: Options,
+    pub(super) last: Vec<Converged>,
 }
 
 impl Tracker {
-    fn new(branch: Branch, opts: &Options) -> Self {
+    pub(super) fn new(branch: Branch, opts: &Options) -> Self {
         let modes: Vec<usize> = if branch.up_down_symmetric() {
             (2..=opts.modes).step_by(2).collect()
         } else {
@@ -38,7 +38,7 @@ impl Tracker {
         };
         Tracker {
             branch,
-            basis: Basis::new(opts.nodes - 1, modes),
+            basis: Basis::new(opts.nodes - 1, modes).with_c0(opts.c0),
             set: NewtonSettings {
                 tol: opts.tol,
                 max_iter: opts.max_iter,
@@ -49,15 +49,15 @@ impl Tracker {
         }
     }
 
-    fn closure(&self) -> bool {
+    pub(super) fn closure(&self) -> bool {
         !self.branch.up_down_symmetric()
     }
 
-    fn current(&self) -> &Converged {
+    pub(super) fn current(&self) -> &Converged {
         self.last.last().expect("tracker started")
     }
 
-    fn push(&mut self, c: Converged) {
+    pub(super) fn push(&mut self, c: Converged) {
         if self.last.len() == 2 {
             self.last.remove(0);
         }
@@ -65,10 +65,13 @@ impl Tracker {
     }
 
     /// Solve from the start shape of the branch; `v_hint` is where the symmetric branches
-    /// start (capped at 0.99). `false` if the start does not converge.
-    fn start(&mut self, v_hint: f64) -> bool {
+    /// start (capped at 0.99). `false` if the start does not converge (always for the pear,
+    /// which [`super::pear::follow_pear`] follows by arclength).
+    pub(super) fn start(&mut self, v_hint: f64) -> bool {
         self.last.clear();
         let (a0, v0) = match self.branch {
+            // Not followed in v (it folds): see `follow_pear`.
+            Branch::Pear => return false,
             Branch::Prolate | Branch::Oblate => {
                 let v0 = v_hint.clamp(0.99, 1.0);
                 (self.one_mode(v0), v0)
@@ -191,7 +194,7 @@ impl Tracker {
 
     /// Continue to `target`; `false` (and the tracker at the last solution reached) if the step
     /// had to fall below `dv_min`.
-    fn advance(&mut self, target: f64) -> bool {
+    pub(super) fn advance(&mut self, target: f64) -> bool {
         let mut step = self.opts.dv_max;
         loop {
             let cur = self.current().eval.v;
@@ -226,7 +229,7 @@ impl Tracker {
         }
     }
 
-    fn solution(&self) -> Solution {
+    pub(super) fn solution(&self) -> Solution {
         solution(self.branch, &self.basis, self.current())
     }
 }
@@ -254,7 +257,8 @@ fn check(v: f64, opts: &Options) -> Result<()> {
 ///
 /// # Errors
 /// `Error::Config` (field `v`) if `v ∉ (0, 1]` or the branch does not reach `v` (beyond the
-/// stomatocyte's limit point, or where the continuation fails); field `nodes` for too coarse a
+/// stomatocyte's limit point, or where the continuation fails; always for [`Branch::Pear`],
+/// which folds in `v`: use [`super::pear::follow_pear`]); field `nodes` for too coarse a
 /// discretisation.
 pub fn solve(branch: Branch, v: f64, opts: &Options) -> Result<Solution> {
     check(v, opts)?;
@@ -371,7 +375,7 @@ pub fn branch_curve(branch: Branch, vs: &[f64], opts: &Options) -> Vec<Solution>
 /// Follows the branch on a grid of step 0.02 over the part that leads to the end.
 pub fn branch_end(branch: Branch, opts: &Options) -> Option<f64> {
     let range = match branch {
-        Branch::Prolate => return None,
+        Branch::Prolate | Branch::Pear => return None,
         Branch::Oblate => (0.30, 0.99),
         Branch::Stomatocyte => (0.60, 0.99),
     };

@@ -1,6 +1,6 @@
 //! The `vesicle axisym` command: the three branches of the c0 = 0 shape diagram on a grid of
 //! reduced volumes, written as CSV (energies, contours), a PNG chart, and the transition
-//! volumes where the branches cross.
+//! volumes where the branches cross; with `--c0 LIST`, the (v, c̄0) diagram ([`super::phase`]).
 
 use super::{branch_end, crossings, follow, Branch, Options, Solution};
 use crate::error::{Error, Result};
@@ -31,6 +31,11 @@ pub struct DiagramArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+    /// Reduced spontaneous curvatures c0·R0, comma separated (e.g. `--c0 0,0.5,1`): the
+    /// (v, c0) diagram with the pear branch (`branches_c0_*.csv`, `summary.csv`, `phase.png`)
+    /// instead of the c0 = 0 diagram.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub c0: Option<Vec<f64>>,
 }
 
 /// Transition volumes of a diagram.
@@ -96,6 +101,9 @@ fn check(args: &DiagramArgs) -> Result<()> {
 /// written); `Error::Io`/`Error::Output` if writing fails.
 pub fn run(args: &DiagramArgs) -> Result<()> {
     check(args)?;
+    if let Some(list) = &args.c0 {
+        return super::phase::run(args, list, &grid(args));
+    }
     if args.out.exists() && !args.force {
         crate::commands::run::make_out_dir(&args.out, false)?;
     }

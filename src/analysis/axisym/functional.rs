@@ -1,15 +1,22 @@
 //! The discrete Ritz functional: reduced energy, closure defect and reduced volume of a shape
 //! `ψ(t) = πt + Σ_k a_k sin(kπt)`, and their exact gradients in the coefficients `a_k`.
 //!
-//! The arc length is `s = L t`, `t ∈ [0, 1]`. Every reduced quantity is scale free, so `L`
-//! drops out: with `ρ(t) = r/L = ∫_0^t cos ψ`,
+//! The arc length is `s = L t`, `t ∈ [0, 1]`. At `R0 = 1` the area fixes the length,
+//! `L = √(2/I_A)`; with `ρ(t) = r/L = ∫_0^t cos ψ` and `h = ψ_t + sin ψ / ρ = L·2H`,
 //!
 //! ```text
-//! e   = ∮(2H)² dA / (16π) = (1/8) ∫_0^1 (ψ_t + sin ψ / ρ)² ρ dt        (2H = ψ_s + sin ψ / r)
+//! e   = ∮(2H − c̄0)² dA / (16π) = e_0 − c̄0 J + c̄0²/4
+//! e_0 = ∮(2H)² dA / (16π) = (1/8) ∫_0^1 h² ρ dt                      (scale free)
+//! J   = ∮2H dA / (8π R0) = (L/4) M,   M = ∫_0^1 h ρ dt = ∫_0^1 (ψ_t ρ + sin ψ) dt
 //! G   = ρ(1) = ∫_0^1 cos ψ dt                                           (closure: G = 0)
 //! v   = V / ((4π/3) R0³) = (3/4) I_V / (I_A/2)^{3/2},
 //!       I_A = ∫ ρ dt  (A = 2π L² I_A),   I_V = ∫ ρ² sin ψ dt  (V = π L³ I_V)
 //! ```
+//!
+//! Only `e_0` is scale free: the spontaneous-curvature term couples to the integrated mean
+//! curvature, which scales with `L`, so at fixed `A` (`R0 = 1`) it carries the factor
+//! `L = √(2/I_A)`; the last term is `c̄0² A/(16π) = c̄0²/4`. A sphere has `e_0 = J = 1`,
+//! `e = (1 − c̄0/2)²`.
 //!
 //! The integrals use Clenshaw–Curtis quadrature on Chebyshev–Lobatto nodes and `ρ` the
 //! spectral integration matrix `Q` ([`super::quadrature`]). In place of `ρ` the functional uses
@@ -21,9 +28,12 @@
 use super::quadrature;
 use std::f64::consts::PI;
 
-/// Nodes, weights and mode tables of one discretisation (`m + 1` nodes, the listed modes).
+/// Nodes, weights and mode tables of one discretisation (`m + 1` nodes, the listed modes),
+/// and the reduced spontaneous curvature `c̄0` of the energy.
 #[derive(Clone, Debug)]
 pub(crate) struct Basis {
+    /// Reduced spontaneous curvature `c̄0 = c0 R0`.
+    pub c0: f64,
     /// Mode numbers `k` of the coefficients, in order.
     pub modes: Vec<usize>,
     /// Nodes `t_j` on `[0, 1]`.
@@ -49,8 +59,10 @@ pub(crate) struct Basis {
 /// Values and gradients of the functional at one coefficient vector.
 #[derive(Clone, Debug)]
 pub(crate) struct Eval {
-    /// Reduced energy `e`.
+    /// Reduced energy `e = e_0 − c̄0 J + c̄0²/4`.
     pub e: f64,
+    /// Reduced integrated mean curvature `J = ∮2H dA / (8π R0)` (1 on the sphere).
+    pub j: f64,
     /// Closure defect `G = ρ(1)`.
     pub g: f64,
     /// Reduced volume `v`.
@@ -77,7 +89,7 @@ pub(crate) struct Samples {
 }
 
 impl Basis {
-    /// A basis with `m + 1` nodes and the given mode numbers.
+    /// A basis with `m + 1` nodes, the given mode numbers and `c̄0 = 0`.
     pub fn new(m: usize, modes: Vec<usize>) -> Self {
         let t = quadrature::nodes(m);
         let q = quadrature::integration_matrix(m);
@@ -106,6 +118,7 @@ impl Basis {
             }
         }
         Basis {
+            c0: 0.0,
             modes,
             t,
             w,
@@ -117,6 +130,12 @@ impl Basis {
             sin_tab,
             dsin_tab,
         }
+    }
+
+    /// The same basis with reduced spontaneous curvature `c0`.
+    pub fn with_c0(mut self, c0: f64) -> Self {
+        self.c0 = c0;
+        self
     }
 
     /// Number of nodes `m + 1`.
@@ -174,12 +193,29 @@ impl Basis {
         let v_rho: Vec<f64> = (0..n)
             .map(|j| v * (2.0 * w[j] * rho[j] * s[j] / iv - 1.5 * w[j] / ia))
             .collect();
+        // Spontaneous curvature: e += −c̄0 J + c̄0²/4, J = (L/4) M, L = √(2/I_A), so
+        // ∂J/∂ψ_j = (L/4) w_j cos ψ_j, ∂J/∂ψ_t,j = (L/4) w_j ρ̃_j,
+        // ∂J/∂ρ̃_j = (L/4) w_j (ψ_t,j − M/(2 I_A)).
+        let length = (2.0 / ia).sqrt();
+        let m: f64 = (1..n - 1).map(|j| w[j] * (dpsi[j] * rho[j] + s[j])).sum();
+        let j_mean = 0.25 * length * m;
+        let c0 = self.c0;
+        if c0 != 0.0 {
+            let f = -c0 * 0.25 * length;
+            e += -c0 * j_mean + 0.25 * c0 * c0;
+            for j in 1..n - 1 {
+                e_psi[j] += f * w[j] * c[j];
+                e_dpsi[j] += f * w[j] * rho[j];
+                e_rho[j] += f * w[j] * (dpsi[j] - 0.5 * m / ia);
+            }
+        }
         let (back_e, back_v) = mat_t_vec2(&self.qt, &e_rho, &v_rho);
         let grad_e = self.chain(&e_psi, Some(&e_dpsi), Some(&back_e), &s);
         let grad_g = self.chain(&g_psi, None, None, &s);
         let grad_v = self.chain(&v_psi, None, Some(&back_v), &s);
         Some(Eval {
             e,
+            j: j_mean,
             g,
             v,
             ia,

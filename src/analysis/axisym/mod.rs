@@ -1,41 +1,52 @@
-//! Axisymmetric reference solver for the shape diagram of closed vesicles at spontaneous
-//! curvature c0 = 0 (Seifert, Berndl & Lipowsky, Phys. Rev. A 44, 1182, 1991), independent of
-//! the phase-field engines.
+//! Axisymmetric reference solver for the shape diagram of closed vesicles in the
+//! spontaneous-curvature model (Seifert, Berndl & Lipowsky, Phys. Rev. A 44, 1182, 1991),
+//! independent of the phase-field engines.
 //!
 //! The generating curve `(r(s), z(s))`, `s ∈ [0, L]`, is given by its tangent angle `ψ(s)`:
 //!
 //! ```text
 //! r' = cos ψ,   z' = sin ψ,   2H = ψ' + sin ψ / r,   dA = 2π r ds,   V = π ∫ r² sin ψ ds
 //! ψ(0) = 0,   ψ(L) = π,   r(0) = r(L) = 0 (closure)
-//! e = ∮(2H)² dA / (16π)  (a sphere has e = 1),   v = V / ((4π/3) R0³),   R0 = √(A/4π)
+//! e = ∮(2H − c̄0)² dA / (16π)  (a sphere has e = (1 − c̄0/2)²),   c̄0 = c0 R0
+//! v = V / ((4π/3) R0³),   R0 = √(A/4π)
 //! ```
+//!
+//! With this orientation (the contour runs from the lower pole to the upper, the normal points
+//! out) a sphere of radius `R` has `2H = 2/R`: a positive `c0` prefers outward buds, and the
+//! sphere's energy vanishes at `c0 = 2/R`.
 //!
 //! **Method (Ritz).** `ψ(t) = πt + Σ_{k ≤ K} a_k sin(kπt)`, `t = s/L`: the boundary values hold
 //! for any `a`, and since `ψ − πt` is odd about both poles on a smooth surface of revolution,
 //! the sine series converges exponentially for analytic shapes. Up–down symmetric shapes
 //! (prolate, oblate: `ψ(1 − t) = π − ψ(t)`) use the even `k` only, which also makes the
 //! closure automatic; the stomatocyte uses every `k` and holds the closure by a multiplier.
-//! The reduced quantities are scale free, so `L` drops out (`functional.rs`); integrals are
+//! At `R0 = 1` the length follows from the area, `L = √(2/I_A)` (`functional.rs`); integrals are
 //! Clenshaw–Curtis on Chebyshev–Lobatto nodes ([`quadrature`]). The constrained minimum of `e`
 //! at fixed `v` is found by Newton on the Lagrangian (`solver.rs`), and each branch is followed
 //! by continuation in `v` with a secant predictor and step halving ([`branches`]): prolate and
-//! oblate from the sphere, the stomatocyte from a sphere-in-sphere start at small `v`. The
-//! command `vesicle axisym` ([`diagram`]) writes the diagram.
+//! oblate from the sphere, the stomatocyte from a sphere-in-sphere start at small `v`, the
+//! pear from its bifurcation off the prolate ([`pear`]). The command `vesicle axisym`
+//! ([`diagram`], and [`phase`] with `--c0`) writes the diagram.
 //!
 //! **Multipliers.** With `e*(v)` the branch energy at `R0 = 1`, the pressure difference and the
-//! tension of the shape equation `δE_b − P δV + σ δA = 0` (`E_b = (κ/2)∮(2H)² dA = 8πκ e`)
-//! are, in units of `κ/R0³` and `κ/R0²`: `P = 6 de*/dv = −6 λ_v` (vary `V` at fixed `A`) and
-//! `σ = P v / 2` (a dilation leaves `E_b` unchanged: `2σA = 3PV`).
+//! tension of the shape equation `δE_b − P δV + σ δA = 0` (`E_b = (κ/2)∮(2H − c0)² dA =
+//! 8πκ e`) are, in units of `κ/R0³` and `κ/R0²`: `P = 6 de*/dv = −6 λ_v` (vary `V` at fixed
+//! `A`) and `σ = P v / 2 + c̄0 J − c̄0²/2` (a dilation by `R0` changes `E_b` by
+//! `8πκ (−c0 J + c0² R0/2) dR0`, `J = ∮2H dA/(8π R0)`; at `c0 = 0`, `2σA = 3PV`).
 
 pub mod branches;
 pub mod diagram;
+pub(crate) mod eigen;
 pub(crate) mod functional;
+pub mod pear;
+pub mod phase;
 pub mod quadrature;
 pub(crate) mod solver;
 
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
+pub use pear::{follow_pear, pear_bifurcation, Bifurcation, PearBranch, PearEnd};
 
-/// The three branches of the c0 = 0 diagram.
+/// The branches of the diagram: the three of c0 = 0 ([`Branch::ALL`]) and the pear.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Branch {
     /// Up–down symmetric, elongated along the axis (from the sphere, `a_2 > 0`).
@@ -43,26 +54,39 @@ pub enum Branch {
     /// Up–down symmetric, flattened (from the sphere, `a_2 < 0`); discocytes at smaller `v`.
     Oblate,
     /// Not up–down symmetric: an invaginated cup; tends to a sphere inside a sphere (`e → 2`) as
-    /// `v → 0`, and ends at a limit point near `v ≈ 0.66`.
+    /// `v → 0`, and ends at a limit point near `v ≈ 0.66` (at c0 = 0).
     Stomatocyte,
+    /// Not up–down symmetric: bifurcates from the prolate where the prolate loses stability to
+    /// up–down asymmetric deformations, and narrows to a bud on a closing neck (the limit
+    /// shape `L_pear`).
+    Pear,
 }
 
 impl Branch {
-    /// All branches, in the order of the diagram.
+    /// The branches of the c0 = 0 diagram, in its order.
     pub const ALL: [Branch; 3] = [Branch::Prolate, Branch::Oblate, Branch::Stomatocyte];
 
-    /// Lower-case name used in files (`prolate`, `oblate`, `stomatocyte`).
+    /// The branches of the diagram at c0 ≠ 0: [`Branch::ALL`] and the pear.
+    pub const WITH_PEAR: [Branch; 4] = [
+        Branch::Prolate,
+        Branch::Oblate,
+        Branch::Stomatocyte,
+        Branch::Pear,
+    ];
+
+    /// Lower-case name used in files (`prolate`, `oblate`, `stomatocyte`, `pear`).
     pub fn name(self) -> &'static str {
         match self {
             Branch::Prolate => "prolate",
             Branch::Oblate => "oblate",
             Branch::Stomatocyte => "stomatocyte",
+            Branch::Pear => "pear",
         }
     }
 
     /// Whether the branch's shapes are up–down symmetric (even modes only, closure automatic).
     pub fn up_down_symmetric(self) -> bool {
-        !matches!(self, Branch::Stomatocyte)
+        matches!(self, Branch::Prolate | Branch::Oblate)
     }
 }
 
@@ -81,6 +105,11 @@ pub struct Options {
     pub dv_max: f64,
     /// Continuation step below which the branch counts as ended (a limit point).
     pub dv_min: f64,
+    /// Reduced spontaneous curvature `c̄0 = c0 R0` of the energy.
+    pub c0: f64,
+    /// The pear branch is followed until its narrowest neck (in units of `R0`) falls below
+    /// this; closer to the limit shape the neck is not resolved by the modes.
+    pub neck_min: f64,
 }
 
 impl Default for Options {
@@ -106,9 +135,20 @@ impl Options {
             max_iter: 15,
             dv_max: 0.02,
             dv_min: 1e-4,
+            c0: 0.0,
+            neck_min: NECK_MIN,
         }
     }
+
+    /// The same options at reduced spontaneous curvature `c0`.
+    pub fn with_c0(mut self, c0: f64) -> Self {
+        self.c0 = c0;
+        self
+    }
 }
+
+/// Default [`Options::neck_min`].
+pub const NECK_MIN: f64 = 0.05;
 
 /// One stationary shape, scaled to `R0 = 1`.
 #[derive(Clone, Debug)]
@@ -117,9 +157,13 @@ pub struct Solution {
     pub branch: Branch,
     /// Reduced volume `v`.
     pub v: f64,
-    /// Reduced bending energy `e = ∮(2H)² dA / (16π)`.
+    /// Reduced spontaneous curvature `c̄0` of the energy.
+    pub c0: f64,
+    /// Reduced bending energy `e = ∮(2H − c̄0)² dA / (16π)`.
     pub e: f64,
-    /// Tension `σ R0²/κ` (`σ = P v/2`; see the module docs).
+    /// Reduced integrated mean curvature `J = ∮2H dA / (8π R0)` (1 on the sphere).
+    pub mean_curvature: f64,
+    /// Tension `σ R0²/κ` (`σ = P v/2 + c̄0 J − c̄0²/2`; see the module docs).
     pub sigma: f64,
     /// Pressure difference `P R0³/κ = 6 de/dv` (inside minus outside).
     pub pressure: f64,
@@ -149,6 +193,18 @@ impl Solution {
     /// Contour length `L` (at `R0 = 1`).
     pub fn length(&self) -> f64 {
         *self.s.last().expect("contour has samples")
+    }
+
+    /// The narrowest waist or neck: the smallest interior local minimum of `r` along the
+    /// contour (refined by the parabola through the three samples around it), in units of
+    /// `R0`; `None` if `r` rises monotonically to its maximum and falls to the other pole.
+    pub fn neck(&self) -> Option<f64> {
+        let r = &self.r;
+        let s = &self.s;
+        (1..r.len() - 1)
+            .filter(|&i| r[i] <= r[i - 1] && r[i] < r[i + 1] && i > 1 && i < r.len() - 2)
+            .map(|i| parabola_min(s[i - 1], s[i], s[i + 1], r[i - 1], r[i], r[i + 1]))
+            .min_by(f64::total_cmp)
     }
 
     /// Size of the up–down asymmetric part: `√Σ_{k odd} a_k²` (0 on symmetric branches).
@@ -181,6 +237,20 @@ impl Solution {
     }
 }
 
+/// The minimum of the parabola through `(x0, y0)`, `(x1, y1)`, `(x2, y2)` (`y1` the smallest
+/// of the three, so the vertex lies in `[x0, x2]`).
+fn parabola_min(x0: f64, x1: f64, x2: f64, y0: f64, y1: f64, y2: f64) -> f64 {
+    let d01 = (y1 - y0) / (x1 - x0);
+    let d12 = (y2 - y1) / (x2 - x1);
+    let curv = (d12 - d01) / (x2 - x0);
+    if curv <= 0.0 {
+        return y1;
+    }
+    // p(x) = y1 + b (x − x1) + curv (x − x1)², b = slope at x1.
+    let b = d01 + curv * (x1 - x0);
+    (y1 - b * b / (4.0 * curv)).min(y1)
+}
+
 /// Whether the segments `ab` and `cd` cross (proper intersection, or touching).
 fn segments_cross(a: (f64, f64), b: (f64, f64), c: (f64, f64), d: (f64, f64)) -> bool {
     let orient = |p: (f64, f64), q: (f64, f64), r: (f64, f64)| {
@@ -202,11 +272,14 @@ pub(crate) fn solution(
     let sin: Vec<f64> = smp.psi.iter().map(|p| p.sin()).collect();
     let z = functional::mat_vec(&basis.q, &sin);
     let pressure = -6.0 * c.lambda_v;
+    let c0 = basis.c0;
     Solution {
         branch,
         v: c.eval.v,
+        c0,
         e: c.eval.e,
-        sigma: 0.5 * pressure * c.eval.v,
+        mean_curvature: c.eval.j,
+        sigma: 0.5 * pressure * c.eval.v + c0 * c.eval.j - 0.5 * c0 * c0,
         pressure,
         lambda_v: c.lambda_v,
         lambda_closure: c.lambda_g,

@@ -139,6 +139,13 @@ impl DiagramSpec {
                 Branch::Prolate => (0.3, 1.0),
                 Branch::Oblate => (0.51, 1.0),
                 Branch::Stomatocyte => (0.3, 0.66),
+                // Not listed by `branch_named`: diagram files hold the c0 = 0 branches.
+                Branch::Pear => {
+                    return Err(Error::config(
+                        at,
+                        "unknown branch (prolate, oblate or stomatocyte)",
+                    ))
+                }
             };
             if vs.is_empty() {
                 return Err(Error::config(at, "list at least one reduced volume"));

@@ -1,0 +1,528 @@
+//! The pear branch: where the prolate loses stability to up–down asymmetric deformations, and
+//! the asymmetric (pear) shapes that bifurcate there, followed down in `v` towards the budding
+//! limit shape `L_pear`, where the neck closes.
+//!
+//! **Bifurcation.** Write the coefficients of every mode `k ≤ K`. On an up–down symmetric
+//! shape the even `k` are symmetric deformations and the odd `k` antisymmetric ones; `∇v` has
+//! only even components and the closure gradient `∇G` only odd ones, so the Hessian of the
+//! Lagrangian `ℒ = e + λ_v (v − v0) + λ_G G` (`λ_G = 0` on the prolate) splits into the two
+//! blocks. The prolate is stable against asymmetric deformations while the odd block,
+//! restricted to the tangent space of the closure (`∇G⊥`), is positive definite. Its smallest
+//! eigenvalue `μ(v)` is scanned down the prolate from `v = 0.99` in steps of 0.01; the first
+//! sign change is refined by the secant method to `|Δv| < 1e-9`, and its eigenvector `φ` is
+//! the pear's direction.
+//!
+//! **Leaving the prolate.** At a pitchfork the branch is a graph over the amplitude
+//! `s = φ·(a − a_b)`, not over `v` (`v − v_b ∝ s²`). The first pear shape solves the KKT
+//! system with `v` free and `φ·(a − a_b) = S1` in its place; from there [`follow_pear`]
+//! continues by pseudo-arclength in the coefficients (every mode, closure held by its
+//! multiplier), so that the branch may fold in `v` (a subcritical pitchfork rises in `v`
+//! first), until the narrowest neck falls below [`Options::neck_min`].
+//!
+//! **Without a bifurcation** the pear branch could still exist detached from the prolate;
+//! [`follow_pear`] then descends from sphere-with-bud shapes (bud radius 0.7 … 0.3 of the
+//! mother's) at fixed `v` and follows the first that stays up–down asymmetric.
+
+use super::branches::Tracker;
+use super::eigen::symmetric_eigen;
+use super::functional::{Basis, Eval};
+use super::solver::{lu_solve, minimise, newton, Converged, NewtonSettings};
+use super::{solution, Branch, Options, Solution};
+use std::f64::consts::PI;
+
+/// The amplitude of the first pear shape along `φ` (radians of `ψ`, `φ` a unit vector of
+/// coefficients): large enough to leave the prolate, small enough that `v − v_b ∝ s²` holds.
+const S1: f64 = 0.02;
+
+/// Step of the scan for the bifurcation down the prolate.
+const SCAN_DV: f64 = 0.01;
+
+/// The scan stops at this reduced volume.
+const SCAN_V_MIN: f64 = 0.3;
+
+/// Step of the finite-difference Hessian (as in the solver).
+const FD_STEP: f64 = 1e-5;
+
+/// Where the pear branch leaves the prolate.
+#[derive(Clone, Debug)]
+pub struct Bifurcation {
+    /// Reduced volume of the bifurcation.
+    pub v: f64,
+    /// Energy of the prolate (and of the pear) there.
+    pub e: f64,
+    /// The prolate shape at the bifurcation.
+    pub prolate: Solution,
+}
+
+/// Why the pear branch stopped going down in `v`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PearEnd {
+    /// The narrowest neck fell below [`Options::neck_min`]: the budding limit is near.
+    Neck {
+        /// Reduced volume of the first grid shape whose neck is below `neck_min`.
+        v: f64,
+        /// Its neck radius (units of `R0`).
+        neck: f64,
+    },
+    /// The continuation in `v` failed at this `v` (a limit point, or the modes no longer
+    /// resolve the shape).
+    Stalled {
+        /// The last reduced volume reached.
+        v: f64,
+    },
+    /// The branch reached the bottom of the grid.
+    Grid,
+}
+
+/// The pear branch followed over a grid of reduced volumes.
+#[derive(Clone, Debug)]
+pub struct PearBranch {
+    /// Where it leaves the prolate; `None` if the prolate keeps its up–down symmetry (stable
+    /// odd block) down to `v = 0.3`.
+    pub bifurcation: Option<Bifurcation>,
+    /// The pear shapes at the grid values, increasing `v`.
+    pub shapes: Vec<Solution>,
+    /// The last shape reached (the narrowest neck), off the grid.
+    pub last: Option<Solution>,
+    /// Why the continuation stopped.
+    pub end: Option<PearEnd>,
+}
+
+/// The full basis (every `k ≤ K`) of `opts`, at its `c̄0`.
+fn full_basis(opts: &Options) -> Basis {
+    Basis::new(opts.nodes - 1, (1..=opts.modes).collect()).with_c0(opts.c0)
+}
+
+/// The coefficients of a prolate (even modes) in the full basis.
+fn embed(even: &Converged, full: &Basis) -> Vec<f64> {
+    let mut a = vec![0.0; full.modes.len()];
+    for (c, ac) in even.a.iter().enumerate() {
+        a[2 * (c + 1) - 1] = *ac;
+    }
+    a
+}
+
+/// `∇ℒ = ∇e + λ_v ∇v + λ_G ∇G`.
+fn lagrangian_grad(ev: &Eval, lv: f64, lg: f64) -> Vec<f64> {
+    (0..ev.grad_e.len())
+        .map(|k| ev.grad_e[k] + lv * ev.grad_v[k] + lg * ev.grad_g[k])
+        .collect()
+}
+
+/// The smallest eigenvalue `μ` of the odd block of `∇²ℒ` on `∇G⊥`, and its eigenvector in the
+/// full basis (unit, zero on the even modes), at the prolate `a` (full basis) with multiplier
+/// `lv`. `None` if a perturbed shape is not admissible.
+fn odd_stability(full: &Basis, a: &[f64], lv: f64) -> Option<(f64, Vec<f64>)> {
+    let odd: Vec<usize> = (0..a.len()).step_by(2).collect();
+    let n = odd.len();
+    // Odd block of the central-difference Hessian, symmetrised.
+    let mut h = vec![0.0; n * n];
+    let mut ap = a.to_vec();
+    for (col, &k) in odd.iter().enumerate() {
+        ap[k] = a[k] + FD_STEP;
+        let gp = lagrangian_grad(&full.eval(&ap)?, lv, 0.0);
+        ap[k] = a[k] - FD_STEP;
+        let gm = lagrangian_grad(&full.eval(&ap)?, lv, 0.0);
+        ap[k] = a[k];
+        for (row, &i) in odd.iter().enumerate() {
+            let d = 0.25 * (gp[i] - gm[i]) / FD_STEP;
+            h[row * n + col] += d;
+            h[col * n + row] += d;
+        }
+    }
+    // Householder reflection Q = I − 2uuᵀ/(uᵀu) with Q ĝ = e_1: columns 2.. of Q span ∇G⊥.
+    let g: Vec<f64> = odd
+        .iter()
+        .map(|&i| full.eval(a)?.grad_g.get(i).copied())
+        .collect::<Option<_>>()?;
+    let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let mut u: Vec<f64> = g.iter().map(|x| x / gn).collect();
+    let sign = if u[0] >= 0.0 { 1.0 } else { -1.0 };
+    u[0] += sign;
+    let uu: f64 = u.iter().map(|x| x * x).sum();
+    let q = |i: usize, j: usize| f64::from(u8::from(i == j)) - 2.0 * u[i] * u[j] / uu;
+    // B = Qᵀ H Q on the indices 1.., as (H Q) then Qᵀ(·).
+    let m = n - 1;
+    let hq: Vec<f64> = (0..n)
+        .flat_map(|i| (1..n).map(move |j| (i, j)))
+        .map(|(i, j)| (0..n).map(|k| h[i * n + k] * q(k, j)).sum())
+        .collect();
+    let b: Vec<f64> = (1..n)
+        .flat_map(|i| (0..m).map(move |j| (i, j)))
+        .map(|(i, j)| (0..n).map(|k| q(k, i) * hq[k * m + j]).sum())
+        .collect();
+    let (vals, vecs) = symmetric_eigen(&b, m);
+    let y = &vecs[0];
+    let mut phi = vec![0.0; a.len()];
+    for (r, &i) in odd.iter().enumerate() {
+        phi[i] = (0..m).map(|j| q(r, j + 1) * y[j]).sum();
+    }
+    Some((vals[0], phi))
+}
+
+/// The prolate state (tracker at `v`) and its odd stability `μ`, or `None`.
+fn prolate_mu(tr: &mut Tracker, full: &Basis, v: f64) -> Option<(f64, Vec<f64>)> {
+    if !tr.advance(v) {
+        return None;
+    }
+    let c = tr.current();
+    odd_stability(full, &embed(c, full), c.lambda_v)
+}
+
+/// The bifurcation internals: the prolate tracker at `v_b`, its full-basis coefficients and
+/// the direction `φ`.
+struct Onset {
+    prolate: Tracker,
+    a: Vec<f64>,
+    phi: Vec<f64>,
+}
+
+/// Scan the prolate for the first zero of `μ(v)` below 0.99 and refine it.
+fn onset(opts: &Options) -> Option<Onset> {
+    let full = full_basis(opts);
+    let mut tr = Tracker::new(Branch::Prolate, opts);
+    if !tr.start(0.99) {
+        return None;
+    }
+    let mut v_hi = 0.99;
+    let (mut mu_hi, _) = prolate_mu(&mut tr, &full, v_hi)?;
+    let mut hi_state = tr.last.clone();
+    let mut v_lo = v_hi;
+    let mut mu_lo = mu_hi;
+    while mu_lo > 0.0 {
+        if v_lo - SCAN_DV < SCAN_V_MIN {
+            return None;
+        }
+        v_hi = v_lo;
+        mu_hi = mu_lo;
+        hi_state = tr.last.clone();
+        v_lo -= SCAN_DV;
+        mu_lo = prolate_mu(&mut tr, &full, v_lo)?.0;
+    }
+    // Secant (regula falsi with the Illinois modification) between v_lo (μ ≤ 0) and v_hi.
+    let mut side = 0i8;
+    for _ in 0..60 {
+        let v = v_lo - mu_lo * (v_hi - v_lo) / (mu_hi - mu_lo);
+        tr.last = hi_state.clone();
+        let (mu, _) = prolate_mu(&mut tr, &full, v)?;
+        if mu > 0.0 {
+            v_hi = v;
+            mu_hi = mu;
+            hi_state = tr.last.clone();
+            if side == 1 {
+                mu_lo *= 0.5;
+            }
+            side = 1;
+        } else {
+            v_lo = v;
+            mu_lo = mu;
+            if side == -1 {
+                mu_hi *= 0.5;
+            }
+            side = -1;
+        }
+        if v_hi - v_lo < 1e-9 || mu == 0.0 {
+            break;
+        }
+    }
+    let v_b = 0.5 * (v_lo + v_hi);
+    tr.last = hi_state;
+    let (_, phi) = prolate_mu(&mut tr, &full, v_b)?;
+    let a = embed(tr.current(), &full);
+    Some(Onset {
+        prolate: tr,
+        a,
+        phi,
+    })
+}
+
+/// Where the pear branch leaves the prolate at `opts.c0`: the first `v` below 0.99 (down to
+/// 0.3) where the prolate loses stability against up–down asymmetric deformations; `None` if
+/// it does not.
+pub fn pear_bifurcation(opts: &Options) -> Option<Bifurcation> {
+    let o = onset(opts)?;
+    let prolate = o.prolate.solution();
+    Some(Bifurcation {
+        v: prolate.v,
+        e: prolate.e,
+        prolate,
+    })
+}
+
+/// Newton for the stationary shape with amplitude `φ·(a − a_b) = s` and `v` free: the KKT
+/// system `∇e + λ_v ∇v + λ_G ∇G = 0`, `G = 0`, `φ·(a − a_b) − s = 0` in `(a, λ_v, λ_G)`.
+fn newton_amplitude(
+    full: &Basis,
+    a_b: &[f64],
+    phi: &[f64],
+    s: f64,
+    start: (&[f64], f64, f64),
+    set: &NewtonSettings,
+) -> Option<Converged> {
+    let n = a_b.len();
+    let (mut a, mut lv, mut lg) = (start.0.to_vec(), start.1, start.2);
+    for iter in 0..=set.max_iter {
+        let ev = full.eval(&a)?;
+        let grad = lagrangian_grad(&ev, lv, lg);
+        let amp: f64 = phi
+            .iter()
+            .zip(a.iter().zip(a_b))
+            .map(|(p, (x, y))| p * (x - y))
+            .sum();
+        let mut rhs: Vec<f64> = grad.iter().map(|g| -g).collect();
+        rhs.push(-ev.g);
+        rhs.push(-(amp - s));
+        let residual = rhs.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        if residual < set.tol {
+            return Some(Converged {
+                a,
+                lambda_v: lv,
+                lambda_g: lg,
+                eval: ev,
+                iterations: iter,
+                residual,
+            });
+        }
+        if iter == set.max_iter || !residual.is_finite() {
+            return None;
+        }
+        let dim = n + 2;
+        let mut jac = vec![0.0; dim * dim];
+        let mut ap = a.clone();
+        for k in 0..n {
+            ap[k] = a[k] + FD_STEP;
+            let gp = lagrangian_grad(&full.eval(&ap)?, lv, lg);
+            ap[k] = a[k] - FD_STEP;
+            let gm = lagrangian_grad(&full.eval(&ap)?, lv, lg);
+            ap[k] = a[k];
+            for i in 0..n {
+                let d = 0.25 * (gp[i] - gm[i]) / FD_STEP;
+                jac[i * dim + k] += d;
+                jac[k * dim + i] += d;
+            }
+        }
+        for i in 0..n {
+            jac[i * dim + n] = ev.grad_v[i];
+            jac[i * dim + n + 1] = ev.grad_g[i];
+            jac[n * dim + i] = ev.grad_g[i];
+            jac[(n + 1) * dim + i] = phi[i];
+        }
+        let dx = lu_solve(&mut jac, &mut rhs, dim)?;
+        let big = dx[..n].iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        let f = if big > set.max_step {
+            set.max_step / big
+        } else {
+            1.0
+        };
+        for (x, d) in a.iter_mut().zip(&dx) {
+            *x += f * d;
+        }
+        lv += f * dx[n];
+        lg += f * dx[n + 1];
+    }
+    None
+}
+
+/// A point of the continuation: coefficients, `λ_v`, `λ_G`.
+type State = (Vec<f64>, f64, f64);
+
+/// First arclength step (Euclidean norm of the coefficient change).
+const H0: f64 = 0.02;
+/// Largest arclength step.
+const H_MAX: f64 = 0.08;
+/// Arclength step below which the continuation counts as stalled.
+const H_MIN: f64 = 1e-4;
+/// Most arclength steps.
+const MAX_STEPS: usize = 400;
+
+/// Follow the pear branch from its bifurcation (or, without one, from a sphere-with-bud start
+/// that stays asymmetric, see the module docs) by pseudo-arclength continuation in the
+/// coefficients: from the last two states `a_{i−1}`, `a_i`, the secant direction
+/// `d = (a_i − a_{i−1})/|a_i − a_{i−1}|`, the predictor `p = a_i + h d`, and the corrector
+/// solves the KKT system with `v` free and `d·(a − p) = 0` (so the branch may turn in `v`: a
+/// subcritical pitchfork first rises in `v`, folds, and comes back down). Steps grow by 1.5
+/// after a success (at most `H_MAX`) and halve after a failure. The continuation stops when
+/// the narrowest neck falls below `opts.neck_min` ([`PearEnd::Neck`]), when `v` falls below
+/// `v_floor` ([`PearEnd::Grid`]), or when the step falls below `H_MIN` or `MAX_STEPS` are
+/// taken ([`PearEnd::Stalled`]). `shapes` holds every state in the order of the path.
+pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
+    let mut out = PearBranch {
+        bifurcation: None,
+        shapes: Vec::new(),
+        last: None,
+        end: None,
+    };
+    let full = full_basis(opts);
+    let set = NewtonSettings {
+        tol: opts.tol,
+        max_iter: opts.max_iter,
+        max_step: 0.5,
+    };
+    let Some(o) = onset(opts) else {
+        // No bifurcation: a pear branch detached from the prolate, if one exists here.
+        if let Some((prev, cur)) = bud_start(&full, &set) {
+            arclength(&full, &set, prev, cur, v_floor, opts, &mut out);
+        }
+        return out;
+    };
+    let prolate = o.prolate.solution();
+    out.bifurcation = Some(Bifurcation {
+        v: prolate.v,
+        e: prolate.e,
+        prolate,
+    });
+    let v_b = o.prolate.current().eval.v;
+    let lv0 = o.prolate.current().lambda_v;
+    // The first state: amplitude S1 along φ.
+    let a0: Vec<f64> = o.a.iter().zip(&o.phi).map(|(ab, p)| ab + S1 * p).collect();
+    let Some(first) = newton_amplitude(&full, &o.a, &o.phi, S1, (&a0, lv0, 0.0), &set) else {
+        out.end = Some(PearEnd::Stalled { v: v_b });
+        return out;
+    };
+    // The bifurcation point itself is the state before it (the prolate, in the full basis).
+    arclength(
+        &full,
+        &set,
+        (o.a.clone(), lv0, 0.0),
+        first,
+        v_floor,
+        opts,
+        &mut out,
+    );
+    out
+}
+
+/// The pseudo-arclength continuation of [`follow_pear`] from the states `prev` (coefficients
+/// and multipliers) and `cur`, appending to `out.shapes` and setting `out.end`, `out.last`.
+fn arclength(
+    full: &Basis,
+    set: &NewtonSettings,
+    mut prev: State,
+    mut cur: Converged,
+    v_floor: f64,
+    opts: &Options,
+    out: &mut PearBranch,
+) {
+    let mut h = H0;
+    out.end = Some(PearEnd::Stalled { v: cur.eval.v });
+    let mut steps = 0;
+    loop {
+        let s = solution(Branch::Pear, full, &cur);
+        if let Some(neck) = s.neck().filter(|r| *r < opts.neck_min) {
+            out.end = Some(PearEnd::Neck { v: s.v, neck });
+            out.last = Some(s.clone());
+            out.shapes.push(s);
+            break;
+        }
+        if s.v < v_floor {
+            out.end = Some(PearEnd::Grid);
+            out.last = Some(s.clone());
+            out.shapes.push(s);
+            break;
+        }
+        out.shapes.push(s);
+        steps += 1;
+        if steps > MAX_STEPS {
+            out.end = Some(PearEnd::Stalled { v: cur.eval.v });
+            break;
+        }
+        let diff: Vec<f64> = cur.a.iter().zip(&prev.0).map(|(x, y)| x - y).collect();
+        let norm = diff.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let d: Vec<f64> = diff.iter().map(|x| x / norm).collect();
+        let next = loop {
+            let p: Vec<f64> = cur.a.iter().zip(&d).map(|(x, d)| x + h * d).collect();
+            let f = h / norm;
+            let lv = cur.lambda_v + f * (cur.lambda_v - prev.1);
+            let lg = cur.lambda_g + f * (cur.lambda_g - prev.2);
+            let solved = newton_amplitude(full, &p, &d, 0.0, (&p, lv, lg), set).filter(|c| {
+                c.a.iter()
+                    .zip(&p)
+                    .all(|(a, q)| (a - q).abs() <= 0.5 * h.max(0.02))
+            });
+            match solved {
+                Some(c) => {
+                    h = (1.5 * h).min(H_MAX);
+                    break Some(c);
+                }
+                None => {
+                    h *= 0.5;
+                    if h < H_MIN {
+                        break None;
+                    }
+                }
+            }
+        };
+        let Some(next) = next else {
+            out.end = Some(PearEnd::Stalled { v: cur.eval.v });
+            break;
+        };
+        prev = (cur.a.clone(), cur.lambda_v, cur.lambda_g);
+        cur = next;
+    }
+    if out.last.is_none() {
+        out.last = out.shapes.last().cloned();
+    }
+}
+
+/// A start on a pear branch that does not bifurcate from the prolate: a sphere with a bud
+/// (outer arc of radius 1 for `ψ ∈ [0, π − β]`, a neck arc of radius `b` turning back to
+/// `ψ = γ`, a bud arc of radius `R2` up to `ψ = π`; `sin γ = (1 + b) sin β / (R2 + b)` closes
+/// it), projected on the modes and descended to a local minimum at its own `v` (about 0.8);
+/// then a second state at `v − 0.005`, so that the secant heads towards the closing neck.
+/// `None` if the descent ends on an up–down symmetric shape (no pear minimum there) or fails.
+fn bud_start(full: &Basis, set: &NewtonSettings) -> Option<(State, Converged)> {
+    BUD_RADII
+        .iter()
+        .find_map(|&r2| bud_start_with(full, set, r2))
+}
+
+/// Bud radii (mother radius 1) tried by [`bud_start`], in order.
+const BUD_RADII: [f64; 4] = [0.7, 0.5, 0.4, 0.3];
+
+/// [`bud_start`] with bud radius `r2`.
+fn bud_start_with(full: &Basis, set: &NewtonSettings, r2: f64) -> Option<(State, Converged)> {
+    let (r1, b, beta) = (1.0f64, 0.15f64, 0.3f64);
+    let gamma = ((r1 + b) * beta.sin() / (r2 + b)).asin();
+    let l1 = r1 * (PI - beta);
+    let l2 = b * (PI - beta - gamma);
+    let l3 = r2 * (PI - gamma);
+    let len = l1 + l2 + l3;
+    let psi = |t: f64| {
+        let s = t * len;
+        if s < l1 {
+            s / r1
+        } else if s < l1 + l2 {
+            PI - beta - (s - l1) / b
+        } else {
+            gamma + (s - l1 - l2) / r2
+        }
+    };
+    let a0 = project_modes(&full.modes, psi);
+    let v0 = full.eval(&a0)?.v;
+    let first = minimise(full, &a0, v0, true, set);
+    let first = first?;
+    let odd = first.a.iter().step_by(2).map(|x| x * x).sum::<f64>().sqrt();
+    if odd < 1e-3 {
+        return None;
+    }
+    let second = newton(full, &first.a, first.eval.v - 0.005, true, set)?;
+    Some(((first.a.clone(), first.lambda_v, first.lambda_g), second))
+}
+
+/// `a_k = 2 ∫_0^1 (ψ − πt) sin(kπt) dt` for the listed `k` (midpoint rule on 8192 cells).
+fn project_modes(modes: &[usize], psi: impl Fn(f64) -> f64) -> Vec<f64> {
+    let cells = 8192;
+    let h = 1.0 / cells as f64;
+    modes
+        .iter()
+        .map(|&k| {
+            2.0 * h
+                * (0..cells)
+                    .map(|i| {
+                        let t = (i as f64 + 0.5) * h;
+                        (psi(t) - PI * t) * (k as f64 * PI * t).sin()
+                    })
+                    .sum::<f64>()
+        })
+        .collect()
+}
