@@ -276,21 +276,26 @@ fn with_threads<T>(scene: &Scene, f: impl FnOnce() -> T + Send) -> T
 where
     T: Send,
 {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(thread_count(scene))
+        .build()
+        .expect("thread pool")
+        .install(f)
+}
+
+/// The worker threads a run of `scene` uses: its `threads`, else one for a computed grid of
+/// fewer than [`SERIAL_BELOW`] points, else as many as the global pool has.
+pub fn thread_count(scene: &Scene) -> usize {
     let mirrored = match &scene.symmetry {
         crate::problem::config::Symmetry::Axes(a) => a.len() as u32,
         crate::problem::config::Symmetry::Auto(_) => 0,
     };
     let points = scene.n.iter().fold(1usize, |p, &m| p.saturating_mul(m)) >> mirrored;
-    let threads = scene.threads.unwrap_or(if points < SERIAL_BELOW {
+    scene.threads.unwrap_or(if points < SERIAL_BELOW {
         1
     } else {
         rayon::current_num_threads()
-    });
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool")
-        .install(f)
+    })
 }
 
 /// Print the one-line result of a run; its exit code (128 + the signal that interrupted it).
