@@ -50,3 +50,25 @@ def test_an_axisymmetric_shape_is_drawn_at_its_volume_and_relaxes():
     # the piecewise-linear level set (3e-3 measured at R0 = 8h).
     assert abs(start_v - sharp_v) < 1e-2, out
     assert re.search(r"after 40 steps", out), out
+
+
+def test_the_dask_ladder_runs_and_a_worker_gives_this_processes_bits():
+    pytest.importorskip("distributed")
+    out = run_example("dask_c0_ladder.py", "--workers", "2")
+    assert len(re.findall(r"^ *0\.[0-3]00 ", out, flags=re.M)) == 4, out
+
+    sys.path.insert(0, str(ROOT / "examples"))
+    try:
+        import dask
+        import dask_c0_ladder as ladder
+        from dask.distributed import Client, LocalCluster
+
+        dask.config.set({"distributed.worker.multiprocessing-method": "spawn"})
+        with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as cluster:
+            with Client(cluster) as client:
+                remote = client.submit(ladder.relax, 0.1, 32).result()
+        local = ladder.relax(0.1, 32)
+    finally:
+        sys.path.remove(str(ROOT / "examples"))
+    del remote["wall_seconds"], local["wall_seconds"]
+    assert remote == local
