@@ -101,25 +101,50 @@ pub fn run(
 ) -> Ended {
     let interrupt = AtomicBool::new(false);
     let failure = Mutex::new(None);
-    let done = (Mutex::new(false), Condvar::new());
-    let mut keyboard = None;
     let Stepper {
         simulation,
         recorder,
         pool,
     } = stepper;
+    let work = || {
+        let mut watch = Watch {
+            interrupt: &interrupt,
+            callback,
+            failure: &failure,
+        };
+        let r = pool.install(|| simulation.run(rules, &mut [recorder, &mut watch]));
+        (r, simulation.clock.t)
+    };
+    let ((result, t), keyboard) = off_thread(py, work, || interrupt.store(true, Ordering::Relaxed));
+    if let Some(e) = keyboard {
+        return Ended::Raised(e);
+    }
+    if let Some(e) = failure.into_inner().expect("not poisoned") {
+        return Ended::Raised(e);
+    }
+    match result {
+        Ok(stopped) => Ended::Stopped(stopped.as_str()),
+        Err(e) => Ended::Failed(e, t),
+    }
+}
+
+/// Run `work` on a new thread with the GIL released, letting Python handle signals every
+/// [`POLL`] meanwhile; at the first exception a signal handler raises (`KeyboardInterrupt`),
+/// call `on_signal` (to ask `work` to stop) and keep waiting. Returns what `work` returned and
+/// that exception, if any. A panic in `work` is resumed here.
+pub fn off_thread<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> T + Send,
+    on_signal: impl Fn(),
+) -> (T, Option<PyErr>) {
+    let done = (Mutex::new(false), Condvar::new());
+    let mut raised = None;
     let result = std::thread::scope(|s| {
         let worker = s.spawn(|| {
-            let mut watch = Watch {
-                interrupt: &interrupt,
-                callback,
-                failure: &failure,
-            };
-            let r = pool.install(|| simulation.run(rules, &mut [recorder, &mut watch]));
-            let t = simulation.clock.t;
+            let r = work();
             *done.0.lock().expect("not poisoned") = true;
             done.1.notify_all();
-            (r, t)
+            r
         });
         loop {
             let finished = py.detach(|| {
@@ -133,27 +158,17 @@ pub fn run(
             if finished {
                 break;
             }
-            if keyboard.is_none() {
+            if raised.is_none() {
                 if let Err(e) = py.check_signals() {
-                    interrupt.store(true, Ordering::Relaxed);
-                    keyboard = Some(e);
+                    on_signal();
+                    raised = Some(e);
                 }
             }
         }
         worker.join()
     });
-    let (result, t) = match result {
-        Ok(r) => r,
-        Err(panic) => std::panic::resume_unwind(panic),
-    };
-    if let Some(e) = keyboard {
-        return Ended::Raised(e);
-    }
-    if let Some(e) = failure.into_inner().expect("not poisoned") {
-        return Ended::Raised(e);
-    }
     match result {
-        Ok(stopped) => Ended::Stopped(stopped.as_str()),
-        Err(e) => Ended::Failed(e, t),
+        Ok(r) => (r, raised),
+        Err(panic) => std::panic::resume_unwind(panic),
     }
 }

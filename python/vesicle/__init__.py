@@ -24,6 +24,20 @@ Names:
 """
 
 from ._vesicle import BlowUp, InvalidInput, Scene, Simulation, __version__
-from . import axisym
+from . import axisym, commands
+from .commands import cli, diagram, diagram_merge, read_tables, study
 
-__all__ = ["Scene", "Simulation", "InvalidInput", "BlowUp", "axisym", "__version__"]
+__all__ = [
+    "Scene",
+    "Simulation",
+    "InvalidInput",
+    "BlowUp",
+    "axisym",
+    "commands",
+    "cli",
+    "study",
+    "diagram",
+    "diagram_merge",
+    "read_tables",
+    "__version__",
+]
