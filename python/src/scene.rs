@@ -11,8 +11,6 @@ use vesicle::problem::config;
 
 /// A validated scene: what `vesicle run` reads from a scene file.
 ///
-/// Scene(spec, overrides=None)
-///
 /// `spec` is a dict (the JSON object of a scene file) or the path of a scene file (str or
 /// os.PathLike; relative file names inside it are taken beside it, as the command line does).
 /// `overrides` are applied before validation, like `--set`: a dict `{"dt": 0.05,

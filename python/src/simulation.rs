@@ -25,8 +25,6 @@ use vesicle::problem::setup;
 /// A simulation of a scene: the engine the scene asks for, prepared and constrained exactly
 /// as `vesicle run` does, at t = 0.
 ///
-/// Simulation(scene, threads=None)
-///
 /// `scene` is a Scene (or anything Scene() accepts: a dict or a scene-file path). `threads`
 /// is the number of worker threads (default: the scene's `threads`, else one for a computed
 /// grid below 2^17 points and every core above, as on the command line).
@@ -415,10 +413,10 @@ impl Simulation {
         )
     }
 
-    /// The φ = 0 level set's measures as a dict {"area", "volume", "reduced_volume"}: area and
-    /// enclosed volume in 3D, perimeter and enclosed area in 2D. `refined=True` measures on
-    /// the band-limited interpolant at h/2 with the volume extrapolated (accurate enough for
-    /// shape diagrams; needs a periodic full box, i.e. no mirrored axes).
+    /// The φ = 0 level set's measures on the full box as a dict {"area", "volume",
+    /// "reduced_volume"}: area and enclosed volume in 3D, perimeter and enclosed area in 2D.
+    /// `refined=True` measures again on the band-limited interpolant at h/2 and extrapolates
+    /// the volume (accurate enough for shape diagrams).
     #[pyo3(signature = (refined=false))]
     fn levelset<'py>(&self, py: Python<'py>, refined: bool) -> PyResult<Bound<'py, PyAny>> {
         let state = self.state()?;
