@@ -267,6 +267,33 @@ pub fn main() -> i32 {
     }
 }
 
+/// Run the command line `args` (the program name first) in this process, as [`main`] does
+/// but returning the error instead of printing it: print what the command prints and return
+/// its exit code (0, or 128 + the signal that ended a run). `--help` and `--version` print and
+/// return 0.
+///
+/// # Errors
+/// `Error::Config` on field `(command line)` with clap's message for arguments that do not
+/// parse; otherwise the command's error.
+pub fn run_args<I, T>(args: I) -> Result<i32, Error>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    match Cli::try_parse_from(args) {
+        Ok(cli) => dispatch(cli),
+        Err(e) if e.exit_code() == 0 => {
+            let _ = e.print();
+            Ok(0)
+        }
+        Err(e) => {
+            let text = e.render().to_string();
+            let reason = text.strip_prefix("error: ").unwrap_or(&text).trim_end();
+            Err(Error::config("(command line)", reason))
+        }
+    }
+}
+
 /// Exit code of an error: 2 invalid input, 3 blow-up, 1 otherwise.
 pub fn exit_code(e: &Error) -> i32 {
     match e {

@@ -200,11 +200,40 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<Outcome> {
 /// otherwise as [`run`].
 pub fn resume(
     dir: &Path,
-    mut checkpoint: Checkpoint<'static>,
+    checkpoint: Checkpoint<'static>,
     scene: &Scene,
     progress: bool,
 ) -> Result<Outcome> {
     let _lock = RunLock::acquire(dir)?;
+    let (simulation, problem) = restore(checkpoint, scene)?;
+    let clock = simulation.clock;
+    let (series, history) = TimeSeries::resume(&dir.join("timeseries.csv"), clock.step)?;
+    let recorder = Recorder::resuming(scene.records(), series, history);
+    eprintln!(
+        "{}\n  resuming at step {} t = {:.6e}",
+        describe(scene, &problem, simulation.engine().name()),
+        clock.step,
+        clock.t
+    );
+    let opts = RunOptions {
+        out: dir.to_path_buf(),
+        force: false,
+        progress,
+    };
+    drive(scene, &problem.grid, simulation, recorder, &opts)
+}
+
+/// The simulation a `checkpoint` holds, for `scene` (its scene after the overrides of
+/// [`resumed_scene`]): the engine rebuilt on the scene's grid (the problem's frame, returned
+/// beside it, without an initial field), its area constraint and state restored, and the clock
+/// where the checkpoint left it. Stepping it continues the run that wrote the checkpoint exactly.
+///
+/// # Errors
+/// `Error::Config` on field `checkpoint` if the checkpoint does not fit the scene.
+pub fn restore(
+    mut checkpoint: Checkpoint<'static>,
+    scene: &Scene,
+) -> Result<(Simulation, Problem)> {
     let problem = setup::frame(scene)?;
     let mut engine = build_engine(scene, &problem)?;
     let target = scene
@@ -223,22 +252,7 @@ pub fn resume(
     let mut simulation = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
     simulation.clock = clock;
     simulation.timers = checkpoint.timers;
-    // The engine holds the state now: the checkpoint's copy is not kept through the run.
-    drop(checkpoint.engine);
-    let (series, history) = TimeSeries::resume(&dir.join("timeseries.csv"), clock.step)?;
-    let recorder = Recorder::resuming(scene.records(), series, history);
-    eprintln!(
-        "{}\n  resuming at step {} t = {:.6e}",
-        describe(scene, &problem, simulation.engine().name()),
-        clock.step,
-        clock.t
-    );
-    let opts = RunOptions {
-        out: dir.to_path_buf(),
-        force: false,
-        progress,
-    };
-    drive(scene, &problem.grid, simulation, recorder, &opts)
+    Ok((simulation, problem))
 }
 
 /// Top-level keys a resumed run may change.
@@ -408,7 +422,12 @@ fn write_final(
     std::fs::write(&path, text).map_err(|source| Error::Io { path, source })
 }
 
-fn write_charts(out: &Path, history: &[Record]) -> Result<()> {
+/// The charts of a run's time series `history` into the folder `out`: `energy.png` (e(t)) and
+/// `residual.png` (RMS(μ − μ̄) against t, log scale).
+///
+/// # Errors
+/// `Error::Output` if a chart cannot be written.
+pub fn write_charts(out: &Path, history: &[Record]) -> Result<()> {
     let series = |f: fn(&Record) -> f64| history.iter().map(|r| (r.t, f(r))).collect::<Vec<_>>();
     output::chart::write_timeseries_png(
         &out.join("energy.png"),

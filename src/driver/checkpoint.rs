@@ -19,7 +19,7 @@
 //! message, never half-loaded.
 
 use crate::driver::schedule::{self, Timer};
-use crate::driver::simulation::Clock;
+use crate::driver::simulation::{Clock, Simulation};
 use crate::engines::{Saved, SavedArray};
 use crate::error::{Error, Result};
 use ndarray::Array3;
@@ -88,6 +88,21 @@ fn clock_values(c: &Clock) -> [f64; 7] {
         c.rejected as f64,
         c.wall_seconds,
     ]
+}
+
+impl<'a> Checkpoint<'a> {
+    /// The checkpoint of `simulation`'s current state, of a run of the resolved scene
+    /// `scene` (`summary.json`'s `"spec"`), by this program version; it borrows the engine's
+    /// arrays.
+    pub fn of(simulation: &'a Simulation, scene: Value) -> Self {
+        Checkpoint {
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            scene,
+            clock: simulation.clock,
+            timers: simulation.timers.clone(),
+            engine: simulation.engine().save(),
+        }
+    }
 }
 
 impl Checkpoint<'_> {

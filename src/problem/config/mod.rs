@@ -43,7 +43,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
             format!("{} cannot be read: {e}", path.display()),
         )
     })?;
-    let mut value: Value = serde_json::from_slice(&bytes).map_err(|e| {
+    let value: Value = serde_json::from_slice(&bytes).map_err(|e| {
         let reason = format!("{} is not valid JSON: {e}", path.display());
         let text = std::str::from_utf8(&bytes).unwrap_or("");
         match nonfinite_field(text, e.line(), e.column()) {
@@ -53,20 +53,37 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
             _ => Error::config("(file)", reason),
         }
     })?;
+    load_value(value, overrides, Some(path))
+}
+
+/// A scene from its JSON `value` (as read from a scene file), with `key=value` `overrides`
+/// applied and validated exactly as [`load`] does: relative file paths inside the scene
+/// (`initial.file`, a shape's `contour`, a `c0` field file) are taken beside `scene_file` when
+/// it is given and such a file exists there, else as they are.
+///
+/// # Errors
+/// As [`load`], past reading the file.
+pub fn load_value(
+    mut value: Value,
+    overrides: &[String],
+    scene_file: Option<&Path>,
+) -> Result<Scene> {
     for o in overrides {
         apply_override(&mut value, o)?;
     }
     let mut scene = from_value(value)?;
-    match &mut scene.initial {
-        Initial::File { file } => *file = resolve_relative(path, file),
-        Initial::Shape(shape) => {
-            for contour in shape.contours_mut() {
-                *contour = resolve_relative(path, contour);
+    if let Some(path) = scene_file {
+        match &mut scene.initial {
+            Initial::File { file } => *file = resolve_relative(path, file),
+            Initial::Shape(shape) => {
+                for contour in shape.contours_mut() {
+                    *contour = resolve_relative(path, contour);
+                }
             }
         }
-    }
-    if let C0Spec::Field(C0Field::File(f)) = &mut scene.c0 {
-        f.file = resolve_relative(path, &f.file);
+        if let C0Spec::Field(C0Field::File(f)) = &mut scene.c0 {
+            f.file = resolve_relative(path, &f.file);
+        }
     }
     scene.validate()?;
     crate::problem::memory::check(&scene)?;

@@ -1,0 +1,90 @@
+//! The axisymmetric sharp-interface reference (c0 = 0 shape diagram) as NumPy arrays.
+
+use crate::errors::check;
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use vesicle::analysis::axisym::{self, Branch, Options, Solution};
+use vesicle::error::Error;
+
+fn branch(py: Python<'_>, name: &str) -> PyResult<Branch> {
+    Branch::ALL
+        .into_iter()
+        .find(|b| b.name() == name)
+        .ok_or_else(|| {
+            let e = Error::config(
+                "branch",
+                format!("unknown branch {name:?}: expected prolate, oblate or stomatocyte"),
+            );
+            crate::errors::to_py(py, e, None)
+        })
+}
+
+/// A solution as a dict: scalars and the contour as arrays.
+fn solution<'py>(py: Python<'py>, s: &Solution) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("branch", s.branch.name())?;
+    d.set_item("v", s.v)?;
+    d.set_item("e", s.e)?;
+    d.set_item("sigma", s.sigma)?;
+    d.set_item("pressure", s.pressure)?;
+    d.set_item("length", s.length())?;
+    d.set_item("self_intersecting", s.self_intersecting())?;
+    d.set_item("residual", s.residual)?;
+    d.set_item("s", PyArray1::from_slice(py, &s.s))?;
+    d.set_item("r", PyArray1::from_slice(py, &s.r))?;
+    d.set_item("z", PyArray1::from_slice(py, &s.z))?;
+    d.set_item("psi", PyArray1::from_slice(py, &s.psi))?;
+    let modes: Vec<i64> = s.modes.iter().map(|&k| k as i64).collect();
+    d.set_item("modes", PyArray1::from_vec(py, modes))?;
+    d.set_item("coefficients", PyArray1::from_slice(py, &s.coefficients))?;
+    Ok(d)
+}
+
+/// The stationary shape of `branch` at reduced volume `v` (see vesicle.axisym.solve).
+#[pyfunction]
+#[pyo3(signature = (branch_name, v, nodes=241))]
+pub fn axisym_solve<'py>(
+    py: Python<'py>,
+    branch_name: &str,
+    v: f64,
+    nodes: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let b = branch(py, branch_name)?;
+    let opts = Options::with_nodes(nodes);
+    let s = check(py, py.detach(|| axisym::solve(b, v, &opts)))?;
+    solution(py, &s)
+}
+
+/// A branch followed over reduced volumes `vs` (see vesicle.axisym.follow).
+#[pyfunction]
+#[pyo3(signature = (branch_name, vs, nodes=241))]
+pub fn axisym_follow<'py>(
+    py: Python<'py>,
+    branch_name: &str,
+    vs: Vec<f64>,
+    nodes: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let b = branch(py, branch_name)?;
+    if nodes < 9 {
+        let e = Error::config("nodes", format!("need at least 9 nodes, got {nodes}"));
+        return Err(crate::errors::to_py(py, e, None));
+    }
+    let opts = Options::with_nodes(nodes);
+    let f = py.detach(|| axisym::follow(b, &vs, &opts));
+    let d = PyDict::new(py);
+    let col = |g: fn(&Solution) -> f64| f.shapes.iter().map(g).collect::<Vec<f64>>();
+    d.set_item("branch", b.name())?;
+    d.set_item("v", PyArray1::from_vec(py, col(|s| s.v)))?;
+    d.set_item("e", PyArray1::from_vec(py, col(|s| s.e)))?;
+    d.set_item("sigma", PyArray1::from_vec(py, col(|s| s.sigma)))?;
+    d.set_item("pressure", PyArray1::from_vec(py, col(|s| s.pressure)))?;
+    d.set_item("end", f.end)?;
+    let shapes = f
+        .shapes
+        .iter()
+        .map(|s| solution(py, s))
+        .collect::<PyResult<Vec<_>>>()?;
+    d.set_item("shapes", shapes)?;
+    Ok(d)
+}

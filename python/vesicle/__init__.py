@@ -1,0 +1,43 @@
+"""vesicle: shapes of lipid vesicles with the phase-field model of Campelo & Hernández-Machado,
+driven from Python.
+
+The engine is the Rust library behind the ``vesicle`` command line; this package runs it in
+process and hands every field and time series back as NumPy arrays::
+
+    import vesicle
+    scene = vesicle.Scene("runs/prolate3d.json", overrides={"max_steps": 200})
+    sim = vesicle.Simulation(scene)
+    why = sim.run()                      # the scene's stop rules, as `vesicle run`
+    print(why, sim.t, sim.reduced_energy, sim.residual)
+    phi = sim.phi                        # full box, read-only float64 array
+    e = sim.history["reduced_energy"]    # the time series, one array per column
+
+Names:
+
+* :class:`Scene` -- a scene from a dict or a scene file, with overrides, validated as the
+  command line validates it;
+* :class:`Simulation` -- run / step / checkpoint / resume, state, ``phi``, ``history``,
+  ``surface()``, writers (``.npy``, ``.vti``, ``.ply``, PNG, charts);
+* :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (c0 = 0);
+* :exc:`InvalidInput` (a ``ValueError`` with ``field``), :exc:`BlowUp` (``step``, ``t``,
+  ``dt``, ``check``); file errors are ``OSError``.
+"""
+
+from ._vesicle import BlowUp, InvalidInput, Scene, Simulation, __version__
+from . import axisym, commands
+from .commands import cli, diagram, diagram_merge, read_tables, study
+
+__all__ = [
+    "Scene",
+    "Simulation",
+    "InvalidInput",
+    "BlowUp",
+    "axisym",
+    "commands",
+    "cli",
+    "study",
+    "diagram",
+    "diagram_merge",
+    "read_tables",
+    "__version__",
+]

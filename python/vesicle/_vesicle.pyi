@@ -1,0 +1,114 @@
+"""Type stubs of the compiled module ``vesicle._vesicle`` (re-exported by ``vesicle``)."""
+
+import os
+from typing import Any, Callable, Literal, Mapping, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+Overrides = Mapping[str, Any] | Sequence[str] | None
+StopReason = Literal["stationary", "t_end", "max_steps", "stalled", "callback"]
+Record = dict[str, float | int]
+
+class InvalidInput(ValueError):
+    """Invalid input, with the command line's message; ``field`` is the dotted scene key."""
+
+    field: str
+    reason: str
+
+class BlowUp(RuntimeError):
+    """A step failed; the simulation keeps its last good state."""
+
+    step: int
+    t: float
+    dt: float
+    check: str
+
+class Scene:
+    """A validated scene: a dict or a scene-file path, with ``--set``-like overrides."""
+
+    def __init__(self, spec: Mapping[str, Any] | str | os.PathLike[str], overrides: Overrides = None) -> None: ...
+    def with_overrides(self, overrides: Mapping[str, Any] | Sequence[str]) -> Scene:
+        """This scene with more overrides, validated again."""
+    def to_dict(self) -> dict[str, Any]:
+        """The scene with every default explicit."""
+    def to_json(self) -> str:
+        """The scene as the text of a scene file."""
+    @property
+    def dim(self) -> int: ...
+    @property
+    def n(self) -> list[int]: ...
+    @property
+    def h(self) -> float: ...
+    @property
+    def eps(self) -> float: ...
+    @property
+    def dt(self) -> float: ...
+
+class Simulation:
+    """A scene's simulation, prepared and constrained as ``vesicle run`` does."""
+
+    def __init__(self, scene: Scene | Mapping[str, Any] | str | os.PathLike[str], threads: int | None = None) -> None: ...
+    @staticmethod
+    def resume(folder: str | os.PathLike[str], overrides: Overrides = None, threads: int | None = None) -> Simulation:
+        """Continue the run whose checkpoint.bin is in ``folder``, exactly."""
+    def run(
+        self,
+        until: float | None = None,
+        max_steps: int | None = None,
+        stop_residual: float | None = None,
+        callback: Callable[[Record], bool | None] | None = None,
+        every: int = 1,
+    ) -> StopReason:
+        """Step until a stop rule fires; the reason it stopped."""
+    def step(self, n: int = 1, callback: Callable[[Record], bool | None] | None = None, every: int = 1) -> StopReason:
+        """Take ``n`` steps."""
+    def checkpoint(self, folder: str | os.PathLike[str]) -> None:
+        """Write folder/checkpoint.bin (atomically) and folder/timeseries.csv."""
+    @property
+    def scene(self) -> Scene: ...
+    @property
+    def t(self) -> float: ...
+    @property
+    def step_count(self) -> int: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def record(self) -> Record: ...
+    @property
+    def energy(self) -> float: ...
+    @property
+    def area(self) -> float: ...
+    @property
+    def volume(self) -> float: ...
+    @property
+    def reduced_volume(self) -> float: ...
+    @property
+    def reduced_energy(self) -> float: ...
+    @property
+    def sigma(self) -> float: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def phi(self) -> npt.NDArray[np.float64]:
+        """φ on the full box, read-only, shape n."""
+    @property
+    def history(self) -> dict[str, npt.NDArray[Any]]:
+        """The time series, one array per timeseries.csv column."""
+    @property
+    def threads(self) -> int: ...
+    def surface(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], float, float, float]:
+        """(vertices, faces, area, volume, v) of the φ = 0 surface (3D)."""
+    def levelset(self, refined: bool = False) -> dict[str, float]:
+        """{"area", "volume", "reduced_volume"} of the φ = 0 level set."""
+    def write_npy(self, path: str | os.PathLike[str]) -> None: ...
+    def write_vti(self, path: str | os.PathLike[str], name: str = "phi") -> None: ...
+    def write_ply(self, path: str | os.PathLike[str]) -> None: ...
+    def write_png(self, path: str | os.PathLike[str], title: str | None = None) -> None: ...
+    def write_charts(self, folder: str | os.PathLike[str]) -> None: ...
+
+def axisym_solve(branch_name: str, v: float, nodes: int = 241) -> dict[str, Any]: ...
+def axisym_follow(branch_name: str, vs: Sequence[float], nodes: int = 241) -> dict[str, Any]: ...
+def cli(args: Sequence[str]) -> int: ...

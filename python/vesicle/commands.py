@@ -1,0 +1,112 @@
+"""The command line's studies and shape diagram from Python: each runs in this process, writes
+its folder (CSV files, charts, text) exactly as the ``vesicle`` program does, and returns its
+tables as NumPy arrays.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from ._vesicle import cli as _cli
+
+PathLike = str | os.PathLike[str]
+Tables = dict[str, dict[str, np.ndarray]]
+
+STUDIES = ("convergence", "precision", "stability", "stationary")
+
+
+def cli(*args: str | os.PathLike[str]) -> int:
+    """Run ``vesicle ARGS...`` in this process (e.g. ``cli("axisym", "--out", "out/axisym")``)
+    and return its exit code: 0, or 128 + the signal that ended a run (Ctrl-C on a run stops
+    it after its step, writing its outputs). Invalid arguments or input raise InvalidInput, a
+    run that blows up BlowUp, file errors OSError. The engine runs with the GIL released;
+    Ctrl-C during a study or the diagram raises KeyboardInterrupt only once it has finished.
+    """
+    return _cli([os.fspath(a) for a in args])
+
+
+def read_tables(folder: PathLike) -> Tables:
+    """Every ``*.csv`` of ``folder`` as {file stem: {column: array}}: a column of numbers as a
+    float64 array (empty cells as NaN), any other as an array of str."""
+    tables: Tables = {}
+    for path in sorted(pathlib.Path(folder).glob("*.csv")):
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+        if not rows:
+            continue
+        header, body = rows[0], rows[1:]
+        columns = {}
+        for i, name in enumerate(header):
+            cells = [r[i] if i < len(r) else "" for r in body]
+            try:
+                columns[name] = np.array([float(c) if c != "" else np.nan for c in cells])
+            except ValueError:
+                columns[name] = np.array(cells)
+        tables[path.stem] = columns
+    return tables
+
+
+def study(kind: str, file: PathLike, out: PathLike, quick: bool = False, force: bool = False) -> Tables:
+    """Run ``vesicle study KIND FILE --out OUT`` and return its tables (read_tables(out)).
+
+    ``kind`` is "convergence", "precision" or "stability" (``file`` a study file, e.g.
+    runs/studies/stability.json; ``quick`` runs its quick block) or "stationary" (``file`` a
+    scene file; ``quick`` does not apply). ``force`` replaces an existing ``out``.
+    """
+    if kind not in STUDIES:
+        raise ValueError(f"unknown study {kind!r}: expected one of {', '.join(STUDIES)}")
+    args = ["study", kind, file, "--out", out]
+    if quick:
+        if kind == "stationary":
+            raise ValueError("the stationary study has no quick variant")
+        args.append("--quick")
+    if force:
+        args.append("--force")
+    cli(*args)
+    return read_tables(out)
+
+
+def diagram(file: PathLike, out: PathLike, case: int | None = None, jobs: int | None = None,
+            force: bool = False) -> Any:
+    """Run the phase-field shape diagram of the diagram file ``file`` into ``out``.
+
+    Without ``case``: every case (``jobs`` at a time, one thread each), merged; returns the
+    tables (diagram, cases, transitions, reference) as read_tables(out). With ``case=K``: that
+    case only, into OUT/cases/<case>/, returning its result (result.json) as a dict; merge the
+    finished cases with diagram_merge(). ``force`` redoes what exists.
+    """
+    args = ["diagram", file, "--out", out]
+    if case is not None:
+        args += ["--case", str(case)]
+    if jobs is not None:
+        args += ["--jobs", str(jobs)]
+    if force:
+        args.append("--force")
+    cli(*args)
+    if case is None:
+        return read_tables(out)
+    results = list(pathlib.Path(out, "cases").glob(f"*/result.json"))
+    for path in results:
+        result = json.loads(path.read_text())
+        if result.get("index") == case:
+            return result
+    raise FileNotFoundError(f"case {case} wrote no result.json under {out}/cases")
+
+
+def diagram_merge(file: PathLike, out: PathLike, force: bool = False) -> Tables:
+    """Merge the finished cases of OUT/cases/ into the diagram's CSV files and charts, and
+    return the tables."""
+    args = ["diagram", file, "--out", out, "--merge"]
+    if force:
+        args.append("--force")
+    cli(*args)
+    return read_tables(out)
+
+
+__all__ = ["STUDIES", "cli", "diagram", "diagram_merge", "read_tables", "study"]
