@@ -299,7 +299,8 @@ pub struct OutputSpec {
     /// every step when nothing bounds the number of steps (no `max_steps`, and no `t_end` or
     /// adaptive steps: a relaxation stopped by `stop_residual` alone).
     pub record_every: Option<usize>,
-    /// Snapshots (`.npy`, `.vti`, `.png`) every this many steps; 0 writes only the final state.
+    /// Snapshots (`.npy`, `.vti`, `.png`) of the initial state (step 0) and every this many steps
+    /// after it; 0 writes only the final state.
     pub snapshot_every: usize,
     /// Write VTK ImageData `.vti` snapshots.
     pub vti: bool,
