@@ -1,13 +1,16 @@
 //! Results against the thread count: a run on 1 thread and the same run on 2 threads.
 //!
-//! * The spectral engines (SBDF1, SBDF2 with adaptive steps) and the relaxational route give
-//!   bitwise the same φ: their sweeps split the box by index, and what feeds back into φ (the
-//!   transforms, the projection's σ, the L-BFGS inner products) does not depend on where the
-//!   split falls.
-//! * The FD engine does not: its fused sweep gives each thread one slab of planes and adds the
-//!   slabs' partial sums in slab order, so A_h (and with it σ, from the projection or the
-//!   Lagrangian update) is summed in another association on 2 threads, and φ differs by
-//!   round-off (measured: 1e-18 to 2e-15 after 10–20 steps at 16³ and 32³).
+//! * The spectral engines (SBDF1, SBDF2 with adaptive steps and the Lagrangian area) and the
+//!   relaxational route give bitwise the same φ on these boxes (also measured at 32³ on 1–4
+//!   threads, and the spectral engines at 64³ on 1 and 2): the transforms split the box by
+//!   index and compute each line alike whatever the split, and the sums that feed back into φ
+//!   (σ, the L-BFGS inner products) came out the same. The line search compares energies whose
+//!   last bits depend on the thread count (below), so a near-tie there could still part them.
+//! * The FD engine does not: A_h, which sets σ, is summed in an order that follows the threads
+//!   (the fused sweep of the Lagrangian update gives each thread one slab of planes and adds
+//!   the slabs' partial sums; the projection's area form is a rayon sum over rows), so σ and
+//!   through it φ differ by round-off (measured: 3e-18 to 2e-15 after 10–20 steps at 16³ and
+//!   32³, full and mirrored boxes).
 //! * The measure columns (F, A, V) of every engine are rayon sums over chunks whose combination
 //!   follows the pool's splits: they agree to round-off, not bit for bit.
 

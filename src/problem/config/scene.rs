@@ -315,7 +315,8 @@ pub struct OutputSpec {
     /// When a `timeseries.csv` row is written (instead of `record_every`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub records: Option<Schedule>,
-    /// Snapshots (`.npy`, `.vti`, `.png`) every this many steps; 0 writes only the final state.
+    /// Snapshots (`.npy`, `.vti`, `.png`) of the initial state (step 0) and every this many steps
+    /// after it; 0 writes only the final state.
     pub snapshot_every: usize,
     /// When snapshots are written (instead of `snapshot_every`).
     #[serde(skip_serializing_if = "Option::is_none")]
