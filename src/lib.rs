@@ -19,6 +19,8 @@
 //! * [`analysis`]: the φ = 0 level set, curves and fits, and the sharp-interface axisymmetric
 //!   reference;
 //! * [`output`]: the writers (npy, vti, ply, png, charts, shaded views, gif) and the folder lock;
+//! * [`cpu`]: the cores and vector instructions (detected once) and the worker pool a command
+//!   runs in;
 //! * [`commands`]: the command line, `run`/`resume`, `compare`, `render`, `measure`, the
 //!   phase-field shape diagram and the studies.
 //!

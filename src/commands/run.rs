@@ -497,3 +497,45 @@ pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::resumed_scene;
+    use crate::problem::config::Schedule;
+    use serde_json::json;
+
+    /// A checkpoint's resolved scene holds the step-count forms; setting the schedule form of an
+    /// output on resume replaces them, and setting a step-count key replaces a schedule.
+    #[test]
+    fn one_form_of_an_output_schedule_replaces_the_other_on_resume() {
+        let resolved = json!({
+            "dim": 2, "n": [32, 32], "dt": 0.1, "max_steps": 10,
+            "initial": {"shape": "sphere", "radius": 6.0},
+            "output": {"record_every": 5, "checkpoint_every": 3, "checkpoint_minutes": 10.0,
+                       "snapshots": {"every_time": 2.0}}
+        });
+        let s = resumed_scene(
+            resolved.clone(),
+            &[
+                r#"output.records={"every_time": 0.5}"#.into(),
+                r#"output.checkpoints={"every_minutes": 1}"#.into(),
+                "output.snapshot_every=4".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(s.records(), Schedule::time(0.5));
+        assert_eq!(s.checkpoints(), Schedule::minutes(1.0));
+        assert_eq!(s.snapshots(), Schedule::steps(4));
+        assert_eq!(s.output.record_every, None);
+        // Without such overrides the checkpoint's forms stay, and a bad value names its key.
+        let s = resumed_scene(resolved.clone(), &[]).unwrap();
+        assert_eq!(s.records(), Schedule::steps(5));
+        let e = resumed_scene(resolved, &[r#"output.records={"every_steps": 0}"#.into()]);
+        assert!(
+            e.unwrap_err()
+                .to_string()
+                .contains("output.records.every_steps"),
+            "names the field"
+        );
+    }
+}

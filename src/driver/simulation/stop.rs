@@ -46,7 +46,8 @@ impl StopRules {
     }
 
     /// Whether `max_wall_minutes` would be passed by one more step: `elapsed` seconds of
-    /// stepping so far in this call plus its `longest_step` exceed it.
+    /// stepping so far in this call plus its `longest_step` (the step and its observers'
+    /// writes) exceed it.
     pub fn wall_time_up(&self, elapsed: f64, longest_step: f64) -> bool {
         self.max_wall_minutes
             .is_some_and(|m| elapsed + longest_step > 60.0 * m)
