@@ -71,7 +71,9 @@ fn c0_zero_reproduces_the_symmetric_diagram() {
 }
 
 /// Convergence in the number of modes at c̄0 = 1, prolate v = 0.75: doubling K from 40 to 80
-/// changes e by less than 1e-6 (the target accuracy of e is 1e-5; measured: see the report).
+/// changes e by less than 1e-6 (the target accuracy of e is 1e-5). Measured: K = 40, 80 and
+/// 160 all give e = 0.5724873252122 (agreement to 1e-13, as at c0 = 0: the c̄0 term adds
+/// only smooth integrands).
 #[test]
 fn converges_in_modes_at_c0() {
     let e = |nodes: usize| {
