@@ -97,34 +97,34 @@ fn resume_matrix(dim: usize) -> Vec<(String, Value)> {
     cases
 }
 
+/// In `dir`, `scene` run for 2n steps into `whole` and for n steps into `split`, then `split`
+/// resumed to 2n steps; the two folders.
+fn whole_and_split(name: &str, dir: &Path, scene: &Value, n: usize) -> (PathBuf, PathBuf) {
+    let scene = write_scene(dir, "s.json", scene);
+    let scene = scene.to_str().unwrap();
+    let (whole, split) = (dir.join("whole"), dir.join("split"));
+    let steps = |k: usize| format!("max_steps={k}");
+    for (out, k) in [(&whole, 2 * n), (&split, n)] {
+        let o = vesicle(&[
+            "run",
+            scene,
+            "--out",
+            out.to_str().unwrap(),
+            "--set",
+            &steps(k),
+        ]);
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+    }
+    let o = vesicle(&["resume", split.to_str().unwrap(), "--set", &steps(2 * n)]);
+    assert!(o.status.success(), "{name}: {}", stderr(&o));
+    (whole, split)
+}
+
 /// A run of 2n steps and a run of n steps resumed for n more: the same φ bit for bit, the same
 /// CSV rows (every column but the wall time) and the same step count.
 fn assert_resume_is_exact(name: &str, scene: &Value, n: usize) {
     let tmp = TempDir::new().unwrap();
-    let scene = write_scene(tmp.path(), "s.json", scene);
-    let scene = scene.to_str().unwrap();
-    let (whole, split) = (tmp.path().join("whole"), tmp.path().join("split"));
-    let steps = |k: usize| format!("max_steps={k}");
-    let o = vesicle(&[
-        "run",
-        scene,
-        "--out",
-        whole.to_str().unwrap(),
-        "--set",
-        &steps(2 * n),
-    ]);
-    assert!(o.status.success(), "{name}: {}", stderr(&o));
-    let o = vesicle(&[
-        "run",
-        scene,
-        "--out",
-        split.to_str().unwrap(),
-        "--set",
-        &steps(n),
-    ]);
-    assert!(o.status.success(), "{name}: {}", stderr(&o));
-    let o = vesicle(&["resume", split.to_str().unwrap(), "--set", &steps(2 * n)]);
-    assert!(o.status.success(), "{name}: {}", stderr(&o));
+    let (whole, split) = whole_and_split(name, tmp.path(), scene, n);
     let phi = |d: &Path| std::fs::read(d.join("phi_final.npy")).unwrap();
     assert!(
         phi(&whole) == phi(&split),
@@ -408,23 +408,7 @@ fn outputs_on_simulated_time_land_on_their_times_and_resume_bitwise() {
             "png": false, "vti": false
         });
         let tmp = TempDir::new().unwrap();
-        let scene = write_scene(tmp.path(), "s.json", &scene);
-        let scene = scene.to_str().unwrap();
-        let (whole, split) = (tmp.path().join("whole"), tmp.path().join("split"));
-        let steps = |k: usize| format!("max_steps={k}");
-        for (out, k) in [(&whole, 2 * n), (&split, n)] {
-            let o = vesicle(&[
-                "run",
-                scene,
-                "--out",
-                out.to_str().unwrap(),
-                "--set",
-                &steps(k),
-            ]);
-            assert!(o.status.success(), "{name}: {}", stderr(&o));
-        }
-        let o = vesicle(&["resume", split.to_str().unwrap(), "--set", &steps(2 * n)]);
-        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let (whole, split) = whole_and_split(name, tmp.path(), &scene, n);
         let times = inner_row_times(&whole);
         assert!(times.len() >= 3, "{name}: {times:?}");
         for (k, t) in times.iter().enumerate() {

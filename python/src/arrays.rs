@@ -5,48 +5,12 @@ use ndarray::{Array3, Ix2};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vesicle::driver::record::Record;
-
-/// The fields of a [`Record`], in the column order of timeseries.csv.
-pub const COLUMNS: [&str; 13] = [
-    "step",
-    "t",
-    "dt",
-    "energy",
-    "area",
-    "volume",
-    "reduced_volume",
-    "reduced_energy",
-    "sigma",
-    "residual",
-    "rate",
-    "rejected",
-    "wall_seconds",
-];
-
-/// The values of `r` in the order of [`COLUMNS`] (the counts as floats).
-fn values(r: &Record) -> [f64; 13] {
-    [
-        r.step as f64,
-        r.t,
-        r.dt,
-        r.energy,
-        r.area,
-        r.volume,
-        r.reduced_volume,
-        r.reduced_energy,
-        r.sigma,
-        r.residual,
-        r.rate,
-        r.rejected as f64,
-        r.wall_seconds,
-    ]
-}
+use vesicle::driver::record::{Record, COLUMNS};
 
 /// A record as a dict keyed by the timeseries.csv column names (`step` and `rejected` ints).
 pub fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (name, v) in COLUMNS.iter().zip(values(r)) {
+    for (name, v) in COLUMNS.iter().zip(r.values()) {
         match *name {
             "step" => d.set_item(name, r.step)?,
             "rejected" => d.set_item(name, r.rejected)?,
@@ -62,11 +26,11 @@ pub fn history_dict<'py>(py: Python<'py>, rows: &[Record]) -> PyResult<Bound<'py
     for (i, name) in COLUMNS.iter().enumerate() {
         match *name {
             "step" | "rejected" => {
-                let ints: Vec<i64> = rows.iter().map(|r| values(r)[i] as i64).collect();
+                let ints: Vec<i64> = rows.iter().map(|r| r.values()[i] as i64).collect();
                 d.set_item(name, PyArray1::from_vec(py, ints))?;
             }
             _ => {
-                let col: Vec<f64> = rows.iter().map(|r| values(r)[i]).collect();
+                let col: Vec<f64> = rows.iter().map(|r| r.values()[i]).collect();
                 d.set_item(name, PyArray1::from_vec(py, col))?;
             }
         }

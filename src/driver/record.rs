@@ -41,6 +41,25 @@ pub struct Record {
 }
 
 impl Record {
+    /// The values in the order of [`COLUMNS`] (the counts as floats).
+    pub fn values(&self) -> [f64; 13] {
+        [
+            self.step as f64,
+            self.t,
+            self.dt,
+            self.energy,
+            self.area,
+            self.volume,
+            self.reduced_volume,
+            self.reduced_energy,
+            self.sigma,
+            self.residual,
+            self.rate,
+            self.rejected as f64,
+            self.wall_seconds,
+        ]
+    }
+
     /// A record of the state `engine` holds at `step`, time `t`, reached by a step `dt`, in a
     /// scene of dimension `dim`, width `eps` (`rate` NaN, counters 0).
     pub fn of(step: usize, t: f64, dt: f64, engine: &dyn Engine, dim: usize, eps: f64) -> Self {
@@ -63,6 +82,23 @@ impl Record {
         }
     }
 }
+
+/// The columns of `timeseries.csv` ([`HEADER`]), in order.
+pub const COLUMNS: [&str; 13] = [
+    "step",
+    "t",
+    "dt",
+    "energy",
+    "area",
+    "volume",
+    "reduced_volume",
+    "reduced_energy",
+    "sigma",
+    "residual",
+    "rate",
+    "rejected",
+    "wall_seconds",
+];
 
 /// The CSV header: the contract's ten columns, then `rate,rejected,wall_seconds`.
 pub const HEADER: &str =
@@ -197,5 +233,16 @@ fn io(path: &Path, source: std::io::Error) -> Error {
     Error::Io {
         path: path.to_path_buf(),
         source,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The header the file is written with names the columns of [`COLUMNS`], in order.
+    #[test]
+    fn header_lists_the_columns() {
+        assert_eq!(HEADER, COLUMNS.join(","));
     }
 }
