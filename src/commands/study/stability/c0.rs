@@ -92,13 +92,13 @@ pub(super) fn c0_frontier(runs: &[C0Run], c0: &C0Sweep) -> C0Frontier {
 /// The printed table of the frontier.
 pub(super) fn c0_table(f: &C0Frontier) -> String {
     let mut s = format!(
-        "\nspontaneous curvature at h = eps, default S, c0 uniform:\n  {:<7} {:>7} {:>14} {:>26}\n",
+        "\nspontaneous curvature at h = eps, default S, c0 uniform:\n  {:<7} {:>7} {:>14} {:>28}\n",
         "scheme", "eps*c0", "largest stable", "first failure"
     );
     for x in f {
         let _ = writeln!(
             s,
-            "  {:<7} {:>7.3} {:>14} {:>26}",
+            "  {:<7} {:>7.3} {:>14} {:>28}",
             x.0,
             x.1,
             x.2.map_or("none".into(), |d| format!("{d:.3e}")),
