@@ -248,7 +248,56 @@ fn stability_quick_study_classifies_the_runs() {
     }
     assert!(rows.iter().any(|r| r[0] == "alpha"));
     assert!(out.join("frontier.csv").exists());
-    charts_exist(&out, &["stability_map", "stability_alpha"]);
+    charts_exist(&out, &["stability_map", "stability_alpha", "stability_c0"]);
+    stability_c0_part(&out, &stdout);
+}
+
+/// The c0 axis of the quick stability study (εc0 in {0, 0.8}, SBDF1 and SBDF2 with the
+/// default S, h = ε): every (scheme, εc0) has classified runs from Δt = 1e-5; at εc0 = 0 both
+/// schemes are stable at Δt = 1 (DESIGN.md §3); SBDF1's largest stable Δt falls with εc0, by
+/// more than 10× at εc0 = 0.8 (measured: 10 at 0, 3.2e-2 at 0.8), since the bulk
+/// linearisation f'(±1) = 2 ± 2εC0 and the c0 terms treated explicitly grow with c0 while the
+/// default S stays the same.
+fn stability_c0_part(out: &Path, stdout: &str) {
+    assert!(stdout.contains("spontaneous curvature at h = eps"));
+    assert_eq!(
+        header(&out.join("stability_c0.csv")),
+        "scheme,eps_c0,dt,class,steps,max_abs_phi,max_area_error"
+    );
+    let rows = csv_fields(&out.join("stability_c0.csv"));
+    let runs = |scheme: &str, eps_c0: f64| -> Vec<(f64, String)> {
+        rows.iter()
+            .filter(|r| r[0] == scheme && r[1].parse::<f64>().unwrap() == eps_c0)
+            .map(|r| (r[2].parse().unwrap(), r[3].clone()))
+            .collect()
+    };
+    let largest_stable = |rs: &[(f64, String)]| {
+        rs.iter()
+            .take_while(|r| r.1 == "stable")
+            .last()
+            .map_or(0.0, |r| r.0)
+    };
+    let mut sbdf1 = Vec::new();
+    for scheme in ["sbdf1", "sbdf2"] {
+        for eps_c0 in [0.0, 0.8] {
+            let rs = runs(scheme, eps_c0);
+            assert!(rs.len() >= 3, "{scheme} at eps c0 {eps_c0}: {rs:?}");
+            assert!((rs[0].0 / 1e-5 - 1.0).abs() < 1e-9);
+            let classes = ["stable", "energy rising", "constraint lost", "blown up"];
+            assert!(rs.iter().all(|r| classes.contains(&r.1.as_str())));
+            if eps_c0 == 0.0 {
+                let at_1 = rs.iter().find(|r| (r.0 - 1.0).abs() < 1e-9).unwrap();
+                assert_eq!(at_1.1, "stable", "{scheme} at dt 1");
+            }
+            if scheme == "sbdf1" {
+                sbdf1.push(largest_stable(&rs));
+            }
+        }
+    }
+    assert!(
+        sbdf1[1] < sbdf1[0] / 10.0,
+        "SBDF1 largest stable dt {sbdf1:?}"
+    );
 }
 
 /// `study precision --quick` on the 3D prolate: SBDF2's transient error falls by at least 3×

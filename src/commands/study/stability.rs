@@ -15,11 +15,16 @@
 //!   |A − A0|/A0 never exceeds 10 × the initial 1% (a small α lets A drift slowly with the
 //!   shape, an unstable one makes it oscillate with growing amplitude; energy rises are
 //!   expected while σ moves, so they are not counted).
+//! * **Spontaneous curvature** (optional `c0` block): at h = ε, the fixed-Δt sweep of spectral
+//!   SBDF1 and/or SBDF2 with the default S at each εc0 of the file, c0 uniform ([`c0`]).
 //!
 //! Reports the largest stable Δt per method and h (the last stable Δt below the first
 //! failure), the spectral/FD ratios and their least-squares scaling with h, the FD bound of
 //! DESIGN.md §2. Writes `stability.csv` (every run), `frontier.csv`, `stability.txt`, and the
-//! charts `stability_map`, `stability_alpha` (PNG and SVG).
+//! charts `stability_map`, `stability_alpha` (PNG and SVG); with a `c0` block also
+//! `stability_c0.csv` and the chart `stability_c0`.
+
+mod c0;
 
 use super::classify::{classify, Class, Criteria, StepSample};
 use super::harness::{self, Report, Study};
@@ -63,6 +68,38 @@ pub struct Spec {
     pub adaptive: AdaptiveSweep,
     /// The Lagrangian α sweep.
     pub alpha: AlphaSweep,
+    /// The spontaneous-curvature axis (optional).
+    #[serde(default)]
+    pub c0: Option<C0Sweep>,
+}
+
+/// The fixed-Δt sweep at h = ε against the spontaneous curvature, default stabiliser.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct C0Sweep {
+    /// εc0 values (c0 set uniform to εc0/ε in the scene).
+    pub eps_c0: Vec<f64>,
+    /// Spectral schemes, each with its default stabiliser.
+    pub schemes: Vec<Scheme>,
+}
+
+/// One classified run of the c0 sweep; a row of `stability_c0.csv`.
+#[derive(Clone, Debug, Serialize)]
+pub struct C0Run {
+    /// `sbdf1` or `sbdf2` (default stabiliser).
+    pub scheme: &'static str,
+    /// εc0.
+    pub eps_c0: f64,
+    /// Δt.
+    pub dt: f64,
+    /// The class.
+    pub class: Class,
+    /// Accepted steps.
+    pub steps: usize,
+    /// Largest max|φ| seen.
+    pub max_abs_phi: f64,
+    /// Largest |A − A0|/A0 seen.
+    pub max_area_error: f64,
 }
 
 /// Adaptive runs at several tolerances.
@@ -228,6 +265,13 @@ impl Study for Stability {
         report.table("stability.csv", &runs)?;
         report.table("frontier.csv", &frontier_rows(&frontier, &bounds))?;
         charts(&mut report, &runs, &frontier, &bounds, (base.dim, base.eps));
+        if let Some(c0) = &spec.c0 {
+            let c0_runs = c0::c0_sweep(spec, c0, &base)?;
+            let edges = c0::c0_frontier(&c0_runs, c0);
+            report.text.push_str(&c0::c0_table(&edges));
+            report.table("stability_c0.csv", &c0_runs)?;
+            report.chart("stability_c0", c0::c0_chart(&c0_runs, &edges, c0));
+        }
         Ok((runs, report))
     }
 }
@@ -258,43 +302,15 @@ fn sweeps(spec: &Spec, base: &Scene) -> Result<(Vec<Run>, Bounds)> {
     let mut runs = Vec::new();
     let mut bounds = Vec::new();
     for &h in &spec.h {
-        // The grid at h: the box kept, no preparation (the field is prepared once), the
-        // study's stop rules only.
-        let grid = |s: &mut Scene| {
-            s.h = h * base.eps;
-            s.n = base
-                .n
-                .iter()
-                .map(|&m| (m as f64 / h).round() as usize)
-                .collect();
-            s.prepare_steps = 0;
-            s.allow_unstable = true;
-            s.adaptive = AdaptiveSpec::Flag(false);
-            s.t_end = None;
-            s.stop_residual = None;
-        };
-        let prep = harness::variant(base, "scene", |s| {
-            grid(s);
-            s.method = Method::Spectral;
-            s.scheme = Scheme::Sbdf1;
-            s.prepare_steps = base.prepare_steps;
-            s.allow_unstable = false;
-        })?;
-        let mut problem = setup::build(&prep)?;
-        problem.phi = super::prepared_field(&prep, &problem)?;
+        let grid = |s: &mut Scene| at_spacing(s, base, h);
+        let problem = prepared(base, h)?;
         bounds.push((h, fd::stability_bound(&problem.grid, base.eps, 0.0)));
         for m in &METHODS {
-            let mut blown = 0;
-            for dt in sweep(spec.dt_min, spec.dt_max, spec.per_decade) {
-                let s = harness::variant(base, "scene", |s| {
-                    grid(s);
-                    m.apply(s);
-                    s.dt = dt;
-                    s.max_steps = Some(spec.steps);
-                })?;
-                let r = fixed_run(&s, &problem, &criteria, None)?;
-                let failed = matches!(r.0, Class::BlownUp | Class::ConstraintLost);
-                blown = if failed { blown + 1 } else { 0 };
+            let edit = |s: &mut Scene| {
+                grid(s);
+                m.apply(s);
+            };
+            for (dt, r) in dt_sweep(spec, base, &problem, &edit)? {
                 runs.push(Run {
                     sweep: "fixed",
                     method: m.name,
@@ -308,10 +324,6 @@ fn sweeps(spec: &Spec, base: &Scene) -> Result<(Vec<Run>, Bounds)> {
                     area_error: r.3,
                     rejected_dts: Vec::new(),
                 });
-                // Three failures in a row: larger steps fail too.
-                if blown == 3 {
-                    break;
-                }
             }
         }
         for &ea in &spec.adaptive.energy_alpha {
@@ -373,8 +385,75 @@ fn sweeps(spec: &Spec, base: &Scene) -> Result<(Vec<Run>, Bounds)> {
     Ok((runs, bounds))
 }
 
+/// The grid at `h` (in units of ε): the box of `base` kept, `n` scaled; no preparation (the
+/// field is prepared once), the study's stop rules only.
+fn at_spacing(s: &mut Scene, base: &Scene, h: f64) {
+    s.h = h * base.eps;
+    s.n = base
+        .n
+        .iter()
+        .map(|&m| (m as f64 / h).round() as usize)
+        .collect();
+    s.prepare_steps = 0;
+    s.allow_unstable = true;
+    s.adaptive = AdaptiveSpec::Flag(false);
+    s.t_end = None;
+    s.stop_residual = None;
+}
+
+/// The problem of `base` at spacing `h`, its field prepared by `base.prepare_steps` spectral
+/// SBDF1 steps (the one starting field of every run at that h).
+fn prepared(base: &Scene, h: f64) -> Result<Problem> {
+    let prep = harness::variant(base, "scene", |s| {
+        at_spacing(s, base, h);
+        s.method = Method::Spectral;
+        s.scheme = Scheme::Sbdf1;
+        s.prepare_steps = base.prepare_steps;
+        s.allow_unstable = false;
+    })?;
+    let mut problem = setup::build(&prep)?;
+    problem.phi = super::prepared_field(&prep, &problem)?;
+    Ok(problem)
+}
+
+/// The fixed-Δt sweep of `spec` (`steps` steps at each Δt, from `problem.phi`) of the scene
+/// `edit` makes from `base`, classified by the default criteria: `(Δt, run)` in increasing Δt,
+/// stopped after three failures (blown up or constraint lost) in a row, as larger steps fail
+/// too.
+fn dt_sweep(
+    spec: &Spec,
+    base: &Scene,
+    problem: &Problem,
+    edit: &dyn Fn(&mut Scene),
+) -> Result<Vec<(f64, Outcome)>> {
+    let criteria = Criteria::default();
+    let mut out = Vec::new();
+    let mut blown = 0;
+    for dt in sweep(spec.dt_min, spec.dt_max, spec.per_decade) {
+        let s = harness::variant(base, "scene", |s| {
+            edit(s);
+            s.dt = dt;
+            s.max_steps = Some(spec.steps);
+        })?;
+        let r = fixed_run(&s, problem, &criteria, None)?;
+        blown = if matches!(r.0, Class::BlownUp | Class::ConstraintLost) {
+            blown + 1
+        } else {
+            0
+        };
+        out.push((dt, r));
+        if blown == 3 {
+            break;
+        }
+    }
+    Ok(out)
+}
+
 /// The area target's offset below the prepared area in the α sweep.
 const ALPHA_OFFSET: f64 = 0.01;
+
+/// A fixed run's class, steps, largest max|φ| and largest area error.
+type Outcome = (Class, usize, f64, f64);
 
 /// `s` from `problem.phi` for its `max_steps`: class, steps, largest max|φ| and area error.
 /// With `alpha`, the Lagrangian update with that α toward (1 − [`ALPHA_OFFSET`]) × the
@@ -384,7 +463,7 @@ fn fixed_run(
     problem: &Problem,
     criteria: &Criteria,
     alpha: Option<f64>,
-) -> Result<(Class, usize, f64, f64)> {
+) -> Result<Outcome> {
     let (mut sim, a0) = Simulation::of_scene(s, problem)?;
     let target = match alpha {
         Some(alpha) => {
@@ -478,18 +557,24 @@ fn frontier(runs: &[Run], hs: &[f64]) -> Frontier {
                 .iter()
                 .filter(|r| r.sweep == "fixed" && r.method == name && r.h == h)
                 .collect();
-            let first_fail = rs.iter().position(|r| r.class != Class::Stable);
-            let stable_end = first_fail.unwrap_or(rs.len());
-            let largest = stable_end.checked_sub(1).map(|i| rs[i].dt);
-            f.push((
-                name,
-                h,
-                largest,
-                first_fail.map(|i| (rs[i].dt, rs[i].class)),
-            ));
+            let (largest, first_fail) = edge(rs.iter().map(|r| (r.dt, r.class)));
+            f.push((name, h, largest, first_fail));
         }
     }
     f
+}
+
+/// Of runs `(Δt, class)` in increasing Δt: the last stable Δt below the first failure, and
+/// the first failure with its class.
+fn edge(runs: impl Iterator<Item = (f64, Class)>) -> (Option<f64>, Option<(f64, Class)>) {
+    let mut largest = None;
+    for (dt, class) in runs {
+        if class != Class::Stable {
+            return (largest, Some((dt, class)));
+        }
+        largest = Some(dt);
+    }
+    (largest, None)
 }
 
 fn largest(f: &Frontier, name: &str, h: f64) -> Option<f64> {
