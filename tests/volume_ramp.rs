@@ -27,6 +27,28 @@ fn ramped_ellipse(fraction: f64, extra: Value) -> Value {
     v
 }
 
+/// Run `scene` into a fresh folder under `tmp`; the folder.
+fn run(tmp: &TempDir, name: &str, scene: &Value) -> std::path::PathBuf {
+    let path = tmp.path().join(format!("{name}.json"));
+    std::fs::write(&path, scene.to_string()).unwrap();
+    let out = tmp.path().join(name);
+    let o = Command::new(env!("CARGO_BIN_EXE_vesicle"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
 /// (t, V) of every row of the run's `timeseries.csv`.
 fn times_and_volumes(dir: &Path) -> Vec<(f64, f64)> {
     let text = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
@@ -103,4 +125,24 @@ fn the_ramp_holds_the_volume_to_its_target_at_every_step() {
             rows.len()
         );
     }
+}
+
+/// The ramp starts after the preparation: the prepared field (row 0, V_init) of a scene with
+/// `volume` is bitwise that of the same scene without it, so V_init is the volume the scene
+/// would otherwise conserve.
+#[test]
+fn the_ramp_starts_from_the_unramped_preparation() {
+    let tmp = TempDir::new().unwrap();
+    let ramped = ramped_ellipse(0.9, json!({"t_end": 1.0}));
+    let mut plain = ramped.clone();
+    plain.as_object_mut().unwrap().remove("volume");
+    let first_row = |dir: &Path| {
+        let text = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
+        let row = text.lines().nth(1).unwrap().to_string();
+        row.rsplit_once(',').unwrap().0.to_string() // without the wall time
+    };
+    assert_eq!(
+        first_row(&run(&tmp, "ramped", &ramped)),
+        first_row(&run(&tmp, "plain", &plain))
+    );
 }
