@@ -162,6 +162,24 @@ fn resumed_3d_runs_are_bitwise_identical_to_uninterrupted_ones() {
     }
 }
 
+/// A volume ramp (V0 from V_init to 0.9 V_init over t ∈ [0, 10]) resumed in the middle of the
+/// ramp (15 + 15 steps of Δt = 0.5, split at t = 7.5) for SBDF1 and SBDF2, fixed and adaptive:
+/// the target is a function of t and of V_init, which the checkpoint carries, so φ and every row
+/// are bitwise those of the uninterrupted run.
+#[test]
+fn resumed_volume_ramps_are_bitwise_identical_to_uninterrupted_ones() {
+    for scheme in ["sbdf1", "sbdf2"] {
+        for adaptive in [false, true] {
+            let mut v = ellipse(json!({"scheme": scheme,
+                "volume": {"final_fraction": 0.9, "ramp_time": 10.0}}));
+            if adaptive {
+                v["adaptive"] = json!({"dt_max": 2.0});
+            }
+            assert_resume_is_exact(&format!("volume ramp {scheme} adaptive {adaptive}"), &v, 15);
+        }
+    }
+}
+
 #[test]
 fn resume_refuses_changes_other_than_stop_rules_and_bad_checkpoints() {
     let tmp = TempDir::new().unwrap();

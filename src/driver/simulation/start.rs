@@ -132,8 +132,10 @@ type Preparation = std::result::Result<Problem, (Box<dyn Engine + Send>, Error)>
 
 fn prepare(scene: &Scene, problem: &Problem) -> Result<Preparation> {
     // The same preparation for every scheme and dynamics of a method, so that scenes differing
-    // only in those start from the same field and A0.
+    // only in those start from the same field and A0; a volume ramp starts after it (V_init is
+    // the prepared field's volume).
     let mut prep_scene = scene.clone();
+    prep_scene.volume = None;
     prep_scene.adaptive = AdaptiveSpec::Flag(false);
     prep_scene.dynamics = Dynamics::Conserved;
     prep_scene.scheme = Scheme::Sbdf1;

@@ -24,7 +24,9 @@ use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, P
 use super::saved::spectrum;
 use crate::engines::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL};
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
-use crate::problem::config::{AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer};
+use crate::problem::config::{
+    AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer, VolumeRamp,
+};
 use crate::problem::grid::Grid;
 use crate::problem::model::{Measures, C0};
 use ndarray::Array3;
@@ -301,7 +303,10 @@ pub struct SpectralEngine {
     max_change: f64,
     sigma: f64,
     area: AreaConstraint,
+    /// V of the prepared initial field: the volume held, or V_init of the ramp.
     volume0: f64,
+    /// The scene's time-dependent volume target, if any.
+    volume_ramp: Option<VolumeRamp>,
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see `check_constraints`).
     energy_guard: bool,
@@ -340,6 +345,7 @@ impl SpectralEngine {
             max_change: 0.0,
             sigma: 0.0,
             area: AreaConstraint::none(),
+            volume_ramp: scene.volume,
             dt_next: None,
             energy_guard: true,
         })
@@ -483,11 +489,39 @@ impl SpectralEngine {
         }
     }
 
+    /// The volume the state must have at time `t`: V0(t) of the ramp, else V of the prepared
+    /// field.
+    fn volume_target(&self, t: f64) -> f64 {
+        match &self.volume_ramp {
+            Some(ramp) => ramp.target(self.volume0, t),
+            None => self.volume0,
+        }
+    }
+
+    /// Under a volume ramp, set the k = 0 coefficient of the written update (and of its copy,
+    /// the inverse transform's input) so that V(φ^{n+1}) = V0(`t`): with V = (N + Σφ) dv/2 over
+    /// the N stored points (dv the cell volume times the mirror factor) and the unnormalised
+    /// forward transforms (X₀ = Σφ on every axis kind, the real part of the first stored
+    /// value, packed or not), X₀ = 2 V0/dv − N. This adds one constant to φ^{n+1}; the area
+    /// (weight |k|² = 0 there) and every other mode are untouched, so the area projection's σ
+    /// stands. Without a ramp the conserved update keeps X₀ itself and nothing is written.
+    fn set_volume(&mut self, t: f64) {
+        if self.volume_ramp.is_none() {
+            return;
+        }
+        let grid = &self.ev.grid;
+        let dv = grid.cell_volume() * grid.mirror_factor();
+        let mean_mode = 2.0 * self.volume_target(t) / dv - grid.len() as f64;
+        self.next.hat[[0, 0, 0]].re = mean_mode;
+        self.next.nonlinear[[0, 0, 0]].re = mean_mode;
+    }
+
     /// Try one step of size `dt`: on success `next` holds the new state (its residual at the
     /// new σ) and the σ of the update and of the new state are returned.
     fn attempt(&mut self, t: f64, dt: f64) -> Result<(f64, f64), Rejection> {
         let sigma = self.choose_sigma(dt).ok_or(Rejection::NoRealRoot)?;
         let area = self.write_update(dt, sigma);
+        self.set_volume(t + dt);
         let sigma_after = self.sigma_after(sigma);
         self.max_change = self
             .ev
@@ -499,17 +533,21 @@ impl SpectralEngine {
                 Some(sigma_after),
             )
             .map_err(Rejection::Diverged)?;
-        self.check_constraints(sigma)?;
+        self.check_constraints(sigma, t, t + dt)?;
         Ok((sigma, sigma_after))
     }
 
     /// Volume (and area under projection) held; F_eff (at the σ of the update) must not rise
     /// where the scheme guarantees that it falls: adaptive steps, and fixed SBDF1 steps (the
     /// stabilised first-order step is dissipative; SBDF2 is not guaranteed to be, and a ramped
-    /// C0 may raise F legitimately). Off when the energy guard is off (stability studies).
-    fn check_constraints(&self, sigma: f64) -> Result<(), Rejection> {
+    /// C0 may raise F legitimately). Off when the energy guard is off (stability studies), and
+    /// for a step that starts (time `t`) while a volume ramp runs: deflating does work on the
+    /// vesicle, so F may rise; once V0 is constant the guard holds again. The volume is checked
+    /// against its target at the step's end, `t_new`.
+    fn check_constraints(&self, sigma: f64, t: f64, t_new: f64) -> Result<(), Rejection> {
         let m = self.next.measures;
-        let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
+        let target = self.volume_target(t_new);
+        let dv = (m.volume - target).abs() / target.abs().max(1e-300);
         if dv > CONSTRAINT_TOL {
             return Err(Rejection::VolumeDrift(dv));
         }
@@ -520,7 +558,8 @@ impl SpectralEngine {
             }
         }
         let dissipative = self.adaptive.is_some() || self.scheme == Scheme::Sbdf1;
-        if self.energy_guard && dissipative && !self.ev.c0.is_ramped() {
+        let ramping = self.volume_ramp.is_some_and(|r| t < r.ramp_time);
+        if self.energy_guard && dissipative && !ramping && !self.ev.c0.is_ramped() {
             let before = self.cur.measures.energy + sigma * self.cur.measures.area;
             let after = m.energy + sigma * m.area;
             if after > before + ENERGY_RISE_TOL * before.abs() {

@@ -16,8 +16,8 @@ mod validation;
 pub use c0::{C0Ball, C0Band, C0Cap, C0Field, C0File, C0Spec, Pole};
 pub use scene::{
     axis_index, AdaptiveSettings, AdaptiveSpec, AreaMethod, AreaSpec, AutoTag, Dynamics, Laplacian,
-    Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, CHECKPOINT_MINUTES,
-    RECORD_ROWS, SERIAL_BELOW,
+    Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, VolumeRamp,
+    CHECKPOINT_MINUTES, RECORD_ROWS, SERIAL_BELOW,
 };
 pub use schedule::Schedule;
 pub use shapes::{
@@ -163,7 +163,7 @@ fn missing_or(field: String, reason: &str) -> Error {
 
 /// Serde reads a struct from an array too, positionally (`"area": ["lagrangian", 0.01]`); a
 /// scene names its fields, so an array where an object belongs (the scene itself, `area`,
-/// `stabilizer`, `output`, `adaptive`, `c0`, `initial` and the shapes inside it) is refused.
+/// `volume`, `stabilizer`, `output`, `adaptive`, `c0`, `initial` and the shapes inside it) is refused.
 fn objects_where_objects(scene: &Value) -> Result<()> {
     fn kind(v: &Value) -> &'static str {
         match v {
@@ -206,7 +206,7 @@ fn objects_where_objects(scene: &Value) -> Result<()> {
             ),
         ));
     };
-    for key in ["area", "stabilizer", "output", "adaptive", "c0"] {
+    for key in ["area", "volume", "stabilizer", "output", "adaptive", "c0"] {
         if let Some(v @ Value::Array(_)) = top.get(key) {
             return Err(Error::config(
                 key,

@@ -61,6 +61,10 @@ pub struct Scene {
     /// Area constraint.
     #[serde(default)]
     pub area: AreaSpec,
+    /// Time-dependent volume target (osmotic deflation or inflation); absent: the dynamics
+    /// conserves the volume of the prepared initial field.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<VolumeRamp>,
     /// Mirror planes through the box centre: e.g. `["x","y","z"]`, `[]`, or `"auto"`.
     #[serde(default)]
     pub symmetry: Symmetry,
@@ -238,6 +242,25 @@ pub struct AreaSpec {
     /// Target area A0 (default: area of the prepared initial field).
     #[serde(default)]
     pub target: Option<f64>,
+}
+
+/// `volume`: `{"final_fraction": f, "ramp_time": T}`, the target
+/// V0(t) = V_init (1 + (f − 1) min(t/T, 1)), V_init the volume V = ∫(1 + φ)/2 of the prepared
+/// initial field.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VolumeRamp {
+    /// V0 at and after `ramp_time`, as a fraction of V_init.
+    pub final_fraction: f64,
+    /// Simulated time over which V0 moves linearly from V_init to `final_fraction` · V_init.
+    pub ramp_time: f64,
+}
+
+impl VolumeRamp {
+    /// V0(t) = `initial` · (1 + (f − 1) min(t/T, 1)).
+    pub fn target(&self, initial: f64, t: f64) -> f64 {
+        initial * (1.0 + (self.final_fraction - 1.0) * (t / self.ramp_time).min(1.0))
+    }
 }
 
 /// `symmetry`: declared mirror axes or automatic detection.

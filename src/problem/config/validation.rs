@@ -58,6 +58,7 @@ impl Scene {
         }
         self.validate_method()?;
         self.validate_area()?;
+        self.validate_volume()?;
         self.validate_c0()?;
         self.validate_symmetry()?;
         if let Initial::Shape(s) = &self.initial {
@@ -203,6 +204,29 @@ impl Scene {
             return Err(Error::config(
                 "area.alpha",
                 "only the lagrangian area method uses alpha",
+            ));
+        }
+        Ok(())
+    }
+
+    /// `volume`: f > 0 and T > 0, finite; only the spectral engine's conserved dynamics holds
+    /// a time-dependent volume.
+    fn validate_volume(&self) -> Result<()> {
+        let Some(v) = &self.volume else {
+            return Ok(());
+        };
+        positive("volume.final_fraction", v.final_fraction)?;
+        positive("volume.ramp_time", v.ramp_time)?;
+        if self.method == Method::Fd {
+            return Err(Error::config(
+                "volume",
+                "a time-dependent volume is held by the spectral engine only; use method spectral",
+            ));
+        }
+        if self.dynamics == Dynamics::Relaxational {
+            return Err(Error::config(
+                "volume",
+                "relaxational dynamics has no time to ramp the volume in; use conserved dynamics",
             ));
         }
         Ok(())
