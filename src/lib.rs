@@ -1,6 +1,6 @@
 //! `vesicle`: shapes and shape instabilities of lipid vesicles with the phase-field model of
 //! Campelo & Hernández-Machado (Canham–Helfrich bending energy with spontaneous curvature,
-//! conserved dynamics, area held by a Lagrange multiplier), as fixed in DESIGN.md:
+//! conserved dynamics, area held by a Lagrange multiplier), as derived in the manual (docs/src/theory/model.md):
 //!
 //! ```text
 //! Φ = (φ + εC0)(φ² − 1) − ε²∇²φ,   F_sc = ∫Φ²,   A = (3/(2√2)) ε ∫|∇φ|²,   V = ∫(1 + φ)/2

@@ -1,4 +1,4 @@
-//! Geometry of the φ = 0 level set (DESIGN.md §1: the diffuse ∫(1+φ)/2 and ∫a carry
+//! Geometry of the φ = 0 level set (docs/src/theory/model.md: the diffuse ∫(1+φ)/2 and ∫a carry
 //! O(ε²/R²) errors; shape diagrams need the sharp surface). φ is interpolated linearly on a
 //! simplex split of the grid (two triangles per cell in 2D, six tetrahedra around the main
 //! diagonal per cube in 3D, which match across faces), the zero set is triangulated, and

@@ -23,13 +23,13 @@ pub struct Record {
     pub area: f64,
     /// Diffuse volume V.
     pub volume: f64,
-    /// v (DESIGN.md §1).
+    /// v (docs/src/theory/model.md).
     pub reduced_volume: f64,
-    /// e (DESIGN.md §1).
+    /// e (docs/src/theory/model.md).
     pub reduced_energy: f64,
     /// σ.
     pub sigma: f64,
-    /// Stationarity residual: RMS over the full box of μ − μ̄ (DESIGN.md §6).
+    /// Stationarity residual: RMS over the full box of μ − μ̄ (docs/src/reference/outputs.md).
     pub residual: f64,
     /// max|φ^{n+1} − φ^n|/Δt of the step that produced this state (NaN for the initial state
     /// and for the relaxational engine, whose time is nominal).

@@ -1,7 +1,7 @@
 //! What the simulation driver needs from an engine (finite differences, spectral,
 //! relaxational).
 //!
-//! Every engine reports the same stationarity measure of its current state (DESIGN.md §6):
+//! Every engine reports the same stationarity measure of its current state (docs/src/reference/outputs.md):
 //!
 //! ```text
 //! residual = ( ∫_Ω (μ − μ̄)² dx / |Ω| )^½,   μ = 2[f'(φ)Φ − ε²∇²Φ] − (3/√2) ε σ ∇²φ,

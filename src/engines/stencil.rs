@@ -1,5 +1,5 @@
 //! Second-order finite-difference operators on the grid, periodic or with mirror (Neumann)
-//! walls: the (2d+1)-point Laplacian and the forward-difference area of DESIGN.md §2.
+//! walls: the (2d+1)-point Laplacian and the forward-difference area of docs/src/theory/fd.md.
 
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::AREA_PREFACTOR;

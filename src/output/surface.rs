@@ -6,7 +6,7 @@
 //! quadrilateral (two triangles). A mesh vertex sits where φ changes sign along an edge of the
 //! split (a cube edge, face diagonal or main diagonal), at the zero of the linear
 //! interpolant, and is shared by every triangle that meets that edge, so a surface that stays
-//! inside the grid is closed. Inside is φ > 0, outside φ ≤ 0 (DESIGN.md §1); each triangle
+//! inside the grid is closed. Inside is φ > 0, outside φ ≤ 0 (docs/src/theory/model.md); each triangle
 //! is wound so that its normal `(b − a) × (c − a)` points outward, towards φ < 0.
 //!
 //! Coordinates are physical: grid point `[i, j, k]` is at `(i h, j h, k h)`, x along axis 0.

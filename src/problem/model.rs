@@ -1,4 +1,4 @@
-//! The phase-field model of DESIGN.md §1 (with the paper's two sign slips corrected):
+//! The phase-field model of docs/src/theory/model.md (with the paper's two sign slips corrected):
 //!
 //! ```text
 //! f(φ)  = (φ + εC0)(φ² − 1),          f'(φ) = 3φ² − 1 + 2εC0 φ
@@ -206,7 +206,7 @@ pub struct Measures {
     pub volume: f64,
 }
 
-/// Reduced volume and reduced energy (DESIGN.md §1, sharp-interface normalisation).
+/// Reduced volume and reduced energy (docs/src/theory/model.md, sharp-interface normalisation).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reduced {
     /// 3D: v = V / ((4π/3) R0³), R0 = √(A/4π). 2D: v = 4πV/L².

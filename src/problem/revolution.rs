@@ -1,5 +1,5 @@
 //! Signed distance to a surface of revolution given by its generating curve (the `axisym`
-//! initial shape, DESIGN.md §4, §7).
+//! initial shape, docs/src/reference/scene-file.md, docs/src/theory/relaxation.md).
 //!
 //! The surface is described in the meridian half-plane: `ρ ≥ 0` the distance from the axis,
 //! `ζ` the coordinate along it. The generating curve runs from the axis back to the axis

@@ -1,5 +1,5 @@
 //! Initial shapes as signed distances (positive inside) and the tanh profile
-//! φ = tanh(d / (√2 ε)) built from them (DESIGN.md §4).
+//! φ = tanh(d / (√2 ε)) built from them (docs/src/reference/scene-file.md).
 //!
 //! [`prepare`] does the once-per-field work (spheroids to ellipsoids, `axisym` shapes solved or
 //! read and resampled, [`crate::problem::revolution`]); [`Prepared::signed_distance`] is then evaluated at

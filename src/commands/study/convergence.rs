@@ -7,7 +7,7 @@
 //!   once from the raw tanh field (the order reduction of an unprepared start). Fit:
 //!   error = C Δt^p.
 //! * **space**: the stationary reduced energy e(h) at fixed ε on boxes of edge `length`, with
-//!   the FD stencil's symbol (the FD discretisation, relaxed semi-implicitly; DESIGN.md §2) and
+//!   the FD stencil's symbol (the FD discretisation, relaxed semi-implicitly; docs/src/theory/fd.md) and
 //!   with the spectral symbol; error |e(h) − e_ref| against spectral at `reference_h`. Fits:
 //!   FD error = C h^p; spectral error = C exp(b ε/h) (straight on a semi-log chart).
 //! * **eps**: shapes of the c0 = 0 diagram (axisymmetric starts at the branch's v, R0 = ε/x)

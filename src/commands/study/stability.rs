@@ -20,7 +20,7 @@
 //!
 //! Reports the largest stable Δt per method and h (the last stable Δt below the first
 //! failure), the spectral/FD ratios and their least-squares scaling with h, the FD bound of
-//! DESIGN.md §2. Writes `stability.csv` (every run), `frontier.csv`, `stability.txt`, and the
+//! docs/src/theory/fd.md. Writes `stability.csv` (every run), `frontier.csv`, `stability.txt`, and the
 //! charts `stability_map`, `stability_alpha` (PNG and SVG); with a `c0` block also
 //! `stability_c0.csv` and the chart `stability_c0`.
 
@@ -827,7 +827,7 @@ fn charts(
     report.chart("stability_alpha", alpha);
 }
 
-/// The FD bound of DESIGN.md §2 at σ = 0: Δt = 1 / (λ (2 + ε²λ)²), λ = 4d/h² (the curve on
+/// The FD bound of docs/src/theory/fd.md at σ = 0: Δt = 1 / (λ (2 + ε²λ)²), λ = 4d/h² (the curve on
 /// the map; [`fd::stability_bound`] gives the same at the computed grids).
 fn fd_bound(dim: usize, h: f64, eps: f64) -> f64 {
     let l = 4.0 * dim as f64 / (h * h);

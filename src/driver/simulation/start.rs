@@ -11,9 +11,9 @@ use crate::problem::config::{AdaptiveSpec, Dynamics, Method, Scene, Scheme};
 use crate::problem::grid::Grid;
 use crate::problem::setup::Problem;
 
-/// Stability bound of the scene's method at σ = 0, if it has one: the FD bound of DESIGN.md
-/// §2, or the frozen-coefficient bound of the spectral scheme (infinite when the stabiliser
-/// makes the bulk linearisation unconditionally stable).
+/// Stability bound of the scene's method at σ = 0, if it has one: the FD bound of
+/// docs/src/theory/fd.md, or the frozen-coefficient bound of the spectral scheme (infinite when
+/// the stabiliser makes the bulk linearisation unconditionally stable).
 pub fn stability_bound(scene: &Scene, grid: &Grid) -> Option<f64> {
     match (scene.method, scene.dynamics) {
         (Method::Fd, _) => Some(fd::stability_bound(grid, scene.eps, 0.0)),

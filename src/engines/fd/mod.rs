@@ -1,4 +1,4 @@
-//! The paper's finite-difference reference (DESIGN.md §2): second-order central differences,
+//! The paper's finite-difference reference (docs/src/theory/fd.md): second-order central differences,
 //! explicit Euler,
 //!
 //! ```text

@@ -1,5 +1,5 @@
 //! `"dynamics": "relaxational"`: the fastest route to the conserved flow's stationary states
-//! (DESIGN.md §7), a preconditioned L-BFGS on the constrained energy.
+//! (docs/src/theory/relaxation.md), a preconditioned L-BFGS on the constrained energy.
 //!
 //! Minimise F_sc(φ) subject to V(φ) = V0 (the k = 0 mode is never changed) and A(φ) = A0.
 //! With the metric ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*), M(k) = 2ε⁴k⁴ + 8 + 8ε²k² (the Hessian of

@@ -1,4 +1,4 @@
-//! The Fourier semi-implicit engine (DESIGN.md §3). In Fourier space
+//! The Fourier semi-implicit engine (docs/src/theory/spectral.md). In Fourier space
 //!
 //! ```text
 //! ∂φ̂/∂t = N̂ − 2ε⁴|k|⁶ φ̂ − c_σ σ |k|⁴ φ̂,   N̂ = −2|k|² FT[f'Φ] − 2ε²|k|⁴ FT[f],   c_σ = 3/√2 ε,

@@ -38,7 +38,7 @@ pub enum ExplicitTerm {
     Gradient(Metric),
 }
 
-/// The relaxational engine's metric ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*) (DESIGN.md §7), M(k) =
+/// The relaxational engine's metric ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*) (docs/src/theory/relaxation.md), M(k) =
 /// 2ε⁴k⁴ + 8 + 8ε²k² (the Hessian of F_sc in the bulk), and the area gradient's preconditioned
 /// direction q = M⁻¹â = (c_σ|k|²/M) φ̂, c_σ = 3ε/√2.
 #[derive(Clone, Copy, Debug, PartialEq)]

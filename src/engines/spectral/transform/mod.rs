@@ -475,7 +475,7 @@ impl Transform {
     ///
     /// The inverse transform drops the part this removes, so a spectrum carried from step to step
     /// must be projected, or the dropped part grows unseen where the explicit tension term is
-    /// anti-diffusive (DESIGN.md §3).
+    /// anti-diffusive (docs/src/theory/spectral.md).
     ///
     /// # Panics
     /// If `a` does not have the spectral shape.
