@@ -193,17 +193,27 @@ impl StudyArgs {
         }
     }
 
-    /// Run `f` in one pool of the study's threads ([`crate::commands::study::file::threads`]).
+    /// Run the study `S` of the file in one pool of its threads
+    /// ([`crate::commands::study::file::threads`]), into [`Self::folder`].
     ///
     /// # Errors
-    /// A study file that cannot be read as the study `name`.
-    fn in_pool<T: Send>(
-        &self,
-        name: &str,
-        f: impl FnOnce() -> Result<T, Error> + Send,
-    ) -> Result<T, Error> {
-        let threads = crate::commands::study::file::threads(&self.file, name, self.quick)?;
-        crate::cpu::in_pool(threads, f)
+    /// A missing or unreadable study file, or the study's own errors.
+    fn run<S: crate::commands::study::harness::Study>(&self) -> Result<(), Error>
+    where
+        S::Output: Send,
+    {
+        self.exists()?;
+        let out = self.folder();
+        let threads = crate::commands::study::file::threads(&self.file, S::NAME, self.quick)?;
+        crate::cpu::in_pool(threads, || {
+            crate::commands::study::harness::run::<S>(
+                &self.file,
+                self.quick,
+                &out,
+                self.output.force,
+            )
+        })?;
+        Ok(())
     }
 
     /// The output folder: `--out`, or `out/<file stem>[-quick]`.
@@ -418,42 +428,15 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             Ok(0)
         }
         Command::Study(Study::Precision(args)) => {
-            args.exists()?;
-            let out = args.folder();
-            args.in_pool("precision", || {
-                crate::commands::study::precision::precision(
-                    &args.file,
-                    args.quick,
-                    &out,
-                    args.output.force,
-                )
-            })?;
+            args.run::<crate::commands::study::precision::Precision>()?;
             Ok(0)
         }
         Command::Study(Study::Stability(args)) => {
-            args.exists()?;
-            let out = args.folder();
-            args.in_pool("stability", || {
-                crate::commands::study::stability::stability(
-                    &args.file,
-                    args.quick,
-                    &out,
-                    args.output.force,
-                )
-            })?;
+            args.run::<crate::commands::study::stability::Stability>()?;
             Ok(0)
         }
         Command::Study(Study::Convergence(args)) => {
-            args.exists()?;
-            let out = args.folder();
-            args.in_pool("convergence", || {
-                crate::commands::study::convergence::convergence(
-                    &args.file,
-                    args.quick,
-                    &out,
-                    args.output.force,
-                )
-            })?;
+            args.run::<crate::commands::study::convergence::Convergence>()?;
             Ok(0)
         }
         Command::Axisym(args) => {

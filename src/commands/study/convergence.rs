@@ -182,15 +182,6 @@ impl Study for Convergence {
     }
 }
 
-/// Run the study of `path` (quick variant if `quick`) into `out`.
-///
-/// # Errors
-/// `Error::Config` for a bad study file (naming the key) or an existing `out` without `force`;
-/// `Error::Blowup` if a run diverges.
-pub fn convergence(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Vec<Row>> {
-    harness::run::<Convergence>(path, quick, out, force)
-}
-
 /// Run `s` from `problem.phi` until its stop rules: the simulation, steps and wall seconds.
 fn settle(s: &Scene, problem: &Problem, rules: &StopRules) -> Result<(Simulation, f64)> {
     let clock = Instant::now();

@@ -99,15 +99,6 @@ impl Study for Precision {
     }
 }
 
-/// Run the study of `path` (quick variant if `quick`) into `out`.
-///
-/// # Errors
-/// `Error::Config` for a bad study file (naming the key) or an existing `out` without `force`;
-/// `Error::Blowup` if a run diverges.
-pub fn precision(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Vec<Config>> {
-    harness::run::<Precision>(path, quick, out, force)
-}
-
 /// A run's scene: the base scene from the prepared field (no preparation), no area
 /// constraint (the reference and every run alike), stopped at `t`.
 fn at(base: &Scene, t: f64, edit: impl FnOnce(&mut Scene)) -> Result<Scene> {

@@ -276,14 +276,6 @@ impl Study for Stability {
     }
 }
 
-/// Run the study of `path` (quick variant if `quick`) into `out`.
-///
-/// # Errors
-/// `Error::Config` for a bad study file (naming the key) or an existing `out` without `force`.
-pub fn stability(path: &Path, quick: bool, out: &Path, force: bool) -> Result<Vec<Run>> {
-    harness::run::<Stability>(path, quick, out, force)
-}
-
 /// The FD bound at each h: `(h/ε, Δt bound)`.
 type Bounds = Vec<(f64, f64)>;
 
