@@ -1,5 +1,7 @@
-//! Small numerical pieces shared by the engines: the parallel chunk size and the stable root of
-//! the area quadratic.
+//! Small numerical pieces shared by the engines: the parallel chunk size, the reduction in a
+//! fixed order, and the stable root of the area quadratic.
+
+use rayon::iter::IndexedParallelIterator;
 
 /// Elements per parallel task in the passes over a spectrum or a field (smaller tasks cost more
 /// in rayon's scheduling than they gain). The spectral sweeps split their chunks down to one a
@@ -15,6 +17,19 @@ pub const ENERGY_RISE_TOL: f64 = 1e-11;
 /// Largest relative drift of V (and of A under the exact projection) before a step counts as
 /// breaking a constraint (both are held to round-off, about 1e-14).
 pub const CONSTRAINT_TOL: f64 = 1e-9;
+
+/// Σ_j partial_j = (((zero + p₀) + p₁) + …) + p_{m−1}: the partials of fixed pieces of the data
+/// (chunks, rows, planes: never a thread's share), computed in parallel and added in index
+/// order. Rayon's own `reduce` and `sum` combine partials along the pool's split tree, so
+/// their last bits depend on the thread count; this order does not, and a result is the same
+/// bits on any number of threads. The cost is one vector of m partials.
+pub fn sum_in_order<T: Send>(
+    partials: impl IndexedParallelIterator<Item = T>,
+    zero: T,
+    add: impl Fn(T, T) -> T,
+) -> T {
+    partials.collect::<Vec<T>>().into_iter().fold(zero, add)
+}
 
 /// The root of a x² + 2b x + c = 0 nearest `near` (numerically stable), `None` if not real.
 pub fn nearest_root(a: f64, b: f64, c: f64, near: f64) -> Option<f64> {

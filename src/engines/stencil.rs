@@ -1,6 +1,7 @@
 //! Second-order finite-difference operators on the grid, periodic or with mirror (Neumann)
 //! walls: the (2d+1)-point Laplacian and the forward-difference area of docs/src/theory/fd.md.
 
+use crate::engines::numerics::sum_in_order;
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::AREA_PREFACTOR;
 use ndarray::Array3;
@@ -107,31 +108,28 @@ pub fn area_form(grid: &Grid, eps: f64, u: &Array3<f64>, v: &Array3<f64>) -> f64
     let kinds = grid.kinds;
     let us = u.as_slice().expect("standard layout");
     let vs = v.as_slice().expect("standard layout");
-    let sum: f64 = (0..n0 * n1)
-        .into_par_iter()
-        .with_min_len(8)
-        .map(|row| {
-            let (i, j) = (row / n1, row % n1);
-            let line = |i: usize, j: usize| (i * n1 + j) * n2..(i * n1 + j + 1) * n2;
-            let (cu, cv) = (&us[line(i, j)], &vs[line(i, j)]);
-            let mut s = 0.0;
-            if n0 > 1 {
-                let r = line(above(i, n0, kinds[0]), j);
-                s += difference_product(cu, &us[r.clone()], cv, &vs[r]);
+    let rows = (0..n0 * n1).into_par_iter().with_min_len(8).map(|row| {
+        let (i, j) = (row / n1, row % n1);
+        let line = |i: usize, j: usize| (i * n1 + j) * n2..(i * n1 + j + 1) * n2;
+        let (cu, cv) = (&us[line(i, j)], &vs[line(i, j)]);
+        let mut s = 0.0;
+        if n0 > 1 {
+            let r = line(above(i, n0, kinds[0]), j);
+            s += difference_product(cu, &us[r.clone()], cv, &vs[r]);
+        }
+        if n1 > 1 {
+            let r = line(i, above(j, n1, kinds[1]));
+            s += difference_product(cu, &us[r.clone()], cv, &vs[r]);
+        }
+        if n2 > 1 {
+            for k in 0..n2 {
+                let up = above(k, n2, kinds[2]);
+                s += (cu[up] - cu[k]) * (cv[up] - cv[k]);
             }
-            if n1 > 1 {
-                let r = line(i, above(j, n1, kinds[1]));
-                s += difference_product(cu, &us[r.clone()], cv, &vs[r]);
-            }
-            if n2 > 1 {
-                for k in 0..n2 {
-                    let up = above(k, n2, kinds[2]);
-                    s += (cu[up] - cu[k]) * (cv[up] - cv[k]);
-                }
-            }
-            s
-        })
-        .sum();
+        }
+        s
+    });
+    let sum = sum_in_order(rows, 0.0, |a, b| a + b);
     AREA_PREFACTOR * eps * sum * grid.h.powi(grid.dim as i32 - 2) * grid.mirror_factor()
 }
 

@@ -21,7 +21,9 @@
 mod lanes;
 mod sweep;
 
-use crate::engines::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK};
+use crate::engines::numerics::{
+    nearest_root, sum_in_order, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK,
+};
 use crate::engines::stencil;
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::problem::config::AreaMethod;
@@ -133,25 +135,21 @@ impl FdEngine {
         let lap = self.next_phi.as_slice().expect("standard layout");
         let big = self.next_mu.as_slice_mut().expect("standard layout");
         // Φ_h = f(φ) − ε²∇²_h φ, with Σ Φ², max|φ| and Σ φ.
-        let (sum_sq, max_abs, sum_phi) = big
-            .par_chunks_mut(PAR_CHUNK)
-            .enumerate()
-            .map(|(j, b)| {
-                let start = j * PAR_CHUNK;
-                let mut acc = (0.0, 0.0f64, 0.0);
-                for (k, b) in b.iter_mut().enumerate() {
-                    let i = start + k;
-                    let p = phi[i];
-                    let ec0 = field.map_or(uniform, |f| r * f[i]);
-                    *b = bulk(p, ec0) - e2 * lap[i];
-                    acc = (acc.0 + *b * *b, acc.1.max(p.abs()), acc.2 + p);
-                }
-                acc
-            })
-            .reduce(
-                || (0.0, 0.0, 0.0),
-                |a, b| (a.0 + b.0, a.1.max(b.1), a.2 + b.2),
-            );
+        let partials = big.par_chunks_mut(PAR_CHUNK).enumerate().map(|(j, b)| {
+            let start = j * PAR_CHUNK;
+            let mut acc = (0.0, 0.0f64, 0.0);
+            for (k, b) in b.iter_mut().enumerate() {
+                let i = start + k;
+                let p = phi[i];
+                let ec0 = field.map_or(uniform, |f| r * f[i]);
+                *b = bulk(p, ec0) - e2 * lap[i];
+                acc = (acc.0 + *b * *b, acc.1.max(p.abs()), acc.2 + p);
+            }
+            acc
+        });
+        let (sum_sq, max_abs, sum_phi) = sum_in_order(partials, (0.0, 0.0, 0.0), |a, b| {
+            (a.0 + b.0, a.1.max(b.1), a.2 + b.2)
+        });
         let dv = self.grid.cell_volume() * self.grid.mirror_factor();
         self.measures = Measures {
             energy: sum_sq * dv,
@@ -269,26 +267,23 @@ impl FdEngine {
         let lap_big = self.work.as_slice().expect("standard layout");
         let lap = self.next_phi.as_slice().expect("standard layout");
         let mu = self.mu.as_slice_mut().expect("standard layout");
-        let sum: f64 = mu
-            .par_chunks_mut(PAR_CHUNK)
-            .enumerate()
-            .map(|(j, m)| {
-                let start = j * PAR_CHUNK;
-                let mut sum = 0.0;
-                for (k, m) in m.iter_mut().enumerate() {
-                    let i = start + k;
-                    let fp = bulk_derivative(phi[i], field.map_or(uniform, |f| r * f[i]));
-                    *m = (2.0 * (fp * big[i]) - tension * lap[i]) - 2.0 * e2 * lap_big[i];
-                    sum += *m;
-                }
-                sum
-            })
-            .sum();
+        let partials = mu.par_chunks_mut(PAR_CHUNK).enumerate().map(|(j, m)| {
+            let start = j * PAR_CHUNK;
+            let mut sum = 0.0;
+            for (k, m) in m.iter_mut().enumerate() {
+                let i = start + k;
+                let fp = bulk_derivative(phi[i], field.map_or(uniform, |f| r * f[i]));
+                *m = (2.0 * (fp * big[i]) - tension * lap[i]) - 2.0 * e2 * lap_big[i];
+                sum += *m;
+            }
+            sum
+        });
+        let sum = sum_in_order(partials, 0.0, |a, b| a + b);
         let mean = sum / mu.len() as f64;
-        let sum_sq: f64 = mu
+        let partials = mu
             .par_chunks(PAR_CHUNK)
-            .map(|m| m.iter().map(|m| (m - mean) * (m - mean)).sum::<f64>())
-            .sum();
+            .map(|m| m.iter().map(|m| (m - mean) * (m - mean)).sum::<f64>());
+        let sum_sq = sum_in_order(partials, 0.0, |a, b| a + b);
         self.residual = (sum_sq / mu.len() as f64).sqrt();
         self.mu_mean = mean;
     }

@@ -162,13 +162,15 @@ impl Sums {
 type Advanced = (Lanes<3>, [f64; 3]);
 
 /// One thread's buffers: the ring of three Φ planes and one row of a Laplacian, each
-/// [`Private`] to the thread; stage 1's results on the slab's edge planes, and the slab's sums.
+/// [`Private`] to the thread; stage 1's results on the slab's edge planes, and the sums of each
+/// of the slab's planes (added over the box in plane order, so that the totals do not depend on
+/// how the planes are cut into slabs, that is on the thread count).
 #[derive(Debug)]
 struct Pipe {
     big: Private<f64>,
     row: Private<f64>,
     edge_sums: [Advanced; 4],
-    sums: Sums,
+    planes: Vec<Sums>,
 }
 
 /// The planes of the box cut into slabs of `per` consecutive planes (the last may be shorter).
@@ -226,7 +228,7 @@ impl Sweep {
                 big: Private::new(3 * plane, 0.0),
                 row: Private::new(layout.len, 0.0),
                 edge_sums: [([[0.0; LANES]; 3], [0.0; 3]); 4],
-                sums: Sums::default(),
+                planes: Vec::new(),
             })
             .collect();
         let edges = (0..count).map(|_| Private::new(4 * plane, 0.0)).collect();
@@ -282,7 +284,8 @@ impl Sweep {
         }
         self.pipes[..n]
             .iter()
-            .fold(Sums::default(), |a, p| a.add(p.sums))
+            .flat_map(|p| &p.planes)
+            .fold(Sums::default(), |a, p| a.add(*p))
     }
 }
 
@@ -352,7 +355,9 @@ impl Pipe {
     #[inline(always)]
     fn stages(&mut self, s: &Slab, phi: &mut [f64], mu: &mut [f64]) {
         let (z0, z1) = (s.z0, s.z1);
-        let mut sums = Sums::default();
+        let mut sums = std::mem::take(&mut self.planes);
+        sums.clear();
+        sums.resize((z1 - z0) as usize, Sums::default());
         for z in z0..(z0 + 2).min(z1) {
             self.advance(s, z, phi, mu, &mut sums);
         }
@@ -365,14 +370,14 @@ impl Pipe {
             self.potential(s, z + 1, phi, mu, &mut sums);
             self.correct(s, z, mu, &mut sums);
         }
-        self.sums = sums;
+        self.planes = sums;
     }
 
-    /// Stage 1 on plane `z` of the slab, its sums added: an edge plane copied from its slot,
+    /// Stage 1 on plane `z` of the slab, its sums into the plane's entry of `sums`: an edge plane copied from its slot,
     /// another computed from the slab's planes of μⁿ in `mu` (an inner plane's neighbours are
     /// the slab's own, and stage 2 has not yet overwritten them).
     #[inline(always)]
-    fn advance(&mut self, s: &Slab, z: isize, phi: &mut [f64], mu: &[f64], sums: &mut Sums) {
+    fn advance(&mut self, s: &Slab, z: isize, phi: &mut [f64], mu: &[f64], sums: &mut [Sums]) {
         let p = s.l.plane();
         let out = &mut phi[(z - s.z0) as usize * p..][..p];
         let ([sum, max_phi, max_lap], [sum_t, max_phi_t, max_lap_t]) =
@@ -388,6 +393,7 @@ impl Pipe {
                     advance(s.l, s.k, mu, old, out, &mut self.row)
                 }
             };
+        let sums = &mut sums[(z - s.z0) as usize];
         sums.phi += total(sum, sum_t);
         sums.max_phi = largest(max_phi, max_phi_t, sums.max_phi);
         sums.max_lap_mu = largest(max_lap, max_lap_t, sums.max_lap_mu);
@@ -397,7 +403,7 @@ impl Pipe {
     /// into μ^{n+1} and the sums of F and A. f and f' take εC0 from the field, the uniform
     /// value, or drop it where C0 = 0.
     #[inline(always)]
-    fn potential(&mut self, s: &Slab, z: isize, phi: &[f64], mu: &mut [f64], sums: &mut Sums) {
+    fn potential(&mut self, s: &Slab, z: isize, phi: &[f64], mu: &mut [f64], sums: &mut [Sums]) {
         match s.f.c0 {
             Some(c) => {
                 let c0 = Some(s.l.plane_of(c, z));
@@ -421,7 +427,7 @@ impl Pipe {
         z: isize,
         phi: &[f64],
         mu: &mut [f64],
-        sums: &mut Sums,
+        sums: &mut [Sums],
         bulk: impl Bulk,
         c0: Option<&[f64]>,
     ) {
@@ -444,6 +450,7 @@ impl Pipe {
         }
         if own {
             let ([energy, phi_lap], [energy_t, phi_lap_t]) = acc.finish();
+            let sums = &mut sums[(z - s.z0) as usize];
             sums.energy += total(energy, energy_t);
             sums.phi_lap += total(phi_lap, phi_lap_t);
         }
@@ -451,7 +458,7 @@ impl Pipe {
 
     /// Stage 3 on plane `z` of the slab: μ^{n+1} = q − 2ε² ∇²_h Φ, with the residual's sums.
     #[inline(always)]
-    fn correct(&mut self, s: &Slab, z: isize, mu: &mut [f64], sums: &mut Sums) {
+    fn correct(&mut self, s: &Slab, z: isize, mu: &mut [f64], sums: &mut [Sums]) {
         let (l, p) = (s.l, s.l.plane());
         let at = |z| -> &[f64] { &self.big[ring(z) * p..][..p] };
         let big = [at(z - 1), at(z), at(z + 1)];
@@ -467,6 +474,7 @@ impl Pipe {
             in_lanes(&kernel, [&self.row], [&mut out[r]], &mut acc);
         }
         let ([dev, dev_sq], [dev_t, dev_sq_t]) = acc.finish();
+        let sums = &mut sums[(z - s.z0) as usize];
         sums.dev += total(dev, dev_t);
         sums.dev_sq += total(dev_sq, dev_sq_t);
     }

@@ -22,7 +22,7 @@ use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm
 use super::kernels::{sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::saved::spectrum;
-use crate::engines::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL};
+use crate::engines::numerics::{nearest_root, sum_in_order, CONSTRAINT_TOL, ENERGY_RISE_TOL};
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::problem::config::{
     AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer, VolumeRamp,
@@ -404,7 +404,7 @@ impl SpectralEngine {
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
         let (task, total) = (sym.task_reals(), 2 * self.cur.hat.len());
-        let [pp, pq, qq] = (0..total.div_ceil(task))
+        let partials = (0..total.div_ceil(task))
             .into_par_iter()
             .with_max_len(1)
             .map(|t| {
@@ -418,8 +418,10 @@ impl SpectralEngine {
                     acc = [acc[0] + s[0], acc[1] + s[1], acc[2] + s[2]];
                 });
                 acc
-            })
-            .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
+            });
+        let [pp, pq, qq] = sum_in_order(partials, [0.0; 3], |a, b| {
+            [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+        });
         (pp, pq, qq)
     }
 

@@ -16,7 +16,7 @@
 use super::kernels::{pointwise_sums, sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
-use crate::engines::numerics::PAR_CHUNK;
+use crate::engines::numerics::{sum_in_order, PAR_CHUNK};
 use crate::engines::Diverged;
 use crate::problem::config::Laplacian;
 use crate::problem::grid::Grid;
@@ -333,7 +333,7 @@ fn pointwise_apart(
     transform.inverse(second, lap);
     let phi = phi.as_slice().expect("standard layout");
     let c = PAR_CHUNK;
-    let sums = lap
+    let partials = lap
         .as_slice_mut()
         .expect("standard layout")
         .par_chunks_mut(c)
@@ -348,8 +348,8 @@ fn pointwise_apart(
             let old = previous.map_or(&phi[range.clone()], |p| &p[range.clone()]);
             let phi = &phi[range.clone()];
             pointwise_range(eps, phi, old, slice_c0(c0, range), lap, fphi)
-        })
-        .reduce(PointSums::default, PointSums::add);
+        });
+    let sums = sum_in_order(partials, PointSums::default(), PointSums::add);
     transform.forward(fphi, first);
     transform.forward(lap, second);
     sums
@@ -586,7 +586,8 @@ fn combine(
         with_residual: sigma.is_some(),
         tension: 2.0 * sym.area_prefactor * sigma.unwrap_or(0.0),
     };
-    n.par_chunks_mut(task)
+    let partials = n
+        .par_chunks_mut(task)
         .enumerate()
         .with_max_len(1)
         .map(|(t, n)| {
@@ -605,8 +606,8 @@ fn combine(
                 sums = sums.add(piece);
             });
             sums
-        })
-        .reduce(CombineSums::default, CombineSums::add)
+        });
+    sum_in_order(partials, CombineSums::default(), CombineSums::add)
 }
 
 /// What [`combine`] forms.

@@ -336,8 +336,8 @@ impl Transform {
     /// replace `a` and `b`. The same as [`Transform::inverse`] twice, `visit` over the box and
     /// [`Transform::forward`] twice, but each slab's fields stay in cache from the inverse
     /// transforms to the forward ones, and the two scratch fields never reach memory. Returns
-    /// the slabs' values summed by `add` from `S::default()` (in slab order within a thread,
-    /// then over the threads), or `None`, having done nothing, when the box has fewer slabs
+    /// the slabs' values summed by `add` from `S::default()` in slab order (the same bits on
+    /// any number of threads), or `None`, having done nothing, when the box has fewer slabs
     /// than threads.
     ///
     /// # Panics
@@ -372,26 +372,28 @@ impl Transform {
         plan.strided_pass(0, Direction::Inverse, yb, works);
         let (slab, spectral_slab) = (n1 * n2, n1 * plan.spectral[2]);
         let scale = 1.0 / (n0 * slab) as f64;
-        // The slabs from `first_slab` of one thread: `ya`, `yb`, `x` hold just those slabs.
+        // The slabs from `first_slab` of one thread: `ya`, `yb`, `x` hold just those slabs;
+        // returns each slab's visit, to be added over the box in slab order (the same bits
+        // however the slabs are shared out).
         let slabs = |first_slab: usize,
                      (ya, yb, x): (&mut [Complex64], &mut [Complex64], &mut [f64]),
                      work: &mut Work,
                      fields: &mut [f64]|
-         -> S {
+         -> Vec<S> {
             let (xb, y) = fields.split_at_mut(slab);
             let ya = ya.chunks_exact_mut(spectral_slab);
             let yb = yb.chunks_exact_mut(spectral_slab);
-            let mut total = S::default();
+            let mut visits = Vec::with_capacity(x.len() / slab);
             for (i, ((ya, yb), x)) in ya.zip(yb).zip(x.chunks_exact_mut(slab)).enumerate() {
                 plan.inverse_slabs(ya, x, scale, work);
                 plan.inverse_slabs(yb, xb, scale, work);
-                total = add(total, visit((first_slab + i) * slab, x, xb, y));
+                visits.push(visit((first_slab + i) * slab, x, xb, y));
                 plan.forward_slabs(y, ya, work);
                 plan.forward_slabs(xb, yb, work);
             }
-            total
+            visits
         };
-        let total = if threads == 1 {
+        let visits = if threads == 1 {
             slabs(0, (ya, yb, x), &mut works[0], &mut slab_fields[0])
         } else {
             let per = n0.div_ceil(threads);
@@ -403,8 +405,10 @@ impl Transform {
                 .map(|(t, (((ya, yb), x), (work, fields)))| {
                     slabs(t * per, (ya, yb, x), work, fields)
                 })
-                .reduce(S::default, &add)
+                .flatten_iter()
+                .collect()
         };
+        let total = visits.into_iter().fold(S::default(), &add);
         plan.strided_pass(0, Direction::Forward, ya, works);
         plan.strided_pass(0, Direction::Forward, yb, works);
         plan.clear_padding(ya);
