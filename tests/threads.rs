@@ -135,3 +135,71 @@ fn fd_runs_do_not_depend_on_the_thread_count() {
         }
     }
 }
+
+/// A run of 10 steps on 1 thread resumed for 10 more on 3 threads ends on the bits of the
+/// 20-step run on 1 thread, so a checkpoint may move to a machine with another core count.
+#[test]
+fn a_run_resumed_on_more_threads_continues_bit_for_bit() {
+    for (name, extra) in [
+        (
+            "fd lagrangian",
+            json!({"method": "fd", "dt": 4e-4,
+                                 "area": {"method": "lagrangian", "alpha": 1e-3}}),
+        ),
+        (
+            "sbdf2 adaptive",
+            json!({"scheme": "sbdf2", "adaptive": {"dt_max": 50.0}}),
+        ),
+        (
+            "relaxational",
+            json!({"dynamics": "relaxational", "dt": 1.0}),
+        ),
+    ] {
+        let tmp = TempDir::new().unwrap();
+        let scene = ellipsoid(extra, true);
+        let (whole, _) = run(tmp.path(), &scene, 20, 1);
+        let spec = tmp.path().join("s.json");
+        let split = tmp.path().join("split");
+        let vesicle = |args: &[&str]| {
+            let o = Command::new(env!("CARGO_BIN_EXE_vesicle"))
+                .args(args)
+                .output()
+                .unwrap();
+            assert!(
+                o.status.success(),
+                "{name}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        };
+        let (spec, split_dir) = (spec.to_str().unwrap(), split.to_str().unwrap());
+        vesicle(&[
+            "run",
+            spec,
+            "--out",
+            split_dir,
+            "--set",
+            "max_steps=10",
+            "--set",
+            "threads=1",
+        ]);
+        vesicle(&[
+            "resume",
+            split_dir,
+            "--set",
+            "max_steps=20",
+            "--set",
+            "threads=3",
+        ]);
+        let bytes = std::fs::read(split.join("phi_final.npy")).unwrap();
+        let header = 10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+        let resumed: Vec<f64> = bytes[header..]
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        assert!(
+            whole == resumed,
+            "{name}: resumed on 3 threads differs by {:e}",
+            max_difference(&whole, &resumed)
+        );
+    }
+}
