@@ -3,7 +3,7 @@
 
 use super::sweeps::{area_values, direction_piece, gradient_sweep, pair_dots, trial_values};
 use super::RelaxEngine;
-use crate::engines::numerics::nearest_root;
+use crate::engines::numerics::{nearest_root, sum_in_order};
 use crate::engines::spectral::evaluator::{Evaluator, ExplicitTerm, Metric};
 use crate::engines::spectral::pieces::{for_each_piece, per_width, reals, reals_mut, PIECE};
 use crate::engines::{AreaConstraint, Diverged};
@@ -305,7 +305,7 @@ impl RelaxEngine {
         let (r, x) = (reals(flat(&self.grad)), reals(flat(&self.cur.hat)));
         let task = sym.task_reals();
         let coefficients = *d;
-        let area = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
+        let partials = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
             .par_chunks_mut(task)
             .enumerate()
             .with_max_len(1)
@@ -324,8 +324,8 @@ impl RelaxEngine {
                         .add(per_width!(sym, W => area_values::<W>(sym, m, p, x, o, &mut terms)));
                 });
                 acc
-            })
-            .reduce(AreaSums::default, AreaSums::add);
+            });
+        let area = sum_in_order(partials, AreaSums::default(), AreaSums::add);
         let project = self.area.method != AreaMethod::None && area.xq > 0.0;
         d.c_q = if project { -area.xd / area.xq } else { 0.0 };
         d.slope += d.c_q * self.ip.qr;
