@@ -6,7 +6,7 @@
 
 use super::case::{read_result, CaseResult};
 use super::chart;
-use super::extrapolate::{self, Point};
+use super::extrapolate::{self, Orders, Point};
 use super::reference::{self, Reference};
 use super::report::{self, Kind};
 use super::spec::{c0_tag, Case, DiagramSpec};
@@ -58,6 +58,12 @@ pub fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Res
         .collect::<Result<_>>()?;
     report::check_complete(cases.len(), &found)?;
     let results: Vec<CaseResult> = found.into_iter().flatten().collect();
+    let Some(orders) = extrapolate::orders(&results) else {
+        return Err(Error::config(
+            "r0",
+            "the orders in ε/R0 need three or more resolutions with distinct values",
+        ));
+    };
     let thumbnails = |c0: f64| -> Vec<PathBuf> {
         cases
             .iter()
@@ -68,7 +74,7 @@ pub fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Res
     };
     let c0s = spec.c0_sorted();
     if let [c0] = c0s.as_slice() {
-        let slice = merge_slice(*c0, &results, &thumbnails(*c0), out)?;
+        let slice = merge_slice(*c0, &results, orders, &thumbnails(*c0), out)?;
         print!("{}", slice.table);
         println!("-> {}", out.display());
         return Ok(());
@@ -81,7 +87,7 @@ pub fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Res
             source,
         })?;
         let mine: Vec<CaseResult> = results.iter().filter(|r| r.c0 == c0).cloned().collect();
-        slices.push(merge_slice(c0, &mine, &thumbnails(c0), &dir)?);
+        slices.push(merge_slice(c0, &mine, orders, &thumbnails(c0), &dir)?);
     }
     let all_thumbnails: Vec<PathBuf> = slices.iter().flat_map(|s| thumbnails(s.c0)).collect();
     chart::write_montage(&out.join("thumbnails.png"), &all_thumbnails, 4)?;
@@ -91,24 +97,20 @@ pub fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Res
     Ok(())
 }
 
-/// Merge the cases `results` of one c̄0 into `dir`: `diagram.csv`, `cases.csv`,
+/// Merge the cases `results` of one c̄0, extrapolated at the diagram's `orders`, into `dir`: `diagram.csv`, `cases.csv`,
 /// `transitions.csv`, `reference.csv`, `table.txt`, `diagram.png`, `errors.png` and
 /// `thumbnails.png` (of the pictures `thumbnails`).
 ///
 /// # Errors
-/// `Error::Config` (field `r0`) if the orders in ε/R0 cannot be fitted; I/O and drawing errors.
+/// I/O and drawing errors.
 pub fn merge_slice(
     c0: f64,
     results: &[CaseResult],
+    orders: Orders,
     thumbnails: &[PathBuf],
     dir: &Path,
 ) -> Result<Slice> {
-    let Some((points, orders)) = extrapolate::extrapolate(results) else {
-        return Err(Error::config(
-            "r0",
-            "the orders in ε/R0 need three or more resolutions with distinct values",
-        ));
-    };
+    let points = extrapolate::extrapolate(results, orders);
     let (v_lo, v_hi) = results.iter().fold((1.0f64, 0.0f64), |(a, b), r| {
         (a.min(r.v).min(r.v_target), b.max(r.v).max(r.v_target))
     });

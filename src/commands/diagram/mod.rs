@@ -1,17 +1,20 @@
-//! `vesicle diagram FILE`: the c0 = 0 shape diagram (reduced bending energy e against reduced
-//! volume v on the prolate, oblate and stomatocyte branches) from the phase-field model,
-//! against the program's own sharp-interface reference ([`crate::analysis::axisym`]).
+//! `vesicle diagram FILE`: the shape diagram (reduced bending energy e against reduced volume
+//! v on the prolate, oblate and stomatocyte branches) from the phase-field model, at one or
+//! several reduced spontaneous curvatures c̄0 = c0 R0, against the program's own
+//! sharp-interface reference at the same c̄0 ([`crate::analysis::axisym`]).
 //!
-//! Each point `(branch, v)` starts from the reference shape at `v` ([`crate::problem::revolution`]),
-//! scaled to R0 = `r0` ε for every resolution of the diagram file ([`spec`]), and is relaxed
-//! by L-BFGS on its symmetry-reduced box (⅛ for prolates and oblates, ¼ for stomatocytes) to
-//! the stationarity tolerance ([`case`]). The φ = 0 surface gives v, and the pair (v, e) is
-//! extrapolated to ε/R0 → 0 with orders fitted over the whole diagram ([`extrapolate`]).
+//! Each point `(branch, v, c̄0)` starts from the reference shape at `(v, c̄0)`
+//! ([`crate::problem::revolution`]), scaled to R0 = `r0` ε for every resolution of the diagram
+//! file ([`spec`]), its scene's uniform c0 = c̄0/`r0`, and is relaxed by L-BFGS on its
+//! symmetry-reduced box (⅛ for prolates and oblates, ¼ for stomatocytes) to the stationarity
+//! tolerance ([`case`]). Start shapes thinner than `min_width` ε at the coarsest resolution are
+//! refused ([`thickness`]). The φ = 0 surface gives v, and the pair (v, e) is extrapolated to
+//! ε/R0 → 0 with orders fitted over the whole diagram ([`extrapolate`]).
 //!
 //! Cases are independent: `--list` prints them, `--case K` runs one into
 //! `OUT/cases/<case>/`, `--merge` collects the folders into the CSV files and charts
-//! ([`report`], [`chart`]); without these flags one process runs every case (`--jobs` at a
-//! time, one thread each) and merges. Either way the CSV files are the same.
+//! ([`merge`], [`report`], [`chart`], [`summary`]); without these flags one process runs every
+//! case (`--jobs` at a time, one thread each) and merges. Either way the CSV files are the same.
 
 pub mod case;
 pub mod chart;

