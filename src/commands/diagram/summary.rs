@@ -14,6 +14,9 @@ use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// The lowest branch below and above a transition.
+type BranchPair = (Branch, Branch);
+
 /// Grid of reduced volumes of the reference phase diagram (`vesicle axisym`'s default).
 const PHASE_V: (f64, f64, f64) = (0.5, 0.99, 0.01);
 
@@ -240,7 +243,7 @@ fn phase_chart(slices: &[Slice]) -> Figure {
     fig.title = "lowest-energy shape: axisymmetric reference, phase-field transitions".into();
     fig.legend = Corner::UpperRight;
     // The reference transitions between the same two branches, joined across c̄0.
-    let mut lines: Vec<((Branch, Branch), Vec<(f64, f64)>)> = Vec::new();
+    let mut lines: Vec<(BranchPair, Vec<(f64, f64)>)> = Vec::new();
     for r in &reference {
         for t in &r.transitions {
             let key = (t.below, t.above);
