@@ -16,7 +16,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// Odd-mode size `√Σ_{k odd} a_k²` above which a shape counts as up–down asymmetric.
-const ASYMMETRIC: f64 = 1e-6;
+pub const ASYMMETRIC: f64 = 1e-6;
 
 /// A change of the lowest-energy branch between two grid values.
 #[derive(Clone, Copy, Debug)]
@@ -245,7 +245,7 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 }
 
 /// `c0` as it appears in file names (`-0.5` → `m0.50`, `1` → `1.00`).
-fn c0_tag(c0: f64) -> String {
+pub fn c0_tag(c0: f64) -> String {
     let t = format!("{:.2}", c0.abs());
     if c0 < 0.0 {
         format!("m{t}")

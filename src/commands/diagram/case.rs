@@ -1,5 +1,5 @@
-//! One case of a diagram: the axisymmetric start of a branch at a reduced volume, scaled to
-//! R0 = `r0` ε, relaxed by L-BFGS on its symmetry-reduced box to the stationarity tolerance,
+//! One case of a diagram: the axisymmetric start of a branch at a reduced volume and reduced
+//! spontaneous curvature c̄0, scaled to R0 = `r0` ε (the scene's uniform c0 = c̄0/`r0`), relaxed by L-BFGS on its symmetry-reduced box to the stationarity tolerance,
 //! and measured. Every case runs on one thread, so its numbers do not depend on how a sweep
 //! is spread over processes.
 
@@ -22,6 +22,9 @@ pub struct CaseResult {
     pub branch: String,
     /// Target reduced volume (of the sharp start).
     pub v_target: f64,
+    /// Reduced spontaneous curvature c̄0 of the sharp start (the scene's c0 is c̄0/`r0`).
+    #[serde(default)]
+    pub c0: f64,
     /// R0/ε.
     pub r0: f64,
     /// Full-box grid.
@@ -32,7 +35,7 @@ pub struct CaseResult {
     pub v: f64,
     /// Diffuse reduced volume from ∫(1 + φ)/2 and the diffuse area.
     pub v_diffuse: f64,
-    /// Reduced bending energy e.
+    /// Reduced bending energy e = ∮(2H − c0)² dA / 16π of the phase field (the record's).
     pub e: f64,
     /// σ (the area multiplier), in units of the scene (ε = 1).
     pub sigma: f64,
@@ -100,11 +103,17 @@ pub fn computed_points(branch: Branch, n: [usize; 3]) -> usize {
     n.iter().product::<usize>() >> mirror_planes(branch).len()
 }
 
-/// The scene of `case` (contour file `contour.csv` beside it).
+/// The scene of `case` (contour file `contour.csv` beside it); it sets `c0` = c̄0/`r0` where
+/// c̄0 ≠ 0.
 pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json::Value {
-    json!({
+    let at_c0 = if case.c0 == 0.0 {
+        String::new()
+    } else {
+        format!(", c0 R0 = {}", case.c0)
+    };
+    let mut scene = json!({
         "description": format!(
-            "diagram case {}: {} branch at v = {}, R0 = {} eps, relaxed by L-BFGS to residual {:e}",
+            "diagram case {}: {} branch at v = {}{at_c0}, R0 = {} eps, relaxed by L-BFGS to residual {:e}",
             case.index, case.branch.name(), case.v, case.r0, spec.stop_residual
         ),
         "dim": 3,
@@ -120,7 +129,11 @@ pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json:
         "symmetry": mirror_planes(case.branch),
         "threads": 1,
         "output": {"png": false, "vti": false}
-    })
+    });
+    if case.c0 != 0.0 {
+        scene["c0"] = json!(case.scene_c0());
+    }
+    scene
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -130,7 +143,7 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
     }
 }
 
-/// Run `case` with the sharp start `shape` (the branch at `case.v`, R0 = 1) in the folder
+/// Run `case` with the sharp start `shape` (the branch at `case.v` and `case.c0`, R0 = 1) in the folder
 /// `dir` (created; it must not hold a result yet): writes `contour.csv`, `scene.json` (which
 /// `vesicle run` accepts as it is), `thumbnail.png` when the spec asks for one, and last, by
 /// an atomic rename, `result.json`.
@@ -174,6 +187,7 @@ pub fn run_case(
         index: case.index,
         branch: case.branch.name().to_string(),
         v_target: case.v,
+        c0: case.c0,
         r0: case.r0,
         n,
         points: problem.grid.len(),
@@ -206,7 +220,11 @@ fn write_thumbnail(full: &ndarray::Array3<f64>, h: f64, case: &Case, path: &Path
         cut: (case.branch == Branch::Stomatocyte).then_some(1),
         ..View::default()
     };
-    let title = format!("{} v = {}", case.branch.name(), case.v);
+    let title = if case.c0 == 0.0 {
+        format!("{} v = {}", case.branch.name(), case.v)
+    } else {
+        format!("{} v = {}, c0 R0 = {}", case.branch.name(), case.v, case.c0)
+    };
     let bounds = Bounds::of_grid([s[0], s[1], s[2]], h);
     shade::render(&mesh, &bounds, &view, &title)?.write_png(path)?;
     Ok(())

@@ -34,13 +34,14 @@ pub struct Transition {
     pub ground: bool,
 }
 
-/// Write the diagram chart: `extrapolated` and `finest` are per branch of [`Branch::ALL`],
+/// Write the diagram chart at reduced spontaneous curvature `c0`: `extrapolated` and `finest` are per branch of [`Branch::ALL`],
 /// `(v, e)` points; `transitions` the reference transitions and the phase-field crossings.
 ///
 /// # Errors
 /// `Error::Output` if drawing or writing fails.
 pub fn write_chart(
     path: &Path,
+    c0: f64,
     reference: &Reference,
     extrapolated: &[Vec<(f64, f64)>],
     finest: &[Vec<(f64, f64)>],
@@ -48,19 +49,24 @@ pub fn write_chart(
 ) -> Result<()> {
     ensure_font(path)?;
     let all = extrapolated.iter().chain(finest).flatten();
-    let (mut v_lo, mut v_hi, mut e_hi) = (1.0f64, 0.0f64, 1.0f64);
+    let (mut v_lo, mut v_hi, mut e_lo, mut e_hi) =
+        (1.0f64, 0.0f64, f64::INFINITY, f64::NEG_INFINITY);
     for &(v, e) in all {
         v_lo = v_lo.min(v);
         v_hi = v_hi.max(v);
+        e_lo = e_lo.min(e);
         e_hi = e_hi.max(e);
     }
     let (v_lo, v_hi) = (v_lo - 0.02, (v_hi + 0.02).min(1.0));
-    let e_range = 0.95..e_hi + 0.1 * (e_hi - 0.95);
+    // From 0.95 (below the sphere's e = 1 at c0 = 0), lower where a point lies lower.
+    let e_lo = 0.95f64.min(0.9 * e_lo);
+    let e_range = e_lo..e_hi + 0.1 * (e_hi - e_lo);
     let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
         draw(
             &root,
+            c0,
             (v_lo..v_hi, e_range),
             reference,
             extrapolated,
@@ -82,6 +88,7 @@ type DrawResult = std::result::Result<
 
 fn draw(
     root: &Area,
+    c0: f64,
     (vs, es): (std::ops::Range<f64>, std::ops::Range<f64>),
     reference: &Reference,
     extrapolated: &[Vec<(f64, f64)>],
@@ -89,23 +96,39 @@ fn draw(
     transitions: &[Transition],
 ) -> DrawResult {
     root.fill(&WHITE)?;
+    let (caption, energy) = if c0 == 0.0 {
+        (
+            "Shape diagram at c0 = 0: phase field (L-BFGS) against the axisymmetric reference"
+                .to_string(),
+            "reduced bending energy e = ∮(2H)² dA / 16π",
+        )
+    } else {
+        (
+            format!(
+                "Shape diagram at c0 R0 = {c0}: phase field (L-BFGS) against the axisymmetric \
+                 reference"
+            ),
+            "reduced bending energy e = ∮(2H − c0)² dA / 16π",
+        )
+    };
     let mut chart = ChartBuilder::on(root)
         .margin(20)
-        .caption(
-            "Shape diagram at c0 = 0: phase field (L-BFGS) against the axisymmetric reference",
-            (FONT_FAMILY, 20),
-        )
+        .caption(caption, (FONT_FAMILY, 20))
         .x_label_area_size(50)
         .y_label_area_size(70)
         .build_cartesian_2d(vs.clone(), es.clone())?;
     chart
         .configure_mesh()
         .x_desc("reduced volume v")
-        .y_desc("reduced bending energy e = ∮(2H)² dA / 16π")
+        .y_desc(energy)
         .axis_desc_style((FONT_FAMILY, 18))
         .label_style((FONT_FAMILY, 14))
         .draw()?;
     for (i, b) in Branch::ALL.iter().enumerate() {
+        // A branch that does not exist at this c0 and has no points is left out of the legend.
+        if reference.curve(*b).is_empty() && extrapolated[i].is_empty() {
+            continue;
+        }
         let colour = COLOURS[i];
         let line: Vec<(f64, f64)> = reference
             .curve(*b)

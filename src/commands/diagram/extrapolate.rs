@@ -5,7 +5,7 @@
 //! v(x) = v∞ + c_v x^{p_v},   e(x) = e∞ + c_e x^{p_e},
 //! ```
 //!
-//! with the orders `p_v`, `p_e` shared by all points and fitted by least squares
+//! with the orders `p_v`, `p_e` shared by all points of the diagram (of every c̄0) and fitted by least squares
 //! ([`crate::analysis::curves::common_order`]), and `v∞`, `e∞` by a least-squares fit per point at those
 //! orders ([`crate::analysis::curves::power_fit`]). Both coordinates move: at finite ε the φ = 0 surface
 //! relaxes to another reduced volume than the sharp start's (by about 0.01 at R0 = 24ε), so
@@ -76,23 +76,22 @@ fn split(mut cases: Vec<CaseResult>) -> (Vec<CaseResult>, Vec<CaseResult>) {
     (dropped, cases)
 }
 
-/// Group `results` into points (branch and target v; cases in increasing R0), leave out the
-/// pre-asymptotic resolutions and extrapolate. `None` if the orders cannot be fitted (no point
-/// keeps three resolutions).
-pub fn extrapolate(results: &[CaseResult]) -> Option<(Vec<Point>, Orders)> {
-    let mut groups: Vec<(String, f64, Vec<CaseResult>)> = Vec::new();
+/// Group `results` into points (c̄0, branch and target v; cases in increasing R0) and leave
+/// out the pre-asymptotic resolutions; `v` and `e` are not yet extrapolated (NaN).
+fn group(results: &[CaseResult]) -> Vec<Point> {
+    let mut groups: Vec<(f64, String, f64, Vec<CaseResult>)> = Vec::new();
     for r in results {
         match groups
             .iter_mut()
-            .find(|g| g.0 == r.branch && g.1 == r.v_target)
+            .find(|g| g.0 == r.c0 && g.1 == r.branch && g.2 == r.v_target)
         {
-            Some(g) => g.2.push(r.clone()),
-            None => groups.push((r.branch.clone(), r.v_target, vec![r.clone()])),
+            Some(g) => g.3.push(r.clone()),
+            None => groups.push((r.c0, r.branch.clone(), r.v_target, vec![r.clone()])),
         }
     }
-    let mut points: Vec<Point> = groups
+    groups
         .into_iter()
-        .map(|(branch, v_target, mut cases)| {
+        .map(|(_, branch, v_target, mut cases)| {
             cases.sort_by(|a, b| a.r0.total_cmp(&b.r0));
             let (dropped, cases) = split(cases);
             Point {
@@ -104,15 +103,27 @@ pub fn extrapolate(results: &[CaseResult]) -> Option<(Vec<Point>, Orders)> {
                 e: f64::NAN,
             }
         })
-        .collect();
+        .collect()
+}
+
+/// The orders in ε/R0 shared by every point of `results` (of every c̄0). `None` if they cannot
+/// be fitted (no point keeps three resolutions).
+pub fn orders(results: &[CaseResult]) -> Option<Orders> {
+    let points = group(results);
     let fitted = |get: fn(&CaseResult) -> f64| {
         let series: Vec<_> = points.iter().map(|p| p.series(get)).collect();
         common_order(&series)
     };
-    let orders = Orders {
+    Some(Orders {
         v: fitted(|c| c.v)?,
         e: fitted(|c| c.e)?,
-    };
+    })
+}
+
+/// Group `results` into points, leave out the pre-asymptotic resolutions and extrapolate each
+/// point at the shared `orders` ([`orders`]).
+pub fn extrapolate(results: &[CaseResult], orders: Orders) -> Vec<Point> {
+    let mut points = group(results);
     for p in &mut points {
         let at = |get: fn(&CaseResult) -> f64, order: f64| {
             let (x, y) = p.series(get);
@@ -124,5 +135,5 @@ pub fn extrapolate(results: &[CaseResult]) -> Option<(Vec<Point>, Orders)> {
         };
         (p.v, p.e) = (at(|c| c.v, orders.v), at(|c| c.e, orders.e));
     }
-    Some((points, orders))
+    points
 }

@@ -1,28 +1,34 @@
-//! `vesicle diagram FILE`: the c0 = 0 shape diagram (reduced bending energy e against reduced
-//! volume v on the prolate, oblate and stomatocyte branches) from the phase-field model,
-//! against the program's own sharp-interface reference ([`crate::analysis::axisym`]).
+//! `vesicle diagram FILE`: the shape diagram (reduced bending energy e against reduced volume
+//! v on the prolate, oblate and stomatocyte branches) from the phase-field model, at one or
+//! several reduced spontaneous curvatures c̄0 = c0 R0, against the program's own
+//! sharp-interface reference at the same c̄0 ([`crate::analysis::axisym`]).
 //!
-//! Each point `(branch, v)` starts from the reference shape at `v` ([`crate::problem::revolution`]),
-//! scaled to R0 = `r0` ε for every resolution of the diagram file ([`spec`]), and is relaxed
-//! by L-BFGS on its symmetry-reduced box (⅛ for prolates and oblates, ¼ for stomatocytes) to
-//! the stationarity tolerance ([`case`]). The φ = 0 surface gives v, and the pair (v, e) is
-//! extrapolated to ε/R0 → 0 with orders fitted over the whole diagram ([`extrapolate`]).
+//! Each point `(branch, v, c̄0)` starts from the reference shape at `(v, c̄0)`
+//! ([`crate::problem::revolution`]), scaled to R0 = `r0` ε for every resolution of the diagram
+//! file ([`spec`]), its scene's uniform c0 = c̄0/`r0`, and is relaxed by L-BFGS on its
+//! symmetry-reduced box (⅛ for prolates and oblates, ¼ for stomatocytes) to the stationarity
+//! tolerance ([`case`]). Start shapes thinner than `min_width` ε at the coarsest resolution are
+//! refused ([`thickness`]). The φ = 0 surface gives v, and the pair (v, e) is extrapolated to
+//! ε/R0 → 0 with orders fitted over the whole diagram ([`extrapolate`]).
 //!
 //! Cases are independent: `--list` prints them, `--case K` runs one into
 //! `OUT/cases/<case>/`, `--merge` collects the folders into the CSV files and charts
-//! ([`report`], [`chart`]); without these flags one process runs every case (`--jobs` at a
-//! time, one thread each) and merges. Either way the CSV files are the same.
+//! ([`merge`], [`report`], [`chart`], [`summary`]); without these flags one process runs every
+//! case (`--jobs` at a time, one thread each) and merges. Either way the CSV files are the same.
 
 pub mod case;
 pub mod chart;
 pub mod extrapolate;
+pub mod merge;
 pub mod reference;
 pub mod report;
 pub mod spec;
+pub mod summary;
+pub mod thickness;
 
 use crate::analysis::axisym::{self, Options};
 use crate::error::{Error, Result};
-use case::{read_result, run_case, CaseResult};
+use case::{run_case, CaseResult};
 use rayon::prelude::*;
 use spec::{Case, DiagramSpec};
 use std::path::{Path, PathBuf};
@@ -91,71 +97,122 @@ pub fn run(args: &DiagramArgs) -> Result<()> {
                 format!("case {k} is done ({}); --force redoes it", dir.display()),
             ));
         }
-        let shape = start_shape(case)?;
+        let shape = start_shape(&spec, case)?;
+        check_width(&spec, case, &shape)?;
         let r = run_case(&spec, case, &shape, &dir)
             .map_err(|e| e.within(&format!("diagram case {k} ({})", case.folder())))?;
         eprintln!("{}", line(&r, 1, 1));
         return Ok(());
     }
     if args.merge {
-        return merge(&cases, &out, args.force);
+        return merge::merge(&spec, &cases, &out, args.force);
     }
     sweep(&spec, &cases, &out, args)?;
-    merge(&cases, &out, true)
+    merge::merge(&spec, &cases, &out, true)
 }
 
-/// The sharp start of `case`.
-fn start_shape(case: &Case) -> Result<axisym::Solution> {
-    axisym::solve(case.branch, case.v, &Options::default()).map_err(|e| {
+/// The sharp start of `case`, at its c̄0.
+///
+/// # Errors
+/// `Error::Config` naming the key that lists the point if the branch does not reach `v` at
+/// this c̄0.
+fn start_shape(spec: &DiagramSpec, case: &Case) -> Result<axisym::Solution> {
+    let at = |why: String| {
         Error::config(
-            format!("branches.{}", case.branch.name()),
-            format!("no reference shape at v = {}: {e}", case.v),
+            spec.key_of(case),
+            format!(
+                "no reference shape at v = {}, c0 = {}: {why}",
+                case.v, case.c0
+            ),
         )
-    })
+    };
+    let shape = axisym::solve(case.branch, case.v, &Options::default().with_c0(case.c0))
+        .map_err(|e| at(e.to_string()))?;
+    if !case.branch.up_down_symmetric() && shape.asymmetry() < reference::ASYMMETRIC {
+        return Err(at(format!(
+            "the {} branch does not exist here (its continuation is up-down symmetric)",
+            case.branch.name()
+        )));
+    }
+    Ok(shape)
 }
 
-/// The sharp starts of every `(branch, v)` of `cases`, in parallel, in the order of `cases`.
-fn start_shapes(cases: &[Case]) -> Result<Vec<axisym::Solution>> {
+/// Refuse `case` if its start's thinnest part ([`thickness::thinnest`]) is narrower than
+/// `min_width` ε at the coarsest resolution.
+///
+/// # Errors
+/// `Error::Config` naming the key that lists the point, the point and its width.
+fn check_width(spec: &DiagramSpec, case: &Case, shape: &axisym::Solution) -> Result<()> {
+    let w = thickness::thinnest(shape);
+    let r0 = spec.coarsest();
+    if w * r0 >= spec.min_width {
+        return Ok(());
+    }
+    Err(Error::config(
+        spec.key_of(case),
+        format!(
+            "the {} at v = {}, c0 = {} is {w:.3} R0 thick at its thinnest part: {:.2} ε at the \
+             coarsest R0 = {r0} ε, below min_width = {} ε (two interfaces would merge); \
+             leave the point out or raise the coarsest r0 to {:.0}",
+            case.branch.name(),
+            case.v,
+            case.c0,
+            w * r0,
+            spec.min_width,
+            (spec.min_width / w).ceil()
+        ),
+    ))
+}
+
+/// The sharp starts of every `(branch, v, c̄0)` of `cases`, in parallel, in the order of
+/// `cases`, each checked by [`check_width`].
+fn start_shapes(spec: &DiagramSpec, cases: &[Case]) -> Result<Vec<axisym::Solution>> {
+    let same = |a: &Case, b: &Case| a.branch == b.branch && a.v == b.v && a.c0 == b.c0;
     let mut keys: Vec<&Case> = Vec::new();
     for c in cases {
-        if !keys.iter().any(|k| k.branch == c.branch && k.v == c.v) {
+        if !keys.iter().any(|k| same(k, c)) {
             keys.push(c);
         }
     }
     let solved: Vec<axisym::Solution> = keys
         .par_iter()
-        .map(|c| start_shape(c))
+        .map(|c| {
+            let shape = start_shape(spec, c)?;
+            check_width(spec, c, &shape)?;
+            Ok(shape)
+        })
         .collect::<Result<_>>()?;
     Ok(cases
         .iter()
         .map(|c| {
-            let k = keys
-                .iter()
-                .position(|k| k.branch == c.branch && k.v == c.v)
-                .expect("listed");
+            let k = keys.iter().position(|k| same(k, c)).expect("listed");
             solved[k].clone()
         })
         .collect())
 }
 
 fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
-    let shapes = start_shapes(cases)?;
-    println!("case  branch        v       R0/ε  grid (full box)    computed points");
+    let shapes = start_shapes(spec, cases)?;
+    println!(
+        "case  branch        v      c0R0   R0/ε  grid (full box)    computed points  thinnest (ε)"
+    );
     let mut total = 0usize;
     for (c, s) in cases.iter().zip(&shapes) {
         let n = case::grid_for(s, c.r0, spec);
         let points = case::computed_points(c.branch, n);
         total += points;
         println!(
-            "{:>4}  {:<12} {:>6} {:>6}  {:>4}x{:>4}x{:>4}  {:>10}",
+            "{:>4}  {:<12} {:>6} {:>6} {:>6}  {:>4}x{:>4}x{:>4}  {:>10}  {:>12.1}",
             c.index,
             c.branch.name(),
             c.v,
+            c.c0,
             c.r0,
             n[0],
             n[1],
             n[2],
-            points
+            points,
+            thickness::thinnest(s) * c.r0
         );
     }
     println!("{} cases, {} computed points in all", cases.len(), total);
@@ -165,8 +222,8 @@ fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
 /// One line about a finished case.
 fn line(r: &CaseResult, done: usize, of: usize) -> String {
     format!(
-        "[{done}/{of}] case {} {} v0 = {} R0 = {}ε: v {:.5} e {:.5} ({}, {} iterations, residual {:.1e}, {:.1} s)",
-        r.index, r.branch, r.v_target, r.r0, r.v, r.e, r.stopped, r.iterations, r.residual, r.wall_seconds
+        "[{done}/{of}] case {} {} v0 = {} c0R0 = {} R0 = {}ε: v {:.5} e {:.5} ({}, {} iterations, residual {:.1e}, {:.1} s)",
+        r.index, r.branch, r.v_target, r.c0, r.r0, r.v, r.e, r.stopped, r.iterations, r.residual, r.wall_seconds
     )
 }
 
@@ -185,7 +242,7 @@ fn sweep(spec: &DiagramSpec, cases: &[Case], out: &Path, args: &DiagramArgs) -> 
         })?;
     }
     let start = Instant::now();
-    let shapes = start_shapes(cases)?;
+    let shapes = start_shapes(spec, cases)?;
     let mut order: Vec<(usize, usize)> = cases
         .iter()
         .zip(&shapes)
@@ -229,76 +286,5 @@ fn sweep(spec: &DiagramSpec, cases: &[Case], out: &Path, args: &DiagramArgs) -> 
         cases.len(),
         start.elapsed().as_secs_f64()
     );
-    Ok(())
-}
-
-/// Collect the case results of `out/cases/` into the merged files.
-fn merge(cases: &[Case], out: &Path, force: bool) -> Result<()> {
-    if out.join("diagram.csv").exists() && !force {
-        return Err(Error::config(
-            "--merge",
-            format!(
-                "{} exists; --force replaces the merged files",
-                out.join("diagram.csv").display()
-            ),
-        ));
-    }
-    let found: Vec<Option<CaseResult>> = cases
-        .iter()
-        .map(|c| read_result(&out.join("cases").join(c.folder())))
-        .collect::<Result<_>>()?;
-    report::check_complete(cases.len(), &found)?;
-    let results: Vec<CaseResult> = found.into_iter().flatten().collect();
-    let Some((points, orders)) = extrapolate::extrapolate(&results) else {
-        return Err(Error::config(
-            "r0",
-            "the orders in ε/R0 need three or more resolutions with distinct values",
-        ));
-    };
-    let (v_lo, v_hi) = results.iter().fold((1.0f64, 0.0f64), |(a, b), r| {
-        (a.min(r.v).min(r.v_target), b.max(r.v).max(r.v_target))
-    });
-    let reference = reference::Reference::new(v_lo - 0.03, v_hi + 0.03);
-    report::write_csv(out, &points, &results, &reference)?;
-    let extrapolated = report::branch_points(&points, |p| (p.v, p.e));
-    // Each transition: its name, the reference volume, and the extrapolated crossing as a
-    // point of the diagram (e on the first of the two branches).
-    let transitions: Vec<chart::Transition> = report::transitions(&points, &reference)
-        .into_iter()
-        .zip(reference::TRANSITIONS)
-        .zip(report::kinds(&reference))
-        .map(|(((name, t), (a, _)), kind)| {
-            let branch = &extrapolated[axisym::Branch::ALL
-                .iter()
-                .position(|b| *b == a)
-                .expect("listed")];
-            let crossing = (t[1].is_finite() && !branch.is_empty())
-                .then(|| (t[1], crate::analysis::curves::cubic_at(branch, t[1])));
-            chart::Transition {
-                name,
-                reference: t[0],
-                crossing,
-                ground: kind == report::Kind::Transition,
-            }
-        })
-        .collect();
-    chart::write_chart(
-        &out.join("diagram.png"),
-        &reference,
-        &extrapolated,
-        &report::branch_points(&points, |p| (p.finest().v, p.finest().e)),
-        &transitions,
-    )?;
-    report::write_error_chart(out, &points, &reference)?;
-    let thumbnails: Vec<PathBuf> = cases
-        .iter()
-        .map(|c| out.join("cases").join(c.folder()).join("thumbnail.png"))
-        .filter(|p| p.exists())
-        .collect();
-    chart::write_montage(&out.join("thumbnails.png"), &thumbnails, 4)?;
-    let table = report::table(&points, &results, orders, &reference);
-    crate::commands::study::write_text(out, "table.txt", &table)?;
-    print!("{table}");
-    println!("-> {}", out.display());
     Ok(())
 }

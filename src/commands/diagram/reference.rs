@@ -1,5 +1,6 @@
-//! The sharp-interface reference of a diagram: the branches of [`crate::analysis::axisym`] on a fine grid
-//! of reduced volumes, interpolated, and their transition volumes.
+//! The sharp-interface reference of a diagram at one reduced spontaneous curvature c̄0: the
+//! branches of [`crate::analysis::axisym`] on a fine grid of reduced volumes, interpolated, and
+//! their transition volumes.
 
 use crate::analysis::axisym::{self, Branch, Options};
 use crate::analysis::curves::{crossings, cubic_at};
@@ -7,6 +8,10 @@ use rayon::prelude::*;
 
 /// Grid spacing in v of the reference curves (the cubic interpolant is then exact to ~1e-8).
 const DV: f64 = 0.005;
+
+/// Where no stomatocyte exists (c̄0 ≳ 0.3) its continuation lands on the oblate: a shape on the
+/// stomatocyte branch counts when its odd modes exceed this (as in `vesicle axisym --c0`).
+pub use crate::analysis::axisym::phase::ASYMMETRIC;
 
 /// The reference branches, each `(v, e)` in increasing v.
 #[derive(Clone, Debug)]
@@ -23,19 +28,22 @@ pub const TRANSITIONS: [(Branch, Branch); 3] = [
 ];
 
 impl Reference {
-    /// Follow every branch over `[v_lo, v_hi]` (clipped to (0, 1]) in steps of 0.005.
-    pub fn new(v_lo: f64, v_hi: f64) -> Self {
+    /// Follow every branch at reduced spontaneous curvature `c0` over `[v_lo, v_hi]` (clipped
+    /// to (0, 1]) in steps of 0.005; a stomatocyte branch keeps only its up–down asymmetric
+    /// shapes ([`ASYMMETRIC`]).
+    pub fn new(c0: f64, v_lo: f64, v_hi: f64) -> Self {
         let lo = (v_lo / DV).floor().max(1.0) as usize;
         // Below v = 1, where the prolate and oblate branches meet at the sphere.
         let hi = ((v_hi / DV).ceil() as usize).min((0.995 / DV).round() as usize);
         let vs: Vec<f64> = (lo..=hi).map(|i| i as f64 * DV).collect();
-        let opts = Options::default();
+        let opts = Options::default().with_c0(c0);
         let curves = Branch::ALL
             .par_iter()
             .map(|&b| {
                 axisym::follow(b, &vs, &opts)
                     .shapes
                     .iter()
+                    .filter(|s| b.up_down_symmetric() || s.asymmetry() > ASYMMETRIC)
                     .map(|s| (s.v, s.e))
                     .collect()
             })
@@ -90,7 +98,7 @@ mod tests {
     /// ground state there: a crossing of metastable branches, not a transition.
     #[test]
     fn only_crossings_of_the_lowest_branches_are_transitions() {
-        let r = Reference::new(0.57, 0.68);
+        let r = Reference::new(0.0, 0.57, 0.68);
         let one = |a, b| match r.transition(a, b).as_slice() {
             [v] => *v,
             other => panic!("{a:?}/{b:?} crossings {other:?}"),

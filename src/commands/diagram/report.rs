@@ -250,6 +250,7 @@ pub fn table(
     for ((name, [r, e, f]), kind) in transitions(points, reference)
         .into_iter()
         .zip(kinds(reference))
+        .filter(|((_, t), _)| t.iter().any(|x| x.is_finite()))
     {
         let what = match kind {
             Kind::Transition => "transition",
@@ -284,17 +285,27 @@ pub fn table(
     s
 }
 
-/// `errors.png`: the relative error `e / e_ref(v) − 1` in percent against v, per branch (in
+/// `errors.png` (at reduced spontaneous curvature `c0`): the relative error `e / e_ref(v) − 1` in percent against v, per branch (in
 /// the diagram's colours), of the extrapolated points (solid line, filled circles) and of the
 /// finest resolution's raw points (dashed line, squares); a line breaks where the reference
 /// does not reach v.
 ///
 /// # Errors
 /// `Error::Output` if drawing or writing fails.
-pub fn write_error_chart(out: &Path, points: &[Point], reference: &Reference) -> Result<()> {
+pub fn write_error_chart(
+    out: &Path,
+    c0: f64,
+    points: &[Point],
+    reference: &Reference,
+) -> Result<()> {
     use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
+    let title = if c0 == 0.0 {
+        "Phase-field error against the axisymmetric reference, per branch".to_string()
+    } else {
+        format!("Phase-field error against the axisymmetric reference at c0 R0 = {c0}, per branch")
+    };
     let mut fig = Figure::new(
-        "Phase-field error against the axisymmetric reference, per branch",
+        title,
         Axis::linear("reduced volume v"),
         Axis::linear("e / e_reference(v) − 1  [%]"),
     );
@@ -302,6 +313,9 @@ pub fn write_error_chart(out: &Path, points: &[Point], reference: &Reference) ->
     for (i, b) in Branch::ALL.into_iter().enumerate() {
         let pct = |v: f64, e: f64| 100.0 * (e / reference.e(b, v) - 1.0);
         let mine: Vec<&Point> = points.iter().filter(|p| p.branch == b.name()).collect();
+        if mine.is_empty() {
+            continue;
+        }
         let sorted = |mut pts: Vec<(f64, f64)>| {
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             pts

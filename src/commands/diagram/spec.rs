@@ -1,6 +1,7 @@
-//! The diagram file (`runs/diagram.json`): which branches and reduced volumes, at which
-//! resolutions ε/R0, and how each case is run. Strict JSON: unknown keys are refused, every
-//! value is checked, and errors name the key.
+//! The diagram file (`runs/diagram.json`, `runs/diagram_c0.json`): which reduced spontaneous
+//! curvatures c̄0, branches and reduced volumes, at which resolutions ε/R0, and how each case
+//! is run. Strict JSON: unknown keys are refused, every value is checked, and errors name the
+//! key.
 
 use crate::analysis::axisym::Branch;
 use crate::error::{Error, Result};
@@ -8,15 +9,26 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// A diagram: every listed `(branch, v)` at every `r0` is one independent case.
+/// Reduced volumes per branch name (`prolate`, `oblate`, `stomatocyte`).
+pub type Branches = BTreeMap<String, Vec<f64>>;
+
+/// A diagram: every listed `(branch, v)` at every `c0` and every `r0` is one independent case.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DiagramSpec {
     /// Free text.
     #[serde(default)]
     pub description: String,
-    /// Reduced volumes per branch (`prolate`, `oblate`, `stomatocyte`).
-    pub branches: BTreeMap<String, Vec<f64>>,
+    /// Reduced spontaneous curvatures c̄0 = c0 R0 (default `[0]`, the c0 = 0 diagram).
+    #[serde(default = "zero_c0")]
+    pub c0: Vec<f64>,
+    /// Reduced volumes per branch, at every c̄0 that `branches_by_c0` does not list.
+    #[serde(default)]
+    pub branches: Branches,
+    /// Reduced volumes per branch at one c̄0 (the key, as a number: `"-0.5"`), replacing
+    /// `branches` there.
+    #[serde(default)]
+    pub branches_by_c0: BTreeMap<String, Branches>,
     /// R0/ε of each resolution (ε = 1); at least two for the extrapolation in ε/R0.
     pub r0: Vec<f64>,
     /// ε/h (the grid spacing is h = 1/eps_over_h).
@@ -40,7 +52,23 @@ pub struct DiagramSpec {
     /// Reduced volumes whose finest-resolution shapes get a thumbnail picture.
     #[serde(default)]
     pub thumbnails: Vec<f64>,
+    /// Thinnest part (of the body or of a gap it encloses, [`super::thickness::thinnest`]) that
+    /// every start shape must keep at the coarsest resolution, in ε.
+    #[serde(default = "default_min_width")]
+    pub min_width: f64,
 }
+
+fn zero_c0() -> Vec<f64> {
+    vec![0.0]
+}
+fn default_min_width() -> f64 {
+    5.0
+}
+
+/// Largest ε|c0| = |c̄0|/(R0/ε) a resolution may have: the phase-field spontaneous-curvature
+/// term εC0 = εc0/√2 must stay a small perturbation of the double well (its error is a power
+/// of ε|c0|, not exponentially small).
+pub const MAX_EPS_C0: f64 = 0.1;
 
 fn one() -> f64 {
     1.0
@@ -61,13 +89,15 @@ fn default_prepare_steps() -> usize {
     20
 }
 
-/// One case: a branch at a reduced volume and a resolution.
+/// One case: a branch at a reduced volume, a reduced spontaneous curvature and a resolution.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Case {
     /// Position in [`DiagramSpec::cases`] (the `--case` number).
     pub index: usize,
     /// The branch.
     pub branch: Branch,
+    /// Reduced spontaneous curvature c̄0 = c0 R0.
+    pub c0: f64,
     /// Target reduced volume (the axisymmetric start's).
     pub v: f64,
     /// R0/ε.
@@ -75,17 +105,31 @@ pub struct Case {
 }
 
 impl Case {
-    /// Folder name of the case: `<index>_<branch>_v<v>_r<r0>`.
+    /// Folder name of the case: `<index>_<branch>_v<v>_r<r0>` at c̄0 = 0 (the names of the
+    /// c0 = 0 diagram), `<index>_<branch>_v<v>_c<c̄0>_r<r0>` otherwise (`c0.50`, `cm1.00`).
     pub fn folder(&self) -> String {
+        let c0 = if self.c0 == 0.0 {
+            String::new()
+        } else {
+            format!("_c{}", c0_tag(self.c0))
+        };
         format!(
-            "{:03}_{}_v{:.4}_r{}",
+            "{:03}_{}_v{:.4}{c0}_r{}",
             self.index,
             self.branch.name(),
             self.v,
             self.r0
         )
     }
+
+    /// c0 of the scene, in units of ε: c̄0 / (R0/ε).
+    pub fn scene_c0(&self) -> f64 {
+        self.c0 / self.r0
+    }
 }
+
+/// `c̄0` as it appears in folder names (`-0.5` → `m0.50`).
+pub use crate::analysis::axisym::phase::c0_tag;
 
 /// The branch called `name`.
 pub fn branch_named(name: &str) -> Option<Branch> {
@@ -124,43 +168,16 @@ impl DiagramSpec {
     /// # Errors
     /// `Error::Config` naming the key and the reason.
     pub fn validate(&self) -> Result<()> {
-        if self.branches.is_empty() {
-            return Err(Error::config("branches", "list at least one branch"));
-        }
-        for (name, vs) in &self.branches {
-            let at = format!("branches.{name}");
-            let Some(branch) = branch_named(name) else {
+        self.validate_c0()?;
+        for c0 in &self.c0 {
+            let (key, branches) = self.branches_at(*c0);
+            let Some(branches) = branches else {
                 return Err(Error::config(
-                    at,
-                    "unknown branch (prolate, oblate or stomatocyte)",
+                    "branches",
+                    format!("list the branches of c0 = {c0} (here or in branches_by_c0)"),
                 ));
             };
-            let (lo, hi) = match branch {
-                Branch::Prolate => (0.3, 1.0),
-                Branch::Oblate => (0.51, 1.0),
-                Branch::Stomatocyte => (0.3, 0.66),
-                // Not listed by `branch_named`: diagram files hold the c0 = 0 branches.
-                Branch::Pear => {
-                    return Err(Error::config(
-                        at,
-                        "unknown branch (prolate, oblate or stomatocyte)",
-                    ))
-                }
-            };
-            if vs.is_empty() {
-                return Err(Error::config(at, "list at least one reduced volume"));
-            }
-            if let Some(v) = vs.iter().find(|v| !(**v > lo && **v < hi)) {
-                return Err(Error::config(
-                    at,
-                    format!("the {name} branch is computed for {lo} < v < {hi}, got {v}"),
-                ));
-            }
-            let mut sorted = vs.clone();
-            sorted.sort_by(f64::total_cmp);
-            if sorted.windows(2).any(|w| w[1] - w[0] < 1e-6) {
-                return Err(Error::config(at, "reduced volumes must be distinct"));
-            }
+            validate_branches(&key, branches, *c0)?;
         }
         if self.r0.len() < 2 {
             return Err(Error::config(
@@ -184,6 +201,7 @@ impl DiagramSpec {
             ("margin", self.margin, 2.0, 50.0),
             ("margin_r0", self.margin_r0, 0.0, 2.0),
             ("stop_residual", self.stop_residual, 1e-12, 1e-2),
+            ("min_width", self.min_width, 0.0, 50.0),
         ];
         for (key, value, lo, hi) in positive {
             if !(value >= lo && value <= hi) {
@@ -196,37 +214,170 @@ impl DiagramSpec {
         if self.max_iterations == 0 {
             return Err(Error::config("max_iterations", "must be at least 1"));
         }
+        let (c0, r0) = (
+            self.c0.iter().fold(0.0f64, |m, c| m.max(c.abs())),
+            self.coarsest(),
+        );
+        if c0 / r0 > MAX_EPS_C0 {
+            return Err(Error::config(
+                "c0",
+                format!(
+                    "|c0| = {c0} at the coarsest R0 = {r0} ε is ε|c0| = {:.3} > {MAX_EPS_C0}: \
+                     raise r0 to at least {} or lower |c0|",
+                    c0 / r0,
+                    c0 / MAX_EPS_C0
+                ),
+            ));
+        }
         Ok(())
     }
 
-    /// Every case, numbered: branches in diagram order (prolate, oblate, stomatocyte), each
-    /// reduced volume in increasing order, each resolution in increasing R0.
+    /// The `c0` list: distinct finite values, `branches_by_c0` keys among them.
+    fn validate_c0(&self) -> Result<()> {
+        if self.c0.is_empty() {
+            return Err(Error::config("c0", "list at least one value"));
+        }
+        if let Some(c) = self.c0.iter().find(|c| !(c.is_finite() && c.abs() <= 10.0)) {
+            return Err(Error::config(
+                "c0",
+                format!("need finite values with |c0| ≤ 10, got {c}"),
+            ));
+        }
+        let mut sorted = self.c0.clone();
+        sorted.sort_by(f64::total_cmp);
+        if sorted.windows(2).any(|w| w[1] - w[0] < 1e-6) {
+            return Err(Error::config("c0", "values must be distinct"));
+        }
+        for key in self.branches_by_c0.keys() {
+            let at = format!("branches_by_c0.{key}");
+            let Ok(c) = key.parse::<f64>() else {
+                return Err(Error::config(
+                    at,
+                    "the key must be a number (a value of c0)",
+                ));
+            };
+            if !self.c0.contains(&c) {
+                return Err(Error::config(at, format!("{c} is not listed in c0")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The branches at `c0` and the key they come from (`branches_by_c0.<c0>` or `branches`).
+    pub fn branches_at(&self, c0: f64) -> (String, Option<&Branches>) {
+        match self
+            .branches_by_c0
+            .iter()
+            .find(|(k, _)| k.parse::<f64>().ok() == Some(c0))
+        {
+            Some((k, b)) => (format!("branches_by_c0.{k}"), Some(b)),
+            None => (
+                "branches".to_string(),
+                (!self.branches.is_empty()).then_some(&self.branches),
+            ),
+        }
+    }
+
+    /// The key that lists `case`'s branch at its c̄0 (`branches.prolate`,
+    /// `branches_by_c0.-1.oblate`).
+    pub fn key_of(&self, case: &Case) -> String {
+        format!("{}.{}", self.branches_at(case.c0).0, case.branch.name())
+    }
+
+    /// Every case, numbered: c̄0 in increasing order, in each the branches in diagram order
+    /// (prolate, oblate, stomatocyte), each reduced volume in increasing order, each resolution
+    /// in increasing R0.
     pub fn cases(&self) -> Vec<Case> {
         let mut r0 = self.r0.clone();
         r0.sort_by(f64::total_cmp);
         let mut out = Vec::new();
-        for branch in Branch::ALL {
-            let Some(vs) = self.branches.get(branch.name()) else {
+        for c0 in self.c0_sorted() {
+            let Some(branches) = self.branches_at(c0).1 else {
                 continue;
             };
-            let mut vs = vs.clone();
-            vs.sort_by(f64::total_cmp);
-            for &v in &vs {
-                for &r in &r0 {
-                    out.push(Case {
-                        index: out.len(),
-                        branch,
-                        v,
-                        r0: r,
-                    });
+            for branch in Branch::ALL {
+                let Some(vs) = branches.get(branch.name()) else {
+                    continue;
+                };
+                let mut vs = vs.clone();
+                vs.sort_by(f64::total_cmp);
+                for &v in &vs {
+                    for &r in &r0 {
+                        out.push(Case {
+                            index: out.len(),
+                            branch,
+                            c0,
+                            v,
+                            r0: r,
+                        });
+                    }
                 }
             }
         }
         out
     }
 
+    /// The c̄0 values in increasing order.
+    pub fn c0_sorted(&self) -> Vec<f64> {
+        let mut c0 = self.c0.clone();
+        c0.sort_by(f64::total_cmp);
+        c0
+    }
+
+    /// The smallest R0/ε (the coarsest resolution).
+    pub fn coarsest(&self) -> f64 {
+        self.r0.iter().cloned().fold(f64::INFINITY, f64::min)
+    }
+
     /// The largest R0/ε (the finest resolution).
     pub fn finest(&self) -> f64 {
         self.r0.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
     }
+}
+
+/// Check the reduced volumes `branches` listed under `key` for c̄0 = `c0`: known branches,
+/// non-empty distinct lists, inside the range where the branch is computed (at c̄0 = 0 the
+/// ranges of the c0 = 0 diagram; elsewhere (0.3, 1), the start shape's solve refusing a volume
+/// the branch does not reach).
+fn validate_branches(key: &str, branches: &Branches, c0: f64) -> Result<()> {
+    if branches.is_empty() {
+        return Err(Error::config(key, "list at least one branch"));
+    }
+    for (name, vs) in branches {
+        let at = format!("{key}.{name}");
+        let Some(branch) = branch_named(name) else {
+            return Err(Error::config(
+                at,
+                "unknown branch (prolate, oblate or stomatocyte)",
+            ));
+        };
+        let (lo, hi) = match branch {
+            // Not listed by `branch_named`: diagram files hold the c0 = 0 branches.
+            Branch::Pear => {
+                return Err(Error::config(
+                    at,
+                    "unknown branch (prolate, oblate or stomatocyte)",
+                ))
+            }
+            _ if c0 != 0.0 => (0.3, 1.0),
+            Branch::Prolate => (0.3, 1.0),
+            Branch::Oblate => (0.51, 1.0),
+            Branch::Stomatocyte => (0.3, 0.66),
+        };
+        if vs.is_empty() {
+            return Err(Error::config(at, "list at least one reduced volume"));
+        }
+        if let Some(v) = vs.iter().find(|v| !(**v > lo && **v < hi)) {
+            return Err(Error::config(
+                at,
+                format!("the {name} branch is computed for {lo} < v < {hi}, got {v}"),
+            ));
+        }
+        let mut sorted = vs.clone();
+        sorted.sort_by(f64::total_cmp);
+        if sorted.windows(2).any(|w| w[1] - w[0] < 1e-6) {
+            return Err(Error::config(at, "reduced volumes must be distinct"));
+        }
+    }
+    Ok(())
 }
