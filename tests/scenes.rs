@@ -223,7 +223,7 @@ fn budding_scene_runs_tiny_and_measure_writes_its_table() {
 
 #[test]
 fn scenes_carry_a_description_and_validate() {
-    for name in ["budding3d", "pearling3d", "pear3d"] {
+    for name in ["budding3d", "pearling3d", "pear3d", "deflation3d"] {
         let path = crate_dir().join(format!("runs/{name}.json"));
         let scene = vesicle::problem::config::load(&path, &[]).expect("valid scene");
         scene.validate().expect("valid scene");

@@ -374,3 +374,36 @@ fn bad_study_files_are_refused() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("`study`"));
     assert!(!out.exists());
 }
+
+/// `study budding --quick`: the prolate at v = 0.8, R0 = 10ε, taken to c̄0 = 2 and back to
+/// 1.5. The sharp reference has no pear bifurcation for c̄0 ≤ 2 (`vesicle axisym --c0`: the
+/// prolate is stable to up–down asymmetry down to v = 0.3), so every step must relax to its
+/// tolerance and stay up–down symmetric (|skewness| < 0.01, the seed relaxed away) and in one
+/// piece, with no bifurcation in the reference columns, and its waist (the neck of the profile,
+/// in R0) must be the sharp prolate's at the same v within 0.01 (measured within 0.0035 at all
+/// three steps); a row per step and every chart.
+#[test]
+fn budding_quick_study_stays_a_symmetric_prolate() {
+    let (_tmp, out, stdout) = quick_study("budding");
+    assert!(stdout.contains("budding continuation"));
+    let path = out.join("budding.csv");
+    let head = header(&path);
+    let col = |name: &str| head.split(',').position(|c| c == name).unwrap();
+    let rows = csv_fields(&path);
+    assert_eq!(rows.len(), 3, "one row per c0 of the path");
+    for r in &rows {
+        assert_eq!(r[col("stopped")], "stationary", "{r:?}");
+        let skew: f64 = r[col("skewness")].parse().unwrap();
+        assert!(skew.abs() < 0.01, "skewness {skew}");
+        assert_eq!(r[col("pieces")], "1");
+        assert_eq!(r[col("state")], "symmetric");
+        assert_eq!(r[col("v_bifurcation_ref")], "NaN");
+        let neck: f64 = r[col("neck_r0")].parse().unwrap();
+        let waist: f64 = r[col("neck_prolate_ref")].parse().unwrap();
+        assert!((neck - waist).abs() < 0.01, "waist {neck} against {waist}");
+    }
+    charts_exist(
+        &out,
+        &["budding_neck_eps", "budding_neck_r0", "budding_skewness"],
+    );
+}

@@ -263,6 +263,13 @@ enum Study {
         after_help = "Example:\n  vesicle study stability runs/studies/stability.json --out out/stability [--quick]"
     )]
     Stability(StudyArgs),
+    /// Quasi-static budding: from the axisymmetric prolate at v, c0 R0 stepped up with an
+    /// L-BFGS relaxation at each step (a small up-down asymmetry seeded first); neck radius,
+    /// skewness and pieces against c0 R0, beside the sharp pear branch at the same v.
+    #[command(
+        after_help = "Example:\n  vesicle study budding runs/studies/budding.json --out out/budding [--quick]"
+    )]
+    Budding(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -433,6 +440,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Stability(args)) => {
             args.run::<crate::commands::study::stability::Stability>()?;
+            Ok(0)
+        }
+        Command::Study(Study::Budding(args)) => {
+            args.run::<crate::commands::study::budding::Budding>()?;
             Ok(0)
         }
         Command::Study(Study::Convergence(args)) => {

@@ -3,8 +3,11 @@
 //! * [`convergence`], [`stability`], [`precision`]: studies run from a study file
 //!   (`runs/studies/*.json`, read by [`file`]), with a `--quick` variant; orders from the
 //!   least-squares fits of [`fit`], stability classes from [`classify`];
-//! * [`stationary`]: what each `stop_residual` buys per engine, on a scene file.
+//! * [`stationary`]: what each `stop_residual` buys per engine, on a scene file;
+//! * [`budding`]: quasi-static budding in c̄0 through stationary states beside the sharp pear
+//!   branch.
 
+pub mod budding;
 pub mod classify;
 pub mod convergence;
 pub mod file;

@@ -1,0 +1,523 @@
+//! `vesicle study budding FILE`: quasi-static budding under a uniform spontaneous curvature,
+//! followed through stationary states by L-BFGS and set beside the sharp-interface pear branch.
+//!
+//! The start is the axisymmetric prolate of the reference solver at the file's reduced volume
+//! `v` and first c̄0 (`c0[0]`), scaled to R0 = `r0` ε, on a box mirrored across x and y only
+//! (a pear breaks the up–down mirror). Then for each c̄0 of the path `c0` in turn (up, and
+//! down again to see hysteresis), starting from the previous step's state:
+//!
+//! 1. the state is seeded with a small up–down asymmetry of strength `seed` ([`seed`]), so that
+//!    a prolate that has become unstable leaves its stationary symmetric state;
+//! 2. c0 = c̄0/R0 is set (uniform) and the field relaxed by L-BFGS (`"dynamics":
+//!    "relaxational"`: area held at the first step's A0, volume at the start's) until the
+//!    scene's `stop_residual` or `max_steps`;
+//! 3. the relaxed state is measured ([`measure::measure_field`] on the unfolded field): e, the
+//!    reduced volume of the φ = 0 surface, its neck (the narrowest slice between the two widest
+//!    along z, as `vesicle measure`), the skewness of the volume along z and the connected
+//!    pieces.
+//!
+//! The reference ([`reference`]) at each c̄0 is the prolate and the pear branch of
+//! [`crate::analysis::axisym`] read at the step's own φ = 0 reduced volume. The dynamics has no
+//! hydrodynamics and L-BFGS has no time at all: the path is a sequence of stationary states, not
+//! a transient.
+//!
+//! Writes `budding.csv` (one row per c̄0), `budding.txt`, and the charts `budding_neck_eps`
+//! (neck in ε against c̄0, with the reference pear's neck at R0 = `r0` ε) and `budding_neck_r0`
+//! (the same in units of R0) and `budding_skewness`.
+
+pub mod reference;
+pub mod seed;
+
+use super::harness::{Report, Study};
+use crate::analysis::axisym::{self, Branch, Options};
+use crate::commands::measure::{self, ShapeMeasure};
+use crate::driver::simulation::{Simulation, StopRules};
+use crate::error::{Error, Result};
+use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
+use crate::problem::config::{self, C0Spec, Scene};
+use crate::problem::grid::Grid;
+use crate::problem::model::C0;
+use crate::problem::revolution::Meridian;
+use crate::problem::setup::{self, FACE_PHI_MAX};
+use crate::problem::shapes::{self, Prepared, Revolution, AXISYM_SPACING};
+use ndarray::Array3;
+use reference::{PearPath, Reading};
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// Largest ε|c0| the study accepts: the preferred bud radius 2/c0 stays at ten interface widths
+/// or more, where the φ = 0 area and volume hold (the spontaneous-curvature page).
+pub const MAX_EPS_C0: f64 = 0.2;
+
+/// Skewness below which a state counts as up–down symmetric (the seed's own skewness, relaxed
+/// away on a stable prolate, is about 1e-3 at δ = 0.02).
+pub const SYMMETRIC_SKEWNESS: f64 = 0.01;
+
+/// Keys of the scene that the study sets itself.
+const STUDY_KEYS: [&str; 5] = ["initial", "c0", "dynamics", "symmetry", "volume"];
+
+/// The study file's keys.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    /// `"budding"`.
+    pub study: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The lattice and the relaxation: a scene object (`dim` 3, `n`, `h`, `eps`, `dt`,
+    /// `stop_residual`, `max_steps`, `prepare_steps`, `threads`, …) without `initial`, `c0`,
+    /// `dynamics`, `symmetry` and `volume`, which the study sets.
+    pub scene: Value,
+    /// Reduced volume of the start prolate, in (0, 1).
+    pub v: f64,
+    /// R0/ε of the start.
+    pub r0: f64,
+    /// The path in c̄0 = c0 R0 (up, then down again for a hysteresis loop; no value twice in a
+    /// row), each with ε|c0| ≤ [`MAX_EPS_C0`].
+    pub c0: Vec<f64>,
+    /// Strength δ of the asymmetry seeded before each relaxation ([`seed`]), in [0, 0.1].
+    pub seed: f64,
+}
+
+/// One step of the continuation; a row of `budding.csv`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// c̄0 = c0 R0 (R0 = `r0` ε).
+    pub c0: f64,
+    /// ε c0.
+    pub eps_c0: f64,
+    /// L-BFGS iterations of this step.
+    pub iterations: usize,
+    /// How the relaxation ended (`stationary` when `stop_residual` was met).
+    pub stopped: String,
+    /// Final stationarity residual RMS(μ − μ̄).
+    pub residual: f64,
+    /// Reduced bending energy e of the phase field.
+    pub e: f64,
+    /// Reduced volume of the φ = 0 surface.
+    pub v: f64,
+    /// R0 of the φ = 0 surface, √(A/4π), in ε.
+    pub r0_surface: f64,
+    /// Neck radius in ε (NaN: no neck, the profile has one maximum).
+    pub neck: f64,
+    /// Neck radius in units of R0 (the φ = 0 surface's).
+    pub neck_r0: f64,
+    /// Largest slice radius, in ε.
+    pub r_max: f64,
+    /// Skewness of the volume along z (0 for an up–down symmetric shape).
+    pub skewness: f64,
+    /// Connected pieces of {φ > 0}.
+    pub pieces: usize,
+    /// The reference prolate's e at this v and c̄0.
+    pub e_prolate_ref: f64,
+    /// The reference prolate's waist (narrowest neck, units of R0; NaN: none).
+    pub neck_prolate_ref: f64,
+    /// The reference pear branch's bifurcation off the prolate (NaN: none down to v = 0.3).
+    pub v_bifurcation_ref: f64,
+    /// The pear branch's fold (largest v).
+    pub v_fold_ref: f64,
+    /// v where the reference pear's neck falls below 0.05 R0 (the branch's end).
+    pub v_limit_ref: f64,
+    /// Neck (units of R0) of the reference's stable pear at this v (NaN: none).
+    pub neck_pear_ref: f64,
+    /// e of the reference's stable pear at this v.
+    pub e_pear_ref: f64,
+    /// Neck (units of R0) of the reference's unstable pear at this v.
+    pub neck_unstable_ref: f64,
+    /// e of the reference's unstable pear at this v.
+    pub e_unstable_ref: f64,
+    /// What the phase field is: `symmetric`, `pear`, `necked` or `pieces` (see [`state`]).
+    pub state: String,
+    /// Wall seconds of the step (seed, relaxation, measurement).
+    pub wall_seconds: f64,
+}
+
+/// The study.
+pub struct Budding;
+
+impl Study for Budding {
+    const NAME: &'static str = "budding";
+    type Spec = Spec;
+    type Output = Vec<Row>;
+
+    fn measure(spec: &Spec, _dir: &Path) -> Result<(Vec<Row>, Report)> {
+        check(spec)?;
+        let base = base_scene(spec)?;
+        let sharp = axisym::solve(
+            Branch::Prolate,
+            spec.v,
+            &Options::default().with_c0(spec.c0[0]),
+        )
+        .map_err(|e| Error::config("v", format!("the start prolate: {e}")))?;
+        let mut problem = setup::build(&base).map_err(within("scene"))?;
+        let full_grid = Grid::new(&base.n, base.h, &[false; 3]);
+        let start = revolved(&sharp.r, &sharp.z, spec.r0 * base.eps, base.eps, &full_grid);
+        check_fits(&start)?;
+        problem.phi = problem.grid.restrict(&start);
+        let mut rows = Vec::new();
+        let mut area_target = None;
+        for (i, &c0) in spec.c0.iter().enumerate() {
+            let began = Instant::now();
+            let mut scene = base.clone();
+            let c = c0 / (spec.r0 * base.eps);
+            scene.c0 = C0Spec::Uniform(c);
+            scene.area.target = area_target;
+            if i > 0 {
+                scene.prepare_steps = 0;
+            }
+            let full = problem.grid.unfold(&problem.phi).into_owned();
+            problem.phi =
+                problem
+                    .grid
+                    .restrict(&seed::seeded(&full, base.h, spec.r0 * base.eps, spec.seed));
+            problem.c0 = C0::new(&scene.c0, &problem.grid, base.eps)?;
+            let (mut sim, a0) = Simulation::of_scene(&scene, &problem)?;
+            area_target = Some(a0);
+            let stopped = sim.run(&StopRules::of(&scene), &mut [])?;
+            let last = sim.record();
+            problem.phi = sim.engine().phi().clone();
+            let full = problem.grid.unfold(&problem.phi);
+            let m = measure::measure_field(&full, 2, base.h, last.step, last.t);
+            let mut row = row_of(c0, c, &m, base.eps);
+            row.iterations = last.step;
+            row.stopped = stopped.as_str().to_string();
+            row.residual = last.residual;
+            row.e = last.reduced_energy;
+            row.wall_seconds = began.elapsed().as_secs_f64();
+            eprintln!(
+                "c0 R0 = {c0}: {} after {} iterations, neck {:.3} eps, skewness {:.4}, pieces {}",
+                row.stopped, row.iterations, row.neck, row.skewness, row.pieces
+            );
+            rows.push(row);
+        }
+        // The reference, at the phase field's own reduced volumes: one pear path per distinct
+        // c̄0, followed to its neck threshold (or v = 0.3).
+        let mut distinct = spec.c0.clone();
+        distinct.sort_by(f64::total_cmp);
+        distinct.dedup();
+        let paths = reference::pear_paths(&distinct, 0.3);
+        for row in rows.iter_mut() {
+            let path = paths
+                .iter()
+                .find(|p| p.c0 == row.c0)
+                .expect("every c0 has a path");
+            let (e_prolate, waist) = reference::prolate(row.v, row.c0);
+            row.neck_prolate_ref = waist;
+            fill_reference(row, &path.read(row.v, e_prolate));
+        }
+        let report = report(spec, &rows, &paths)?;
+        Ok((rows, report))
+    }
+}
+
+/// Refuse a bad study file, naming the key.
+fn check(spec: &Spec) -> Result<()> {
+    if !(spec.v > 0.0 && spec.v < 1.0) {
+        return Err(Error::config(
+            "v",
+            format!("must lie in (0, 1), got {}", spec.v),
+        ));
+    }
+    if !(spec.r0.is_finite() && spec.r0 > 0.0) {
+        return Err(Error::config("r0", format!("must be > 0, got {}", spec.r0)));
+    }
+    if spec.c0.is_empty() {
+        return Err(Error::config("c0", "needs at least one value"));
+    }
+    if let Some(w) = spec.c0.windows(2).find(|w| w[1] == w[0]) {
+        return Err(Error::config(
+            "c0",
+            format!("a path of steps: {} twice in a row", w[0]),
+        ));
+    }
+    if let Some(c) = spec
+        .c0
+        .iter()
+        .find(|c| !c.is_finite() || c.abs() / spec.r0 > MAX_EPS_C0 + 1e-12)
+    {
+        return Err(Error::config(
+            "c0",
+            format!(
+                "c0 R0 = {c} at R0 = {} eps is eps|c0| = {:.3}, above {MAX_EPS_C0}: the preferred \
+                 bud radius 2/c0 would come within ten interface widths",
+                spec.r0,
+                c.abs() / spec.r0
+            ),
+        ));
+    }
+    if !(0.0..=0.1).contains(&spec.seed) {
+        return Err(Error::config(
+            "seed",
+            format!("must lie in [0, 0.1], got {}", spec.seed),
+        ));
+    }
+    Ok(())
+}
+
+/// Errors of a scene built from the study key `key`, renamed `key.<field>`.
+fn within(key: &'static str) -> impl Fn(Error) -> Error {
+    move |e| match e {
+        Error::Config { field, reason } => Error::config(format!("{key}.{field}"), reason),
+        other => other,
+    }
+}
+
+/// The scene of the study: the file's `scene` with L-BFGS, mirror planes x and y, c0 = 0 and a
+/// placeholder initial shape (the spheroid of the same v and R0; the start field replaces it).
+///
+/// # Errors
+/// `Error::Config` naming `scene.<key>` for a key the study sets or an invalid scene.
+fn base_scene(spec: &Spec) -> Result<Scene> {
+    let Value::Object(obj) = &spec.scene else {
+        return Err(Error::config("scene", "must be a scene object"));
+    };
+    if let Some(k) = STUDY_KEYS.iter().find(|k| obj.contains_key(**k)) {
+        return Err(Error::config(
+            format!("scene.{k}"),
+            "is set by the study (initial: the axisymmetric prolate at v and c0[0]; c0: the \
+             path; dynamics: relaxational; symmetry: x and y); remove it",
+        ));
+    }
+    let mut value = spec.scene.clone();
+    value["initial"] = json!({
+        "shape": "spheroid", "reduced_volume": spec.v, "kind": "prolate", "axis": "z",
+        "r0": spec.r0 * obj.get("eps").and_then(Value::as_f64).unwrap_or(1.0)
+    });
+    value["dynamics"] = json!("relaxational");
+    value["symmetry"] = json!(["x", "y"]);
+    let scene = config::load_value(value, &[], None).map_err(within("scene"))?;
+    if scene.dim != 3 {
+        return Err(Error::config("scene.dim", "the budding study is 3D"));
+    }
+    if scene.stop_residual.is_none() && scene.max_steps.is_none() {
+        return Err(Error::config(
+            "scene.stop_residual",
+            "each relaxation needs a stop: stop_residual (and max_steps as a cap)",
+        ));
+    }
+    Ok(scene)
+}
+
+/// φ = tanh(d/(√2 ε)) of the surface of revolution about z through the contour `(r, z)` (R0 = 1)
+/// scaled to `r0`, centred in the box of `grid`.
+fn revolved(r: &[f64], z: &[f64], r0: f64, eps: f64, grid: &Grid) -> Array3<f64> {
+    let shape = Prepared::Revolution(Revolution {
+        meridian: Meridian::new(r, z, r0, AXISYM_SPACING * eps),
+        axis: 2,
+        center: [0.0; 3],
+    });
+    grid.par_field_from(|p| shapes::profile(shape.signed_distance(p, 3), eps))
+}
+
+/// The start must keep bulk outside on the box's faces (φ ≤ [`FACE_PHI_MAX`]).
+fn check_fits(phi: &Array3<f64>) -> Result<()> {
+    let (n0, n1, n2) = phi.dim();
+    let on_face = |(i, j, k): (usize, usize, usize)| {
+        i == 0 || j == 0 || k == 0 || i == n0 - 1 || j == n1 - 1 || k == n2 - 1
+    };
+    let worst = phi
+        .indexed_iter()
+        .filter(|(ix, _)| on_face(*ix))
+        .map(|(_, p)| *p)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if worst > FACE_PHI_MAX {
+        return Err(Error::config(
+            "scene.n",
+            format!(
+                "the start prolate does not fit the box: φ = {worst:.3} on a face (at most \
+                 {FACE_PHI_MAX}); enlarge n"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// What the phase field is at a step: `pieces` (more than one connected piece), `symmetric`
+/// (|skewness| below [`SYMMETRIC_SKEWNESS`]: the prolate, with or without a waist), `necked`
+/// (asymmetric, a neck between the two widest slices) or `pear` (asymmetric, no neck).
+pub fn state(m: &ShapeMeasure) -> &'static str {
+    if m.pieces > 1 {
+        "pieces"
+    } else if m.skewness.abs() < SYMMETRIC_SKEWNESS {
+        "symmetric"
+    } else if m.neck.is_some() {
+        "necked"
+    } else {
+        "pear"
+    }
+}
+
+/// The measured part of a row (the relaxation's and the reference's columns left to fill).
+fn row_of(c0: f64, c: f64, m: &ShapeMeasure, eps: f64) -> Row {
+    let r0_surface = (m.surface.area / (4.0 * std::f64::consts::PI)).sqrt();
+    let neck = m.neck.map_or(f64::NAN, |(r, _)| r);
+    Row {
+        c0,
+        eps_c0: eps * c,
+        iterations: 0,
+        stopped: String::new(),
+        residual: f64::NAN,
+        e: f64::NAN,
+        v: m.surface.reduced_volume,
+        r0_surface: r0_surface / eps,
+        neck: neck / eps,
+        neck_r0: neck / r0_surface,
+        r_max: m.r_max / eps,
+        skewness: m.skewness,
+        pieces: m.pieces,
+        e_prolate_ref: f64::NAN,
+        neck_prolate_ref: f64::NAN,
+        v_bifurcation_ref: f64::NAN,
+        v_fold_ref: f64::NAN,
+        v_limit_ref: f64::NAN,
+        neck_pear_ref: f64::NAN,
+        e_pear_ref: f64::NAN,
+        neck_unstable_ref: f64::NAN,
+        e_unstable_ref: f64::NAN,
+        state: state(m).to_string(),
+        wall_seconds: 0.0,
+    }
+}
+
+fn fill_reference(row: &mut Row, r: &Reading) {
+    row.e_prolate_ref = r.e_prolate;
+    row.v_bifurcation_ref = r.v_bifurcation;
+    row.v_fold_ref = r.v_fold;
+    row.v_limit_ref = r.v_limit;
+    (row.neck_pear_ref, row.e_pear_ref) = r.stable;
+    (row.neck_unstable_ref, row.e_unstable_ref) = r.unstable;
+}
+
+/// The table, `budding.csv` and the charts.
+fn report(spec: &Spec, rows: &[Row], paths: &[PearPath]) -> Result<Report> {
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "budding continuation: v = {} (start), R0 = {} eps, seed {}; L-BFGS through stationary \
+         states (no time: the path is not a transient)",
+        spec.v, spec.r0, spec.seed
+    );
+    let _ = writeln!(
+        text,
+        "{:>5} {:>6} {:>6} {:>8} {:>7} {:>7} {:>8} {:>8} {:>7} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>6}  state",
+        "c0R0", "eps*c0", "iters", "stopped", "v", "e", "neck/eps", "neck/R0", "skew", "pieces",
+        "e_prol", "waist", "e_pear", "neck_ref", "neck_uns", "v_bif", "v_fold"
+    );
+    for r in rows {
+        let _ = writeln!(
+            text,
+            "{:>5.2} {:>6.3} {:>6} {:>8} {:>7.4} {:>7.4} {:>8.3} {:>8.4} {:>7.4} {:>6} {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>7.4} {:>6.4}  {}",
+            r.c0, r.eps_c0, r.iterations, short(&r.stopped), r.v, r.e, r.neck, r.neck_r0,
+            r.skewness, r.pieces, r.e_prolate_ref, r.neck_prolate_ref, r.e_pear_ref, r.neck_pear_ref,
+            r.neck_unstable_ref, r.v_bifurcation_ref, r.v_fold_ref, r.state
+        );
+    }
+    let _ = writeln!(
+        text,
+        "reference: the axisymmetric prolate (e_prol, its waist) and pear branch at each row's \
+         phi = 0 v; neck_ref the stable pear's (after the fold), neck_uns the unstable one's (before it), in R0; NaN \
+         where the stretch does not reach v"
+    );
+    for p in paths {
+        let _ = writeln!(
+            text,
+            "  c0R0 = {}: pear bifurcation v = {:.5}, {} path states{}",
+            p.c0,
+            p.v_bifurcation,
+            p.states.len(),
+            if p.reached_limit {
+                " (ends at the neck threshold)"
+            } else {
+                ""
+            }
+        );
+    }
+    let mut report = Report {
+        text,
+        ..Report::default()
+    };
+    report.table("budding.csv", rows)?;
+    let r0 = rows.first().map_or(spec.r0, |r| r.r0_surface);
+    report.chart(
+        "budding_neck_eps",
+        neck_chart(rows, r0, "neck radius / eps"),
+    );
+    report.chart("budding_neck_r0", neck_chart(rows, 1.0, "neck radius / R0"));
+    report.chart("budding_skewness", skewness_chart(rows));
+    Ok(report)
+}
+
+fn short(s: &str) -> &str {
+    match s {
+        "stationary" => "stat",
+        "max_steps" => "max",
+        other => other,
+    }
+}
+
+/// Neck against c̄0: the phase field's (in ε, or in R0 when `scale` = 1) beside the reference
+/// pear's stable and unstable necks (in R0, times `scale`).
+/// The phase field's points are joined in path order (up and down a hysteresis loop).
+fn neck_chart(rows: &[Row], scale: f64, label: &str) -> Figure {
+    let per_r0 = scale == 1.0;
+    let pts = |f: &dyn Fn(&Row) -> f64| -> Vec<(f64, f64)> {
+        rows.iter()
+            .map(|r| (r.c0, f(r)))
+            .filter(|p| p.1.is_finite())
+            .collect()
+    };
+    let mut fig = Figure::new(
+        "Quasi-static budding: neck radius against c0 R0 at fixed v",
+        Axis::linear("c0 R0"),
+        Axis::linear(label),
+    );
+    fig.legend = Corner::UpperRight;
+    fig.push(Series::new(
+        "phase field (L-BFGS)",
+        pts(&|r| if per_r0 { r.neck_r0 } else { r.neck }),
+        colour(0),
+        Mark::LinePoints(Shape::Circle),
+    ));
+    fig.push(Series::new(
+        "reference: prolate's waist",
+        pts(&|r| r.neck_prolate_ref * scale),
+        colour(3),
+        Mark::Dashed,
+    ));
+    fig.push(Series::new(
+        "reference: stable pear",
+        pts(&|r| r.neck_pear_ref * scale),
+        colour(1),
+        Mark::LinePoints(Shape::Square),
+    ));
+    fig.push(Series::new(
+        "reference: unstable pear",
+        pts(&|r| r.neck_unstable_ref * scale),
+        colour(2),
+        Mark::DashedPoints(Shape::Triangle),
+    ));
+    fig
+}
+
+/// Skewness of the volume along z against c̄0.
+fn skewness_chart(rows: &[Row]) -> Figure {
+    let mut fig = Figure::new(
+        "Quasi-static budding: up-down asymmetry",
+        Axis::linear("c0 R0"),
+        Axis::linear("skewness of the volume along z"),
+    );
+    fig.push(Series::new(
+        "phase field (L-BFGS)",
+        rows.iter().map(|r| (r.c0, r.skewness)).collect(),
+        colour(0),
+        Mark::LinePoints(Shape::Circle),
+    ));
+    fig
+}
+
+#[cfg(test)]
+mod tests;
