@@ -97,24 +97,55 @@ fn read_npy_wrong_shape_names_both_shapes_and_file() {
     assert!(err.to_string().contains("[1, 5, 7]"), "{err}");
 }
 
+/// An npy version 1.0 file of `descr`, order and shape, its values all zero bytes, as NumPy
+/// writes it: the header padded with spaces to 64 bytes and ended by a newline.
+fn zero_npy(descr: &str, fortran: &str, shape: &str, data_len: usize) -> Vec<u8> {
+    let mut dict =
+        format!("{{'descr': '{descr}', 'fortran_order': {fortran}, 'shape': {shape}, }}");
+    while (10 + dict.len() + 1) % 64 != 0 {
+        dict.push(' ');
+    }
+    dict.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((dict.len() as u16).to_le_bytes());
+    bytes.extend(dict.as_bytes());
+    bytes.resize(bytes.len() + data_len, 0);
+    bytes
+}
+
 #[test]
 fn read_npy_rejects_other_dtype_and_fortran_order() {
-    use ndarray_npy::WriteNpyExt;
     let dir = TempDir::new().unwrap();
     let f32_path = temp_file(&dir, "f32.npy");
-    let a32 = ndarray::Array2::<f32>::zeros((2, 3));
-    a32.write_npy(std::fs::File::create(&f32_path).unwrap())
-        .unwrap();
+    std::fs::write(&f32_path, zero_npy("<f4", "False", "(2, 3)", 24)).unwrap();
     let msg = read_npy(&f32_path, &[2, 3]).unwrap_err().to_string();
     assert!(msg.contains("<f4") && msg.contains("f32.npy"), "{msg}");
 
     let fortran_path = temp_file(&dir, "fortran.npy");
-    let a64 = ndarray::Array2::<f64>::zeros((3, 2));
-    a64.t()
-        .write_npy(std::fs::File::create(&fortran_path).unwrap())
-        .unwrap();
+    std::fs::write(&fortran_path, zero_npy("<f8", "True", "(2, 3)", 48)).unwrap();
     let msg = read_npy(&fortran_path, &[2, 3]).unwrap_err().to_string();
     assert!(msg.contains("Fortran"), "{msg}");
+
+    let good_path = temp_file(&dir, "good.npy");
+    std::fs::write(&good_path, zero_npy("<f8", "False", "(2, 3)", 48)).unwrap();
+    assert_eq!(read_npy(&good_path, &[2, 3]).unwrap().shape(), [1, 2, 3]);
+}
+
+/// The bytes NumPy 2.4 writes for `np.save(f, np.arange(6.0).reshape(2, 3))`: its header
+/// (with the padding NumPy leaves for the first axis to grow) and the values 0 to 5.
+#[test]
+fn read_npy_reads_what_numpy_writes() {
+    let mut bytes =
+        b"\x93NUMPY\x01\x00v\x00{'descr': '<f8', 'fortran_order': False, 'shape': (2, 3), }"
+            .to_vec();
+    bytes.resize(127, b' ');
+    bytes.push(b'\n');
+    bytes.extend((0..6).flat_map(|i| f64::from(i).to_le_bytes()));
+    let dir = TempDir::new().unwrap();
+    let path = temp_file(&dir, "numpy.npy");
+    std::fs::write(&path, &bytes).unwrap();
+    let field = read_npy(&path, &[2, 3]).unwrap();
+    assert_eq!(field, ndarray::array![[[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]]]);
 }
 
 #[test]

@@ -1,28 +1,47 @@
 //! NumPy `.npy` files: float64, C order, shape `[nx, ny]` (2D) or `[n0, n1, n2]` (3D).
+//!
+//! The format (NumPy's `numpy.lib.format`): the magic `\x93NUMPY`, the version's major and
+//! minor bytes, the header's length (`u16` little-endian in version 1.0, `u32` in 2.0 and 3.0),
+//! the header, then the values as raw little-endian float64 in C order. The header is a Python
+//! dict literal, `{'descr': '<f8', 'fortran_order': False, 'shape': (96, 96), }`, padded with
+//! spaces and ended by a newline so that the values start at a multiple of 64 bytes.
+
+mod header;
 
 use super::{check_field, create_file, OutputError};
-use ndarray::{Array3, Axis};
-use ndarray_npy::npy::header::{Header, Layout, ReadHeaderError};
-use ndarray_npy::{ReadDataError, ReadableElement, WriteNpyError, WriteNpyExt};
+use header::{Header, HeaderError};
+use ndarray::Array3;
 use std::fs::File;
-use std::io::{BufReader, Write};
+use std::io::{BufReader, ErrorKind, Read, Write};
 use std::path::Path;
 
-/// The type descriptor of little-endian float64 as it appears in an npy header.
-const F64_DESCR: &str = "'<f8'";
+/// The type descriptor of little-endian float64.
+const F64_DESCR: &str = "<f8";
 
 /// Write a full-box `field` of a `dim`-dimensional scene as a float64 C-order `.npy` file of
 /// shape `[nx, ny]` (dim 2, the leading length-1 axis dropped) or `[n0, n1, n2]` (dim 3).
 pub fn write_npy(path: &Path, field: &Array3<f64>, dim: usize) -> Result<(), OutputError> {
     check_field(path, field, dim)?;
-    let mut file = create_file(path)?;
-    let result = if dim == 2 {
-        field.index_axis(Axis(0), 0).write_npy(&mut file)
+    let shape = if dim == 2 {
+        &field.shape()[1..]
     } else {
-        field.write_npy(&mut file)
+        field.shape()
     };
-    result.map_err(|e| write_error(path, e))?;
-    file.flush().map_err(|e| OutputError::io(path, e))
+    let mut file = create_file(path)?;
+    write_contents(&mut file, shape, field).map_err(|e| OutputError::io(path, e))
+}
+
+/// The header of a float64 C-order array of `shape`, then the values of `field` in C order.
+fn write_contents(
+    file: &mut impl Write,
+    shape: &[usize],
+    field: &Array3<f64>,
+) -> std::io::Result<()> {
+    file.write_all(&header::to_bytes(F64_DESCR, shape))?;
+    for v in field {
+        file.write_all(&v.to_le_bytes())?;
+    }
+    file.flush()
 }
 
 /// Read a float64 C-order `.npy` file of shape `expected_shape` (`[nx, ny]` or
@@ -36,8 +55,7 @@ pub fn read_npy(path: &Path, expected_shape: &[usize]) -> Result<Array3<f64>, Ou
     let header = Header::from_reader(&mut reader).map_err(|e| header_error(path, e))?;
     check_header(path, &header, expected_shape)?;
     let len = internal.iter().product();
-    let data = f64::read_to_end_exact_vec(&mut reader, &header.type_descriptor, len)
-        .map_err(|e| data_error(path, e))?;
+    let data = read_values(&mut reader, len).map_err(|e| data_error(path, len, e))?;
     Array3::from_shape_vec(internal, data).map_err(|e| OutputError::format(path, e))
 }
 
@@ -55,14 +73,16 @@ fn internal_shape(path: &Path, shape: &[usize]) -> Result<[usize; 3], OutputErro
 
 /// Accept only little-endian float64 in C order with exactly the expected shape.
 fn check_header(path: &Path, header: &Header, expected: &[usize]) -> Result<(), OutputError> {
-    let descr = header.type_descriptor.to_string();
-    if descr != F64_DESCR {
+    if header.descr != F64_DESCR {
         return Err(OutputError::format(
             path,
-            format!("expected dtype {F64_DESCR} (float64), found {descr}"),
+            format!(
+                "expected dtype '{F64_DESCR}' (float64), found '{}'",
+                header.descr
+            ),
         ));
     }
-    if header.layout == Layout::Fortran {
+    if header.fortran_order {
         return Err(OutputError::format(
             path,
             "expected C order (fortran_order: False), found Fortran order",
@@ -78,32 +98,45 @@ fn check_header(path: &Path, header: &Header, expected: &[usize]) -> Result<(), 
     Ok(())
 }
 
-/// Map an ndarray-npy write error, keeping I/O errors as such.
-fn write_error(path: &Path, err: WriteNpyError) -> OutputError {
-    match err {
-        WriteNpyError::Io(io) => OutputError::io(path, io),
-        other => OutputError::format(path, format!("cannot write npy: {other}")),
+/// Exactly `len` little-endian float64 values, then the end of the file.
+fn read_values(reader: &mut impl Read, len: usize) -> std::io::Result<Vec<f64>> {
+    let mut values = vec![0.0f64; len];
+    reader.read_exact(bytemuck::cast_slice_mut(&mut values))?;
+    if reader.read(&mut [0u8])? != 0 {
+        return Err(std::io::Error::new(
+            ErrorKind::InvalidData,
+            "the file goes on after its values",
+        ));
     }
+    // The bytes were read in the file's (little-endian) order: a no-op on little-endian hosts.
+    for v in &mut values {
+        *v = f64::from_le_bytes(v.to_ne_bytes());
+    }
+    Ok(values)
 }
 
-/// Map an ndarray-npy header error, keeping I/O errors as such.
-fn header_error(path: &Path, err: ReadHeaderError) -> OutputError {
+/// Map a header error, keeping I/O errors as such.
+fn header_error(path: &Path, err: HeaderError) -> OutputError {
     match err {
-        ReadHeaderError::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-            OutputError::format(
-                path,
-                "invalid npy header: the file ends before its header does (empty or cut short)",
-            )
+        HeaderError::Io(io) if io.kind() == ErrorKind::UnexpectedEof => OutputError::format(
+            path,
+            "invalid npy header: the file ends before its header does (empty or cut short)",
+        ),
+        HeaderError::Io(io) => OutputError::io(path, io),
+        HeaderError::Invalid(message) => {
+            OutputError::format(path, format!("invalid npy header: {message}"))
         }
-        ReadHeaderError::Io(io) => OutputError::io(path, io),
-        other => OutputError::format(path, format!("invalid npy header: {other}")),
     }
 }
 
-/// Map an ndarray-npy data error, keeping I/O errors as such.
-fn data_error(path: &Path, err: ReadDataError) -> OutputError {
-    match err {
-        ReadDataError::Io(io) => OutputError::io(path, io),
-        other => OutputError::format(path, format!("invalid npy data: {other}")),
+/// Map an error reading the `len` values, keeping I/O errors other than a short or long file.
+fn data_error(path: &Path, len: usize, err: std::io::Error) -> OutputError {
+    match err.kind() {
+        ErrorKind::UnexpectedEof => OutputError::format(
+            path,
+            format!("invalid npy data: the file ends before its {len} values do"),
+        ),
+        ErrorKind::InvalidData => OutputError::format(path, format!("invalid npy data: {err}")),
+        _ => OutputError::io(path, err),
     }
 }
