@@ -192,16 +192,18 @@ fn start_shapes(spec: &DiagramSpec, cases: &[Case]) -> Result<Vec<axisym::Soluti
 }
 
 fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
+    use std::fmt::Write as _;
     let shapes = start_shapes(spec, cases)?;
-    println!(
-        "case  branch        v      c0R0   R0/ε  grid (full box)    computed points  thinnest (ε)"
+    let mut text = String::from(
+        "case  branch        v      c0R0   R0/ε  grid (full box)    computed points  thinnest (ε)\n",
     );
     let mut total = 0usize;
     for (c, s) in cases.iter().zip(&shapes) {
         let n = case::grid_for(s, c.r0, spec);
         let points = case::computed_points(c.branch, n);
         total += points;
-        println!(
+        let _ = writeln!(
+            text,
             "{:>4}  {:<12} {:>6} {:>6} {:>6}  {:>4}x{:>4}x{:>4}  {:>10}  {:>12.1}",
             c.index,
             c.branch.name(),
@@ -215,8 +217,20 @@ fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
             thickness::thinnest(s) * c.r0
         );
     }
-    println!("{} cases, {} computed points in all", cases.len(), total);
-    Ok(())
+    let _ = writeln!(
+        text,
+        "{} cases, {} computed points in all",
+        cases.len(),
+        total
+    );
+    // A reader that stops early (`| head`) closes the pipe: that is not an error of the listing.
+    match std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Error::Io {
+            path: "(standard output)".into(),
+            source: e,
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// One line about a finished case.
