@@ -2,12 +2,13 @@
 //! in φ and in every measured column (F, A, V, σ), for every engine.
 //!
 //! Why it holds: every sum over the box is a sum of partials of fixed pieces of the data
-//! (chunks, rows of the spectrum, planes of the FD sweep, slabs of the fused transform), added
-//! in index order (`engines::numerics::sum_in_order`); the pool only decides who computes a
-//! piece. Rayon's own `reduce`/`sum` would add the partials along its split tree, which
-//! follows the thread count (measured before the change: FD φ apart by 3e-18–2e-15 after
-//! 10–20 steps, every engine's F, A, V in the last bits). The transforms compute each line
-//! alike whatever the split.
+//! (chunks, groups of rows, spectral tasks), combined over a binary tree whose shape depends
+//! only on their number (`engines::numerics::sum_in_fixed_tree`), or, where each thread owns a
+//! slab (the FD sweep's planes, the fused transform's slabs), kept per plane or slab and added
+//! in index order. Rayon's plain `reduce`/`sum` stop splitting where the pool runs out of
+//! threads and would add in another order on each thread count (measured before the change:
+//! FD φ apart by 3e-18–2e-15 after 10–20 steps, every engine's F, A, V in the last bits). The
+//! transforms compute each line alike whatever the split.
 
 use serde_json::{json, Value};
 use std::path::Path;

@@ -516,7 +516,13 @@ fn round_trip_by_slabs_equals_the_transforms_apart() {
             let (mut a_slabs, mut b_slabs) = (a.clone(), b.clone());
             let mut real = Array3::zeros(shape);
             let sum = t
-                .round_trip([&mut a_slabs, &mut b_slabs], &mut real, work, |p, q| p + q)
+                .round_trip(
+                    [&mut a_slabs, &mut b_slabs],
+                    &mut real,
+                    &mut Vec::new(),
+                    work,
+                    |p, q| p + q,
+                )
                 .expect("a slab per thread");
             let case = format!("{kinds:?}, {threads} threads");
             let scale = a_apart
@@ -544,6 +550,12 @@ fn round_trip_by_slabs_equals_the_transforms_apart() {
     let a = forward_of(&mut t, &random_field(flat, 13));
     let (mut a1, mut b1) = (a.clone(), a.clone());
     let mut real = Array3::zeros(flat);
-    let declined = t.round_trip([&mut a1, &mut b1], &mut real, work, |p, q| p + q);
+    let declined = t.round_trip(
+        [&mut a1, &mut b1],
+        &mut real,
+        &mut Vec::new(),
+        work,
+        |p, q| p + q,
+    );
     assert!(declined.is_none() && a1 == a && b1 == a && real.iter().all(|&v| v == 0.0));
 }

@@ -1,7 +1,7 @@
 //! Small numerical pieces shared by the engines: the parallel chunk size, the reduction in a
 //! fixed order, and the stable root of the area quadratic.
 
-use rayon::iter::IndexedParallelIterator;
+use rayon::iter::{IndexedParallelIterator, ParallelIterator};
 
 /// Elements per parallel task in the passes over a spectrum or a field (smaller tasks cost more
 /// in rayon's scheduling than they gain). The spectral sweeps split their chunks down to one a
@@ -18,17 +18,20 @@ pub const ENERGY_RISE_TOL: f64 = 1e-11;
 /// breaking a constraint (both are held to round-off, about 1e-14).
 pub const CONSTRAINT_TOL: f64 = 1e-9;
 
-/// Σ_j partial_j = (((zero + p₀) + p₁) + …) + p_{m−1}: the partials of fixed pieces of the data
-/// (chunks, rows, planes: never a thread's share), computed in parallel and added in index
-/// order. Rayon's own `reduce` and `sum` combine partials along the pool's split tree, so
-/// their last bits depend on the thread count; this order does not, and a result is the same
-/// bits on any number of threads. The cost is one vector of m partials.
-pub fn sum_in_order<T: Send>(
+/// Σ_j partial_j over a binary tree whose shape depends only on the number m of partials, which
+/// are those of fixed pieces of the data (chunks, rows, tasks: never a thread's share). Every
+/// piece is its own rayon job (`with_max_len(1)`): the pool then halves the index range
+/// (mid = len/2) down to single pieces whatever the thread count and whoever steals what, and
+/// adds the partials along that tree, so a result is the same bits on any number of threads
+/// (`tests/threads.rs`). Rayon's plain `sum`/`reduce` stop splitting where the pool runs out
+/// of threads and fold the rest in sequence, which is another order on each thread count.
+/// Nothing is allocated (`tests/no_alloc.rs`).
+pub fn sum_in_fixed_tree<T: Send>(
     partials: impl IndexedParallelIterator<Item = T>,
-    zero: T,
-    add: impl Fn(T, T) -> T,
+    zero: impl Fn() -> T + Sync + Send,
+    add: impl Fn(T, T) -> T + Sync + Send,
 ) -> T {
-    partials.collect::<Vec<T>>().into_iter().fold(zero, add)
+    partials.with_max_len(1).reduce(zero, add)
 }
 
 /// The root of a x² + 2b x + c = 0 nearest `near` (numerically stable), `None` if not real.

@@ -1,9 +1,12 @@
 //! Second-order finite-difference operators on the grid, periodic or with mirror (Neumann)
 //! walls: the (2d+1)-point Laplacian and the forward-difference area of docs/src/theory/fd.md.
 
-use crate::engines::numerics::sum_in_order;
+use crate::engines::numerics::sum_in_fixed_tree;
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::AREA_PREFACTOR;
+
+/// Rows of the box per parallel piece of [`area_form`]'s sum.
+const ROWS_PER_PIECE: usize = 16;
 use ndarray::Array3;
 use rayon::prelude::*;
 
@@ -108,7 +111,7 @@ pub fn area_form(grid: &Grid, eps: f64, u: &Array3<f64>, v: &Array3<f64>) -> f64
     let kinds = grid.kinds;
     let us = u.as_slice().expect("standard layout");
     let vs = v.as_slice().expect("standard layout");
-    let rows = (0..n0 * n1).into_par_iter().with_min_len(8).map(|row| {
+    let row_sum = |row: usize| {
         let (i, j) = (row / n1, row % n1);
         let line = |i: usize, j: usize| (i * n1 + j) * n2..(i * n1 + j + 1) * n2;
         let (cu, cv) = (&us[line(i, j)], &vs[line(i, j)]);
@@ -128,8 +131,13 @@ pub fn area_form(grid: &Grid, eps: f64, u: &Array3<f64>, v: &Array3<f64>) -> f64
             }
         }
         s
+    };
+    // Rows in groups of ROWS_PER_PIECE, each added in sequence, the groups over a fixed tree.
+    let rows = n0 * n1;
+    let pieces = (0..rows.div_ceil(ROWS_PER_PIECE)).into_par_iter().map(|g| {
+        (g * ROWS_PER_PIECE..((g + 1) * ROWS_PER_PIECE).min(rows)).fold(0.0, |s, r| s + row_sum(r))
     });
-    let sum = sum_in_order(rows, 0.0, |a, b| a + b);
+    let sum = sum_in_fixed_tree(pieces, || 0.0, |a, b| a + b);
     AREA_PREFACTOR * eps * sum * grid.h.powi(grid.dim as i32 - 2) * grid.mirror_factor()
 }
 

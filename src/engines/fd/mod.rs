@@ -22,7 +22,7 @@ mod lanes;
 mod sweep;
 
 use crate::engines::numerics::{
-    nearest_root, sum_in_order, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK,
+    nearest_root, sum_in_fixed_tree, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK,
 };
 use crate::engines::stencil;
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
@@ -147,9 +147,11 @@ impl FdEngine {
             }
             acc
         });
-        let (sum_sq, max_abs, sum_phi) = sum_in_order(partials, (0.0, 0.0, 0.0), |a, b| {
-            (a.0 + b.0, a.1.max(b.1), a.2 + b.2)
-        });
+        let (sum_sq, max_abs, sum_phi) = sum_in_fixed_tree(
+            partials,
+            || (0.0, 0.0, 0.0),
+            |a, b| (a.0 + b.0, a.1.max(b.1), a.2 + b.2),
+        );
         let dv = self.grid.cell_volume() * self.grid.mirror_factor();
         self.measures = Measures {
             energy: sum_sq * dv,
@@ -278,12 +280,12 @@ impl FdEngine {
             }
             sum
         });
-        let sum = sum_in_order(partials, 0.0, |a, b| a + b);
+        let sum = sum_in_fixed_tree(partials, || 0.0, |a, b| a + b);
         let mean = sum / mu.len() as f64;
         let partials = mu
             .par_chunks(PAR_CHUNK)
             .map(|m| m.iter().map(|m| (m - mean) * (m - mean)).sum::<f64>());
-        let sum_sq = sum_in_order(partials, 0.0, |a, b| a + b);
+        let sum_sq = sum_in_fixed_tree(partials, || 0.0, |a, b| a + b);
         self.residual = (sum_sq / mu.len() as f64).sqrt();
         self.mu_mean = mean;
     }

@@ -3,7 +3,7 @@
 
 use super::sweeps::{area_values, direction_piece, gradient_sweep, pair_dots, trial_values};
 use super::RelaxEngine;
-use crate::engines::numerics::{nearest_root, sum_in_order};
+use crate::engines::numerics::{nearest_root, sum_in_fixed_tree};
 use crate::engines::spectral::evaluator::{Evaluator, ExplicitTerm, Metric};
 use crate::engines::spectral::pieces::{for_each_piece, per_width, reals, reals_mut, PIECE};
 use crate::engines::{AreaConstraint, Diverged};
@@ -325,7 +325,7 @@ impl RelaxEngine {
                 });
                 acc
             });
-        let area = sum_in_order(partials, AreaSums::default(), AreaSums::add);
+        let area = sum_in_fixed_tree(partials, AreaSums::default, AreaSums::add);
         let project = self.area.method != AreaMethod::None && area.xq > 0.0;
         d.c_q = if project { -area.xd / area.xq } else { 0.0 };
         d.slope += d.c_q * self.ip.qr;

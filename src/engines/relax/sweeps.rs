@@ -2,7 +2,7 @@
 //! gradient with the new pair, each one pass over the pieces with its sums.
 
 use super::lbfgs::{flat, AreaSums, Direction, GradientSums, Pair};
-use crate::engines::numerics::sum_in_order;
+use crate::engines::numerics::sum_in_fixed_tree;
 use crate::engines::spectral::evaluator::{write_inverse_value, Metric, State, Symbols};
 use crate::engines::spectral::kernels::{pair_sums, sum, wide_fn};
 use crate::engines::spectral::pieces::{
@@ -268,7 +268,6 @@ pub(super) fn gradient_sweep(
         acc
     };
     let grad = reals_mut(grad);
-    let zero = GradientSums::zero();
     match new {
         None => {
             let partials = grad
@@ -276,7 +275,7 @@ pub(super) fn gradient_sweep(
                 .enumerate()
                 .with_max_len(1)
                 .map(|(t, r)| run(t, r, None));
-            sum_in_order(partials, zero, GradientSums::add)
+            sum_in_fixed_tree(partials, GradientSums::zero, GradientSums::add)
         }
         Some((x_old, pair)) => {
             let partials = grad
@@ -286,7 +285,7 @@ pub(super) fn gradient_sweep(
                 .enumerate()
                 .with_max_len(1)
                 .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), s, y))));
-            sum_in_order(partials, zero, GradientSums::add)
+            sum_in_fixed_tree(partials, GradientSums::zero, GradientSums::add)
         }
     }
 }

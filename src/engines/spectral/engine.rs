@@ -22,7 +22,7 @@ use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm
 use super::kernels::{sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::saved::spectrum;
-use crate::engines::numerics::{nearest_root, sum_in_order, CONSTRAINT_TOL, ENERGY_RISE_TOL};
+use crate::engines::numerics::{nearest_root, sum_in_fixed_tree, CONSTRAINT_TOL, ENERGY_RISE_TOL};
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::problem::config::{
     AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer, VolumeRamp,
@@ -419,9 +419,11 @@ impl SpectralEngine {
                 });
                 acc
             });
-        let [pp, pq, qq] = sum_in_order(partials, [0.0; 3], |a, b| {
-            [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-        });
+        let [pp, pq, qq] = sum_in_fixed_tree(
+            partials,
+            || [0.0; 3],
+            |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]],
+        );
         (pp, pq, qq)
     }
 

@@ -16,7 +16,7 @@
 use super::kernels::{pointwise_sums, sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
-use crate::engines::numerics::{sum_in_order, PAR_CHUNK};
+use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::engines::Diverged;
 use crate::problem::config::Laplacian;
 use crate::problem::grid::Grid;
@@ -167,6 +167,8 @@ pub struct Evaluator {
     work: Array3<f64>,
     /// Real scratch with the transforms apart: f'Φ.
     work2: Array3<f64>,
+    /// The pointwise sums of each slab of the fused round trip, added in slab order.
+    slab_sums: Vec<PointSums>,
 }
 
 impl Evaluator {
@@ -185,6 +187,7 @@ impl Evaluator {
             spare: Array3::zeros(transform.spectral_shape()),
             work: grid.zeros(),
             work2: grid.zeros(),
+            slab_sums: Vec::new(),
             explicit,
             eps,
             c0,
@@ -268,6 +271,7 @@ impl Evaluator {
         let fused = self.transform.round_trip(
             spectra,
             &mut state.phi,
+            &mut self.slab_sums,
             |first, phi, lap, fphi| {
                 let range = first..first + phi.len();
                 let old = previous.map_or(phi, |p| &p[range.clone()]);
@@ -349,7 +353,7 @@ fn pointwise_apart(
             let phi = &phi[range.clone()];
             pointwise_range(eps, phi, old, slice_c0(c0, range), lap, fphi)
         });
-    let sums = sum_in_order(partials, PointSums::default(), PointSums::add);
+    let sums = sum_in_fixed_tree(partials, PointSums::default, PointSums::add);
     transform.forward(fphi, first);
     transform.forward(lap, second);
     sums
@@ -607,7 +611,7 @@ fn combine(
             });
             sums
         });
-    sum_in_order(partials, CombineSums::default(), CombineSums::add)
+    sum_in_fixed_tree(partials, CombineSums::default, CombineSums::add)
 }
 
 /// What [`combine`] forms.

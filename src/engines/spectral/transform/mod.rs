@@ -336,8 +336,8 @@ impl Transform {
     /// replace `a` and `b`. The same as [`Transform::inverse`] twice, `visit` over the box and
     /// [`Transform::forward`] twice, but each slab's fields stay in cache from the inverse
     /// transforms to the forward ones, and the two scratch fields never reach memory. Returns
-    /// the slabs' values summed by `add` from `S::default()` in slab order (the same bits on
-    /// any number of threads), or `None`, having done nothing, when the box has fewer slabs
+    /// the slabs' values, kept in `visits` (scratch whose allocation is reused), summed by `add`
+    /// from `S::default()` in slab order (the same bits on any number of threads), or `None`, having done nothing, when the box has fewer slabs
     /// than threads.
     ///
     /// # Panics
@@ -346,6 +346,7 @@ impl Transform {
         &mut self,
         [a, b]: [&mut Array3<Complex64>; 2],
         real: &mut Array3<f64>,
+        visits: &mut Vec<S>,
         visit: impl Fn(usize, &[f64], &mut [f64], &mut [f64]) -> S + Sync,
         add: impl Fn(S, S) -> S + Sync,
     ) -> Option<S> {
@@ -372,43 +373,43 @@ impl Transform {
         plan.strided_pass(0, Direction::Inverse, yb, works);
         let (slab, spectral_slab) = (n1 * n2, n1 * plan.spectral[2]);
         let scale = 1.0 / (n0 * slab) as f64;
-        // The slabs from `first_slab` of one thread: `ya`, `yb`, `x` hold just those slabs;
-        // returns each slab's visit, to be added over the box in slab order (the same bits
-        // however the slabs are shared out).
+        // The slabs from `first_slab` of one thread: `ya`, `yb`, `x` hold just those slabs, and
+        // `out` their entries of `visits`.
         let slabs = |first_slab: usize,
                      (ya, yb, x): (&mut [Complex64], &mut [Complex64], &mut [f64]),
+                     out: &mut [S],
                      work: &mut Work,
-                     fields: &mut [f64]|
-         -> Vec<S> {
+                     fields: &mut [f64]| {
             let (xb, y) = fields.split_at_mut(slab);
             let ya = ya.chunks_exact_mut(spectral_slab);
             let yb = yb.chunks_exact_mut(spectral_slab);
-            let mut visits = Vec::with_capacity(x.len() / slab);
-            for (i, ((ya, yb), x)) in ya.zip(yb).zip(x.chunks_exact_mut(slab)).enumerate() {
+            let slabs = ya.zip(yb).zip(x.chunks_exact_mut(slab)).zip(out);
+            for (i, (((ya, yb), x), out)) in slabs.enumerate() {
                 plan.inverse_slabs(ya, x, scale, work);
                 plan.inverse_slabs(yb, xb, scale, work);
-                visits.push(visit((first_slab + i) * slab, x, xb, y));
+                *out = visit((first_slab + i) * slab, x, xb, y);
                 plan.forward_slabs(y, ya, work);
                 plan.forward_slabs(xb, yb, work);
             }
-            visits
         };
-        let visits = if threads == 1 {
-            slabs(0, (ya, yb, x), &mut works[0], &mut slab_fields[0])
+        visits.clear();
+        visits.resize_with(n0, S::default);
+        if threads == 1 {
+            slabs(0, (ya, yb, x), visits, &mut works[0], &mut slab_fields[0]);
         } else {
             let per = n0.div_ceil(threads);
             ya.par_chunks_mut(per * spectral_slab)
                 .zip(yb.par_chunks_mut(per * spectral_slab))
                 .zip(x.par_chunks_mut(per * slab))
+                .zip(visits.par_chunks_mut(per))
                 .zip(works.par_iter_mut().zip(slab_fields.par_iter_mut()))
                 .enumerate()
-                .map(|(t, (((ya, yb), x), (work, fields)))| {
-                    slabs(t * per, (ya, yb, x), work, fields)
-                })
-                .flatten_iter()
-                .collect()
-        };
-        let total = visits.into_iter().fold(S::default(), &add);
+                .for_each(|(t, ((((ya, yb), x), out), (work, fields)))| {
+                    slabs(t * per, (ya, yb, x), out, work, fields);
+                });
+        }
+        // In slab order, whatever thread computed which slab.
+        let total = visits.drain(..).fold(S::default(), &add);
         plan.strided_pass(0, Direction::Forward, ya, works);
         plan.strided_pass(0, Direction::Forward, yb, works);
         plan.clear_padding(ya);
