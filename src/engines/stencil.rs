@@ -1,12 +1,9 @@
 //! Second-order finite-difference operators on the grid, periodic or with mirror (Neumann)
 //! walls: the (2d+1)-point Laplacian and the forward-difference area of docs/src/theory/fd.md.
 
-use crate::engines::numerics::sum_in_fixed_tree;
+use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::AREA_PREFACTOR;
-
-/// Rows of the box per parallel piece of [`area_form`]'s sum.
-const ROWS_PER_PIECE: usize = 16;
 use ndarray::Array3;
 use rayon::prelude::*;
 
@@ -132,11 +129,12 @@ pub fn area_form(grid: &Grid, eps: f64, u: &Array3<f64>, v: &Array3<f64>) -> f64
         }
         s
     };
-    // Rows in groups of ROWS_PER_PIECE, each added in sequence, the groups over a fixed tree.
-    let rows = n0 * n1;
-    let pieces = (0..rows.div_ceil(ROWS_PER_PIECE)).into_par_iter().map(|g| {
-        (g * ROWS_PER_PIECE..((g + 1) * ROWS_PER_PIECE).min(rows)).fold(0.0, |s, r| s + row_sum(r))
-    });
+    // Rows in groups of about PAR_CHUNK points, each group added in sequence, the groups
+    // over a fixed tree (both fixed by the box, not by the thread count).
+    let (rows, per) = (n0 * n1, (PAR_CHUNK / n2).max(1));
+    let pieces = (0..rows.div_ceil(per))
+        .into_par_iter()
+        .map(|g| (g * per..((g + 1) * per).min(rows)).fold(0.0, |s, r| s + row_sum(r)));
     let sum = sum_in_fixed_tree(pieces, || 0.0, |a, b| a + b);
     AREA_PREFACTOR * eps * sum * grid.h.powi(grid.dim as i32 - 2) * grid.mirror_factor()
 }
