@@ -254,7 +254,12 @@ fn bad_diagram_files_name_the_key() {
 /// The committed diagram files are valid and list their cases.
 #[test]
 fn committed_diagram_files_list_their_cases() {
-    for (file, cases) in [("diagram.json", 84), ("diagram_c0.json", 165)] {
+    for (file, cases) in [
+        ("diagram.json", 84),
+        ("diagram_c0.json", 165),
+        ("diagram_fine.json", 81),
+        ("diagram_c0_fine.json", 165),
+    ] {
         let path = format!("{}/runs/{file}", env!("CARGO_MANIFEST_DIR"));
         let out = vesicle(&["diagram", &path, "--list"]);
         assert!(out.status.success(), "{file}: {}", text(&out));
