@@ -15,30 +15,42 @@ use std::path::Path;
 use std::process::Command;
 use tempfile::TempDir;
 
-/// φ (the `.npy` payload as f64) and the CSV rows (columns F, A, V, σ as numbers) of `scene`
-/// run for `steps` steps on `threads` threads.
+/// `vesicle ARGS`, asserting success.
+fn vesicle(args: &[&str]) {
+    let o = Command::new(env!("CARGO_BIN_EXE_vesicle"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// φ of the run in `out`: the payload of its `phi_final.npy` as f64.
+fn phi_of(out: &Path) -> Vec<f64> {
+    let bytes = std::fs::read(out.join("phi_final.npy")).unwrap();
+    let header = 10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    bytes[header..]
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+        .collect()
+}
+
+/// φ and the CSV rows (columns F, A, V, σ as numbers) of `scene` run for `steps` steps on
+/// `threads` threads.
 fn run(dir: &Path, scene: &Value, steps: usize, threads: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
     let spec = dir.join("s.json");
     std::fs::write(&spec, scene.to_string()).unwrap();
     let out = dir.join(format!("t{threads}"));
-    let o = Command::new(env!("CARGO_BIN_EXE_vesicle"))
-        .args([
-            "run",
-            spec.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .args(["--set", &format!("max_steps={steps}")])
-        .args(["--set", &format!("threads={threads}")])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let bytes = std::fs::read(out.join("phi_final.npy")).unwrap();
-    let header = 10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-    let phi = bytes[header..]
-        .chunks_exact(8)
-        .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
-        .collect();
+    vesicle(&[
+        "run",
+        spec.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        &format!("max_steps={steps}"),
+        "--set",
+        &format!("threads={threads}"),
+    ]);
+    let phi = phi_of(&out);
     let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
     let rows = csv
         .lines()
@@ -144,8 +156,7 @@ fn a_run_resumed_on_more_threads_continues_bit_for_bit() {
     for (name, extra) in [
         (
             "fd lagrangian",
-            json!({"method": "fd", "dt": 4e-4,
-                                 "area": {"method": "lagrangian", "alpha": 1e-3}}),
+            json!({"method": "fd", "dt": 4e-4, "area": {"method": "lagrangian", "alpha": 1e-3}}),
         ),
         (
             "sbdf2 adaptive",
@@ -159,19 +170,7 @@ fn a_run_resumed_on_more_threads_continues_bit_for_bit() {
         let tmp = TempDir::new().unwrap();
         let scene = ellipsoid(extra, true);
         let (whole, _) = run(tmp.path(), &scene, 20, 1);
-        let spec = tmp.path().join("s.json");
-        let split = tmp.path().join("split");
-        let vesicle = |args: &[&str]| {
-            let o = Command::new(env!("CARGO_BIN_EXE_vesicle"))
-                .args(args)
-                .output()
-                .unwrap();
-            assert!(
-                o.status.success(),
-                "{name}: {}",
-                String::from_utf8_lossy(&o.stderr)
-            );
-        };
+        let (spec, split) = (tmp.path().join("s.json"), tmp.path().join("split"));
         let (spec, split_dir) = (spec.to_str().unwrap(), split.to_str().unwrap());
         vesicle(&[
             "run",
@@ -191,12 +190,7 @@ fn a_run_resumed_on_more_threads_continues_bit_for_bit() {
             "--set",
             "threads=3",
         ]);
-        let bytes = std::fs::read(split.join("phi_final.npy")).unwrap();
-        let header = 10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-        let resumed: Vec<f64> = bytes[header..]
-            .chunks_exact(8)
-            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
-            .collect();
+        let resumed = phi_of(&split);
         assert!(
             whole == resumed,
             "{name}: resumed on 3 threads differs by {:e}",

@@ -259,9 +259,9 @@ impl Sweep {
         let n = slabs.count();
         let at = |i, edges| Slab::new(&l, slabs, i, f, k, edges);
         for (i, pipe) in self.pipes[..n].iter_mut().enumerate() {
-            let s = at(i, &[]);
+            let (z0, z1) = slabs.bounds(i);
             pipe.planes.clear();
-            pipe.planes.resize((s.z1 - s.z0) as usize, Sums::default());
+            pipe.planes.resize(z1 - z0, Sums::default());
         }
         if n == 1 {
             let pipe = &mut self.pipes[0];

@@ -308,7 +308,6 @@ impl RelaxEngine {
         let partials = reals_mut(self.dir.as_slice_mut().expect("standard layout"))
             .par_chunks_mut(task)
             .enumerate()
-            .with_max_len(1)
             .map(|(t, out)| {
                 let base = t * task;
                 let mut acc = AreaSums::default();

@@ -273,7 +273,6 @@ pub(super) fn gradient_sweep(
             let partials = grad
                 .par_chunks_mut(task)
                 .enumerate()
-                .with_max_len(1)
                 .map(|(t, r)| run(t, r, None));
             sum_in_fixed_tree(partials, GradientSums::zero, GradientSums::add)
         }
@@ -283,7 +282,6 @@ pub(super) fn gradient_sweep(
                 .zip(pair.s.par_chunks_mut(task))
                 .zip(pair.y.par_chunks_mut(task))
                 .enumerate()
-                .with_max_len(1)
                 .map(|(t, ((r, s), y))| run(t, r, Some((reals(x_old), s, y))));
             sum_in_fixed_tree(partials, GradientSums::zero, GradientSums::add)
         }

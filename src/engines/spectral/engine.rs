@@ -404,21 +404,17 @@ impl SpectralEngine {
         let inputs = Inputs::new(&self.cur, self.prev.as_ref(), u.a[2]);
         let sym = &self.ev.symbols;
         let (task, total) = (sym.task_reals(), 2 * self.cur.hat.len());
-        let partials = (0..total.div_ceil(task))
-            .into_par_iter()
-            .with_max_len(1)
-            .map(|t| {
-                let mut acc = [0.0; 3];
-                let mut terms = [[0.0; PIECE]; 3];
-                let (a, len) = (sym.area_prefactor, task.min(total - t * task));
-                for_each_piece(sym, t, len, |p, at| {
-                    let x = inputs.reals(t * task + at..t * task + at + p.reals());
-                    let s =
-                        per_width!(sym, W => quadratic_values::<PREV, W>(&u, p, a, x, &mut terms));
-                    acc = [acc[0] + s[0], acc[1] + s[1], acc[2] + s[2]];
-                });
-                acc
+        let partials = (0..total.div_ceil(task)).into_par_iter().map(|t| {
+            let mut acc = [0.0; 3];
+            let mut terms = [[0.0; PIECE]; 3];
+            let (a, len) = (sym.area_prefactor, task.min(total - t * task));
+            for_each_piece(sym, t, len, |p, at| {
+                let x = inputs.reals(t * task + at..t * task + at + p.reals());
+                let s = per_width!(sym, W => quadratic_values::<PREV, W>(&u, p, a, x, &mut terms));
+                acc = [acc[0] + s[0], acc[1] + s[1], acc[2] + s[2]];
             });
+            acc
+        });
         let [pp, pq, qq] = sum_in_fixed_tree(
             partials,
             || [0.0; 3],

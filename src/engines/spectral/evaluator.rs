@@ -590,27 +590,23 @@ fn combine(
         with_residual: sigma.is_some(),
         tension: 2.0 * sym.area_prefactor * sigma.unwrap_or(0.0),
     };
-    let partials = n
-        .par_chunks_mut(task)
-        .enumerate()
-        .with_max_len(1)
-        .map(|(t, n)| {
-            let z = [0.0; PIECE];
-            let mut terms = CombineTerms {
-                residual: z,
-                qq: z,
-                gq: z,
-            };
-            let mut sums = CombineSums::default();
-            for_each_piece(sym, t, n.len(), |p, at| {
-                let r = at..at + p.reals();
-                let (g, h) = (&g[t * task..][r.clone()], &h[t * task..][r.clone()]);
-                let n = &mut n[r];
-                let piece = per_width!(sym, W => combine_piece::<W>(&how, p, g, h, n, &mut terms));
-                sums = sums.add(piece);
-            });
-            sums
+    let partials = n.par_chunks_mut(task).enumerate().map(|(t, n)| {
+        let z = [0.0; PIECE];
+        let mut terms = CombineTerms {
+            residual: z,
+            qq: z,
+            gq: z,
+        };
+        let mut sums = CombineSums::default();
+        for_each_piece(sym, t, n.len(), |p, at| {
+            let r = at..at + p.reals();
+            let (g, h) = (&g[t * task..][r.clone()], &h[t * task..][r.clone()]);
+            let n = &mut n[r];
+            let piece = per_width!(sym, W => combine_piece::<W>(&how, p, g, h, n, &mut terms));
+            sums = sums.add(piece);
         });
+        sums
+    });
     sum_in_fixed_tree(partials, CombineSums::default, CombineSums::add)
 }
 
