@@ -6,7 +6,7 @@ use std::cell::Cell;
 use std::f64::consts::PI;
 
 use ndarray::{Array3, Zip};
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 use vesicle::engines::spectral::transform::Transform;
 use vesicle::problem::grid::{AxisKind, Grid};
 

@@ -11,8 +11,8 @@
 //! interpolated to spectral accuracy.
 
 use ndarray::{Array3, Axis};
-use rustfft::num_complex::Complex64;
-use rustfft::FftPlanner;
+use num_complex::Complex64;
+use vesicle_fft_plans::Planner;
 
 /// The field `phi` (a full periodic box, `[1, nx, ny]` in 2D) on the grid of spacing h/2:
 /// every axis of length > 1 doubled by [band-limited interpolation](self).
@@ -32,9 +32,9 @@ fn double_axis(field: &Array3<f64>, axis: usize) -> Array3<f64> {
     let mut shape = [field.shape()[0], field.shape()[1], field.shape()[2]];
     shape[axis] = 2 * n;
     let mut out = Array3::zeros(shape);
-    let mut planner = FftPlanner::new();
-    let forward = planner.plan_fft_forward(n);
-    let inverse = planner.plan_fft_inverse(2 * n);
+    let mut planner = Planner::new();
+    let forward = planner.forward(n);
+    let inverse = planner.inverse(2 * n);
     let mut x = vec![Complex64::default(); n];
     let mut y = vec![Complex64::default(); 2 * n];
     let half = n / 2;

@@ -23,7 +23,7 @@ use crate::driver::simulation::{Clock, Simulation};
 use crate::engines::{Saved, SavedArray};
 use crate::error::{Error, Result};
 use ndarray::Array3;
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::fs::File;

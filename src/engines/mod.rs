@@ -21,7 +21,7 @@ pub mod stencil;
 use crate::problem::config::AreaMethod;
 use crate::problem::model::Measures;
 use ndarray::{Array3, ArrayView3, CowArray, Ix3};
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 use std::borrow::Cow;
 
 /// The area constraint an engine applies.

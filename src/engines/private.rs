@@ -54,7 +54,7 @@ mod tests {
         p[4] = 2.0;
         assert_eq!(&p[..], &[1.0, 1.0, 1.0, 1.0, 2.0]);
         assert!(p.guard * 8 >= GUARD_BYTES && p.buf.len() == 5 + 2 * p.guard);
-        let c = Private::new(3, rustfft::num_complex::Complex64::default());
+        let c = Private::new(3, num_complex::Complex64::default());
         assert!(c.guard * 16 >= GUARD_BYTES && c.len() == 3);
     }
 }

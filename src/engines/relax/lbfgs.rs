@@ -11,8 +11,8 @@ use crate::problem::config::{AreaMethod, Scene};
 use crate::problem::grid::Grid;
 use crate::problem::model::C0;
 use ndarray::Array3;
+use num_complex::Complex64;
 use rayon::prelude::*;
-use rustfft::num_complex::Complex64;
 use std::collections::VecDeque;
 
 /// Armijo constant: accept when F(φ + αd) ≤ F(φ) + c α ⟨∇F, d⟩.

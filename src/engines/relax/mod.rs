@@ -62,7 +62,7 @@ use crate::engines::spectral::evaluator::{Evaluator, Metric, State};
 use crate::engines::AreaConstraint;
 use lbfgs::{Direction, InnerProducts, Pair};
 use ndarray::Array3;
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 use std::collections::VecDeque;
 
 /// The L-BFGS relaxation engine.

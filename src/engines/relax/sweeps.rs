@@ -8,8 +8,8 @@ use crate::engines::spectral::kernels::{pair_sums, sum, wide_fn};
 use crate::engines::spectral::pieces::{
     for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE,
 };
+use num_complex::Complex64;
 use rayon::prelude::*;
-use rustfft::num_complex::Complex64;
 use std::collections::VecDeque;
 
 wide_fn! {

@@ -39,7 +39,7 @@ use std::f64::consts::PI;
 
 use super::transform::{dct_twiddle_table, makhoul_positions};
 use ndarray::ArrayViewMut2;
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 
 /// Columns per block (16 complex values: four cache lines of a row).
 const BLOCK: usize = 16;
@@ -593,7 +593,7 @@ mod x86 {
     //! The register `Y` (AVX2/FMA, two complex values) and the prefetch.
 
     use super::{Rows, Vector};
-    use rustfft::num_complex::Complex64;
+    use num_complex::Complex64;
     use std::arch::x86_64::*;
 
     #[derive(Clone, Copy)]

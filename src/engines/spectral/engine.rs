@@ -30,8 +30,8 @@ use crate::problem::config::{
 use crate::problem::grid::Grid;
 use crate::problem::model::{Measures, C0};
 use ndarray::Array3;
+use num_complex::Complex64;
 use rayon::prelude::*;
-use rustfft::num_complex::Complex64;
 
 /// The SBDF update at one wavenumber (see the module documentation), for one step's Δt and
 /// coefficients.

@@ -25,8 +25,8 @@ use crate::problem::model::{
     AREA_PREFACTOR, C0,
 };
 use ndarray::Array3;
+use num_complex::Complex64;
 use rayon::prelude::*;
-use rustfft::num_complex::Complex64;
 
 /// Which explicit term [`Evaluator::evaluate`] leaves in `State::nonlinear`.
 #[derive(Clone, Copy, Debug, PartialEq)]

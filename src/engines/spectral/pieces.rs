@@ -16,7 +16,7 @@
 
 use super::evaluator::Symbols;
 use super::kernels::wide_fn;
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 
 /// Modes per piece.
 pub const PIECE: usize = 256;

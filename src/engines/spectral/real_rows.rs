@@ -23,8 +23,8 @@
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-use rustfft::num_complex::Complex64;
-use rustfft::{Fft, FftPlanner};
+use num_complex::Complex64;
+use vesicle_fft_plans::{Fft, Planner};
 
 /// Rows transformed by one call of the complex FFT (16 rows of 64 reals and their spectra take
 /// 16 KiB, so the split reads what the FFT left in L1).
@@ -41,7 +41,7 @@ pub struct RealRows {
 
 impl RealRows {
     /// The plan for rows of length `n`, if `n ≥ 2` is even and the CPU has AVX2 and FMA.
-    pub fn new(planner: &mut FftPlanner<f64>, n: usize) -> Option<Self> {
+    pub fn new(planner: &mut Planner, n: usize) -> Option<Self> {
         if n < 2 || !n.is_multiple_of(2) || !crate::cpu::has_avx2_fma() {
             return None;
         }
@@ -51,8 +51,8 @@ impl RealRows {
             .collect();
         Some(RealRows {
             m,
-            forward: planner.plan_fft_forward(m),
-            inverse: planner.plan_fft_inverse(m),
+            forward: planner.forward(m),
+            inverse: planner.inverse(m),
             twiddles,
         })
     }
@@ -161,7 +161,7 @@ mod x86 {
     //! [`super::split`] and [`super::merge`] two bins a register: bins k, k + 1 and their
     //! mirrors m − k, m − k − 1 (loaded as one register and its halves swapped).
 
-    use rustfft::num_complex::Complex64;
+    use num_complex::Complex64;
     use std::arch::x86_64::*;
 
     /// Conjugate (flip the imaginary signs).
@@ -301,7 +301,7 @@ mod tests {
     /// or the merge's scale is changed.
     #[test]
     fn rows_match_the_naive_real_dft() {
-        let mut planner = FftPlanner::new();
+        let mut planner = Planner::new();
         let lengths = (2..=40).step_by(2).chain([48, 64, 96, 100, 128, 192, 256]);
         for n in lengths {
             let Some(plan) = RealRows::new(&mut planner, n) else {
@@ -346,7 +346,7 @@ mod tests {
 
     #[test]
     fn odd_lengths_have_no_plan() {
-        let mut planner = FftPlanner::new();
+        let mut planner = Planner::new();
         for n in [1, 3, 15, 33] {
             assert!(RealRows::new(&mut planner, n).is_none(), "n = {n}");
         }

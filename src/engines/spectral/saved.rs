@@ -5,7 +5,7 @@
 use super::transform::Transform;
 use crate::engines::Saved;
 use ndarray::{CowArray, Ix3};
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 
 /// The saved spectrum `name` as `t` stores it (see [`Saved::complex`]).
 ///

@@ -1,6 +1,6 @@
 //! AVX versions of the packing and twiddle loops: the same operations as the scalar code, so the same values.
 
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 use std::arch::x86_64::*;
 
 /// [`super::rows::unpack_to_packed_rows`] on one lane of n values whose rows `a`, `b` both exist:

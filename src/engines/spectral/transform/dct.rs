@@ -2,7 +2,7 @@
 
 use std::f64::consts::PI;
 
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
 
 use crate::cpu::has_avx;
 

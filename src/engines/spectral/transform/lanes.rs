@@ -2,8 +2,8 @@
 
 use std::sync::Arc;
 
-use rustfft::num_complex::Complex64;
-use rustfft::{Fft, FftPlanner};
+use num_complex::Complex64;
+use vesicle_fft_plans::{Fft, Planner};
 
 use super::{
     dct_twiddle_table, dct_twiddles, makhoul_positions, Direction, LANE_BUFFER, LANE_PAD, MIN_BATCH,
@@ -32,15 +32,10 @@ pub(super) struct LaneKernel {
 
 impl LaneKernel {
     /// The kernel of an axis of `len` points; `padded` lanes are [`LANE_PAD`] values apart.
-    pub(super) fn new(
-        planner: &mut FftPlanner<f64>,
-        len: usize,
-        kind: AxisKind,
-        padded: bool,
-    ) -> Self {
+    pub(super) fn new(planner: &mut Planner, len: usize, kind: AxisKind, padded: bool) -> Self {
         let stride = if padded { len + LANE_PAD } else { len };
-        let forward = planner.plan_fft_forward(len);
-        let inverse = planner.plan_fft_inverse(len);
+        let forward = planner.forward(len);
+        let inverse = planner.inverse(len);
         let scratch_len = forward
             .get_inplace_scratch_len()
             .max(inverse.get_inplace_scratch_len());

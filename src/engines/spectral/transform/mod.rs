@@ -50,10 +50,9 @@ use std::f64::consts::PI;
 use std::fmt;
 
 use ndarray::{Array3, ArrayView3};
+use num_complex::Complex64;
 use rayon::prelude::*;
-use realfft::RealFftPlanner;
-use rustfft::num_complex::Complex64;
-use rustfft::FftPlanner;
+use vesicle_fft_plans::Planner;
 
 use super::real_rows::RealRows;
 use crate::engines::private::Private;
@@ -124,19 +123,16 @@ impl Transform {
     /// If an axis has length 0.
     pub fn new(shape: [usize; 3], kinds: [AxisKind; 3], threads: usize) -> Self {
         assert!(shape.iter().all(|&n| n > 0), "axes must not be empty");
-        let mut planner = FftPlanner::new();
+        let mut planner = Planner::new();
         let packed = kinds[2] == AxisKind::Mirror
             && (0..2).all(|a| shape[a] == 1 || kinds[a] == AxisKind::Mirror);
         let last = match kinds[2] {
             AxisKind::Periodic => match RealRows::new(&mut planner, shape[2]) {
                 Some(rows) => LastAxis::Halved(rows),
-                None => {
-                    let mut real = RealFftPlanner::new();
-                    LastAxis::Real {
-                        r2c: real.plan_fft_forward(shape[2]),
-                        c2r: real.plan_fft_inverse(shape[2]),
-                    }
-                }
+                None => LastAxis::Real {
+                    r2c: planner.real_forward(shape[2]),
+                    c2r: planner.real_inverse(shape[2]),
+                },
             },
             AxisKind::Mirror => LastAxis::Mirror {
                 kernel: LaneKernel::new(&mut planner, shape[2], AxisKind::Mirror, false),

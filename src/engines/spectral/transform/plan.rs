@@ -1,8 +1,8 @@
 //! The stages of a planned transform: scratch sizes and the parallel sweeps over the axes.
 
 use ndarray::{ArrayViewMut3, Axis};
+use num_complex::Complex64;
 use rayon::prelude::*;
-use rustfft::num_complex::Complex64;
 
 use super::{strided_piece, Direction, LastAxis, Plan, Strided, Work, COLUMN_ALIGN};
 use crate::engines::private::Private;

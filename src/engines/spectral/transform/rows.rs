@@ -2,8 +2,8 @@
 
 use std::sync::Arc;
 
-use realfft::{ComplexToReal, RealToComplex};
-use rustfft::num_complex::Complex64;
+use num_complex::Complex64;
+use vesicle_fft_plans::{ComplexToReal, RealToComplex};
 
 use super::{has_avx, makhoul_position, Direction, LaneKernel, Work};
 use crate::engines::spectral::kernels::wide_fn;

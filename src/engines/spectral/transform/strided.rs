@@ -1,8 +1,8 @@
 //! The transforms along the strided axes (0 and 1): down the columns in place, or gathered into lanes.
 
 use ndarray::{s, ArrayView2, ArrayViewMut2, ArrayViewMut3};
-use rustfft::num_complex::Complex64;
-use rustfft::FftPlanner;
+use num_complex::Complex64;
+use vesicle_fft_plans::Planner;
 
 use super::{has_avx, Direction, LaneKernel, Work};
 use crate::engines::spectral::columns::ColumnFft;
@@ -21,7 +21,7 @@ pub(super) enum Strided {
 impl Strided {
     /// The transform of axis `a` of `shape` with walls `kinds`.
     pub(super) fn new(
-        planner: &mut FftPlanner<f64>,
+        planner: &mut Planner,
         a: usize,
         shape: [usize; 3],
         kinds: [AxisKind; 3],
