@@ -12,6 +12,7 @@
 //! unlike max|φ^{n+1} − φ^n|/Δt, it does not shrink as Δt grows.
 
 pub mod fd;
+pub mod gpu;
 pub mod numerics;
 pub(crate) mod private;
 pub mod relax;

@@ -7,7 +7,7 @@ use crate::engines::relax::RelaxEngine;
 use crate::engines::spectral::{self, SpectralEngine};
 use crate::engines::{AreaConstraint, Diverged, Engine};
 use crate::error::{Error, Result};
-use crate::problem::config::{AdaptiveSpec, Dynamics, Method, Scene, Scheme};
+use crate::problem::config::{AdaptiveSpec, Device, Dynamics, Method, Scene, Scheme};
 use crate::problem::grid::Grid;
 use crate::problem::setup::Problem;
 
@@ -65,6 +65,7 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
     let phi = problem.phi.clone();
     let bad = |d: Diverged| Error::config("initial", d.0);
     let mut engine: Box<dyn Engine + Send> = match (scene.method, scene.dynamics) {
+        _ if scene.device == Device::Gpu => gpu_engine(scene, grid, c0, phi)?,
         (Method::Fd, _) => {
             Box::new(FdEngine::new(grid, scene.eps, c0, phi, 0.0, scene.threads()).map_err(bad)?)
         }
@@ -78,6 +79,33 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
     // A stability study asks to see what an unstable Δt does, energy rises included.
     engine.guard_energy(!scene.allow_unstable);
     Ok(engine)
+}
+
+/// The GPU engine (`"device": "gpu"`, validated: the spectral conserved flow on the full box).
+///
+/// # Errors
+/// `Error::Config` on field `device` if the GPU cannot be set up or this binary has no GPU
+/// engine.
+fn gpu_engine(
+    scene: &Scene,
+    grid: Grid,
+    c0: crate::problem::model::C0,
+    phi: ndarray::Array3<f64>,
+) -> Result<Box<dyn Engine + Send>> {
+    #[cfg(feature = "gpu")]
+    {
+        let engine = crate::engines::gpu::GpuEngine::new(scene, grid, c0, phi)
+            .map_err(|d| Error::config("device", d.0))?;
+        Ok(Box::new(engine))
+    }
+    #[cfg(not(feature = "gpu"))]
+    {
+        let _ = (scene, grid, c0, phi);
+        Err(Error::config(
+            "device",
+            crate::engines::gpu::usable().expect_err("no GPU engine in this build"),
+        ))
+    }
 }
 
 /// A simulation after the preparation steps: ready with its area constraint and A0, or

@@ -587,7 +587,7 @@ impl SpectralEngine {
 
     /// Energy-based proposal for the next step (Qiao–Zhang–Tang), limited by `growth`:
     /// `clamp(dt_max / √(1 + α (Ḟ/F)²), dt_min, growth · Δt)`.
-    fn propose(a: &AdaptiveSettings, dt: f64, f_old: f64, f_new: f64) -> f64 {
+    pub(crate) fn propose(a: &AdaptiveSettings, dt: f64, f_old: f64, f_new: f64) -> f64 {
         let rate = (f_new - f_old).abs() / dt / f_new.abs().max(1e-300);
         let (dt_min, dt_max) = (a.dt_min.unwrap_or(dt), a.dt_max.unwrap_or(dt));
         let target = dt_max / (1.0 + a.energy_alpha * rate * rate).sqrt();

@@ -15,8 +15,8 @@ mod validation;
 
 pub use c0::{C0Ball, C0Band, C0Cap, C0Field, C0File, C0Spec, Pole};
 pub use scene::{
-    axis_index, AdaptiveSettings, AdaptiveSpec, AreaMethod, AreaSpec, AutoTag, Dynamics, Laplacian,
-    Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, VolumeRamp,
+    axis_index, AdaptiveSettings, AdaptiveSpec, AreaMethod, AreaSpec, AutoTag, Device, Dynamics,
+    Laplacian, Method, OutputSpec, Scene, Scheme, Stabilizer, StabilizerSpec, Symmetry, VolumeRamp,
     CHECKPOINT_MINUTES, RECORD_ROWS, SERIAL_BELOW,
 };
 pub use schedule::Schedule;

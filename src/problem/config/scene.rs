@@ -93,6 +93,28 @@ pub struct Scene {
     /// Output schedule.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Where the spectral engine runs: the CPU (default) or an NVIDIA GPU (a binary built
+    /// with the `gpu` feature).
+    #[serde(default, skip_serializing_if = "Device::is_cpu")]
+    pub device: Device,
+}
+
+/// Where the spectral engine runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Device {
+    /// The CPU, on `threads` threads.
+    #[default]
+    Cpu,
+    /// The first NVIDIA GPU (CUDA driver, cuFFT and NVRTC loaded at run time).
+    Gpu,
+}
+
+impl Device {
+    /// Whether this is the default, the CPU (not written into a scene's record).
+    pub fn is_cpu(&self) -> bool {
+        *self == Device::Cpu
+    }
 }
 
 /// Rows of `timeseries.csv` the automatic `output.record_every` aims at.

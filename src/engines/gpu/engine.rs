@@ -1,0 +1,513 @@
+//! The GPU engine: the CPU spectral engine's step (`engines::spectral::engine`, the same SBDF
+//! formula, exact area projection, Lagrangian update, energy guard and adaptive controller) on
+//! the full periodic 3D box, with every array on the device. The host keeps the scalars, takes
+//! σ from the area quadratic's three sums and checks the constraints; φ and the spectra come
+//! back to the host only when they are asked for (outputs, checkpoints).
+
+use super::kernels::{failed, Device, Field, Spectrum, UpdateArgs};
+use crate::engines::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL};
+use crate::engines::spectral::SpectralEngine;
+use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
+use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer};
+use crate::problem::grid::Grid;
+use crate::problem::model::{self, Measures, C0};
+use cudarc::cufft::sys::double2;
+use ndarray::Array3;
+use num_complex::Complex64;
+use std::cell::OnceCell;
+
+/// (3/(2√2)): A = (3/(2√2)) ε ∫|∇φ|².
+const AREA_FACTOR: f64 = 1.060_660_171_779_821_2;
+
+/// A state on the device.
+struct State {
+    hat: Spectrum,
+    nonlinear: Spectrum,
+    phi: Field,
+    measures: Measures,
+    residual: f64,
+}
+
+/// Copies of device arrays, made when the host asks and dropped when the state changes.
+#[derive(Default)]
+struct HostCopies {
+    phi: OnceCell<Array3<f64>>,
+    hat: OnceCell<Array3<Complex64>>,
+    prev: OnceCell<(Array3<Complex64>, Array3<Complex64>)>,
+}
+
+/// The spectral conserved flow on the GPU.
+pub struct GpuEngine {
+    dev: Device,
+    grid: Grid,
+    eps: f64,
+    /// εC0 (uniform).
+    ec0: f64,
+    stabilizer: Stabilizer,
+    scheme: Scheme,
+    adaptive: Option<AdaptiveSettings>,
+    cur: State,
+    next: State,
+    prev: Option<(Spectrum, Spectrum)>,
+    /// Scratch: the inverse transforms' second input (−|k|²φ̂), then FT[f].
+    spare: Spectrum,
+    /// Real scratch: ∇²φ, then f; and f'Φ.
+    work: Field,
+    work2: Field,
+    dt_prev: f64,
+    max_change: f64,
+    sigma: f64,
+    area: AreaConstraint,
+    volume0: f64,
+    dt_next: Option<f64>,
+    energy_guard: bool,
+    host: HostCopies,
+}
+
+// SAFETY: the engine is used by one thread at a time (the driver's loop); the host copies'
+// cells are only touched through it. cudarc's handles are Send.
+unsafe impl Send for GpuEngine {}
+
+fn to_device(dev: &Device, a: &Array3<Complex64>) -> Result<Spectrum, String> {
+    let host: Vec<double2> = a.iter().map(|c| double2 { x: c.re, y: c.im }).collect();
+    dev.stream
+        .clone_htod(&host)
+        .map_err(failed("copying a spectrum"))
+}
+
+fn to_host(dev: &Device, a: &Spectrum, shape: [usize; 3]) -> Array3<Complex64> {
+    let host = dev.stream.clone_dtoh(a).expect("GPU: reading a spectrum");
+    let values = host.iter().map(|v| Complex64::new(v.x, v.y)).collect();
+    Array3::from_shape_vec(shape, values).expect("spectrum shape")
+}
+
+impl GpuEngine {
+    /// Engine holding `phi` at t = 0, no area constraint yet.
+    ///
+    /// # Errors
+    /// [`Diverged`] if the GPU cannot be set up or `phi` is not finite.
+    pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
+        Self::build(scene, grid, c0, phi).map_err(Diverged)
+    }
+
+    fn build(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, String> {
+        let dev = Device::new(&grid, scene.laplacian)?;
+        let state = |dev: &Device| -> Result<State, String> {
+            Ok(State {
+                hat: dev.spectrum()?,
+                nonlinear: dev.spectrum()?,
+                phi: dev.field()?,
+                measures: Measures::default(),
+                residual: f64::NAN,
+            })
+        };
+        let mut cur = state(&dev)?;
+        let host = phi.as_slice().expect("standard layout");
+        dev.stream
+            .memcpy_htod(host, &mut cur.phi)
+            .map_err(failed("copying φ"))?;
+        dev.forward(&cur.phi, &mut cur.hat)?;
+        let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
+            dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
+            dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
+            ..a
+        });
+        let mut e = GpuEngine {
+            next: state(&dev)?,
+            spare: dev.spectrum()?,
+            work: dev.field()?,
+            work2: dev.field()?,
+            cur,
+            ec0: c0.parts(c0.ramp(0.0)).0,
+            eps: scene.eps,
+            grid,
+            dev,
+            stabilizer: scene.stabilizer(),
+            scheme: scene.scheme,
+            adaptive,
+            prev: None,
+            dt_prev: scene.dt,
+            max_change: 0.0,
+            sigma: 0.0,
+            area: AreaConstraint::none(),
+            volume0: 0.0,
+            dt_next: None,
+            energy_guard: true,
+            host: HostCopies::default(),
+        };
+        e.evaluate_current(Some(0.0))?;
+        e.volume0 = e.cur.measures.volume;
+        Ok(e)
+    }
+
+    /// The spectral shape.
+    fn spectral_shape(&self) -> [usize; 3] {
+        let [n0, n1, s2, _] = self.dev.dims;
+        [n0 as usize, n1 as usize, s2 as usize]
+    }
+
+    /// Evaluate the current state from its φ̂ (the CPU `Evaluator::evaluate`).
+    fn evaluate_current(&mut self, sigma: Option<f64>) -> Result<(), String> {
+        let ap = AREA_FACTOR * self.eps;
+        self.dev.hermitian(&mut self.cur.hat)?;
+        let area =
+            self.dev
+                .inverse_inputs(&self.cur.hat, &mut self.cur.nonlinear, &mut self.spare, ap)?;
+        self.max_change = finish(
+            &self.dev,
+            (self.eps, self.ec0, self.grid.cell_volume()),
+            &mut self.cur,
+            (&mut self.spare, &mut self.work, &mut self.work2),
+            area,
+            None,
+            sigma,
+        )?;
+        Ok(())
+    }
+
+    /// SBDF coefficients (a0, a1, a2, b1, b2) for this step (as the CPU engine's).
+    fn coefficients(&self, dt: f64) -> [f64; 5] {
+        match (&self.scheme, &self.prev) {
+            (Scheme::Sbdf2, Some(_)) => {
+                let w = dt / self.dt_prev;
+                [
+                    (1.0 + 2.0 * w) / (1.0 + w),
+                    -(1.0 + w),
+                    w * w / (1.0 + w),
+                    1.0 + w,
+                    -w,
+                ]
+            }
+            _ => [1.0, -1.0, 0.0, 1.0, 0.0],
+        }
+    }
+
+    fn update(&self, dt: f64) -> UpdateArgs {
+        let e2 = self.eps * self.eps;
+        let [a0, a1, a2, b1, b2] = self.coefficients(dt);
+        UpdateArgs {
+            a0,
+            a1,
+            a2,
+            b1,
+            b2,
+            dt,
+            s2: self.stabilizer.s2,
+            s4e2: self.stabilizer.s4 * e2,
+            e4x2: 2.0 * e2 * e2,
+            c_sigma: 3.0 / std::f64::consts::SQRT_2 * self.eps,
+        }
+    }
+
+    /// φ̂ⁿ⁻¹, N̂ⁿ⁻¹ when this step's formula reads them.
+    fn prev_inputs(&self, dt: f64) -> Option<(&Spectrum, &Spectrum)> {
+        let a2 = self.coefficients(dt)[2];
+        self.prev
+            .as_ref()
+            .filter(|_| a2 != 0.0)
+            .map(|(h, n)| (h, n))
+    }
+
+    fn choose_sigma(&self, dt: f64) -> Result<Option<f64>, String> {
+        Ok(match self.area.method {
+            AreaMethod::None => Some(0.0),
+            AreaMethod::Lagrangian => Some(self.sigma),
+            AreaMethod::Projection => {
+                let ap = AREA_FACTOR * self.eps;
+                let cur = (&self.cur.hat, &self.cur.nonlinear);
+                let [pp, pq, qq] =
+                    self.dev
+                        .area_quadratic(cur, self.prev_inputs(dt), self.update(dt), ap)?;
+                nearest_root(qq, pq, pp - self.area.target, self.sigma)
+            }
+        })
+    }
+
+    fn sigma_after(&self, step_sigma: f64) -> f64 {
+        match self.area.method {
+            AreaMethod::Lagrangian => {
+                self.sigma + self.area.alpha * (self.cur.measures.area - self.area.target)
+            }
+            _ => step_sigma,
+        }
+    }
+
+    /// Try one step of `dt` into `next`; `Err` with the reason it was rejected.
+    fn attempt(&mut self, dt: f64) -> Result<(f64, f64), Rejected> {
+        let sigma = self
+            .choose_sigma(dt)
+            .map_err(Rejected::Device)?
+            .ok_or_else(|| Rejected::Step("the area projection has no real root".into()))?;
+        let ap = AREA_FACTOR * self.eps;
+        let u = self.update(dt);
+        let a2 = u.a2;
+        let prev = self.prev.as_ref().filter(|_| a2 != 0.0);
+        let area = self
+            .dev
+            .write_update(
+                (&self.cur.hat, &self.cur.nonlinear),
+                prev.map(|(h, n)| (h, n)),
+                u,
+                ap,
+                sigma,
+                &mut self.next.hat,
+                &mut self.next.nonlinear,
+                &mut self.spare,
+            )
+            .map_err(Rejected::Device)?;
+        let sigma_after = self.sigma_after(sigma);
+        self.max_change = finish(
+            &self.dev,
+            (self.eps, self.ec0, self.grid.cell_volume()),
+            &mut self.next,
+            (&mut self.spare, &mut self.work, &mut self.work2),
+            area,
+            Some(&self.cur.phi),
+            Some(sigma_after),
+        )
+        .map_err(Rejected::Step)?;
+        self.check_constraints(sigma)?;
+        Ok((sigma, sigma_after))
+    }
+
+    /// The CPU engine's checks: volume, area (projection), F_eff not rising where the scheme
+    /// is dissipative.
+    fn check_constraints(&self, sigma: f64) -> Result<(), Rejected> {
+        let m = self.next.measures;
+        let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
+        if dv > CONSTRAINT_TOL {
+            return Err(Rejected::Step(format!(
+                "volume drifted by {dv:.2e} (relative)"
+            )));
+        }
+        if self.area.method == AreaMethod::Projection {
+            let da = (m.area - self.area.target).abs() / self.area.target;
+            if da > CONSTRAINT_TOL {
+                return Err(Rejected::Step(format!(
+                    "area off its target by {da:.2e} (relative)"
+                )));
+            }
+        }
+        let dissipative = self.adaptive.is_some() || self.scheme == Scheme::Sbdf1;
+        if self.energy_guard && dissipative {
+            let before = self.cur.measures.energy + sigma * self.cur.measures.area;
+            let after = m.energy + sigma * m.area;
+            if after > before + ENERGY_RISE_TOL * before.abs() {
+                return Err(Rejected::Step(format!(
+                    "F_eff rose from {before:.12e} to {after:.12e}: the step is not \
+                     dissipative at this Δt; lower dt or use adaptive steps"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn accept(&mut self, sigma: f64, dt: f64) -> Result<(), String> {
+        std::mem::swap(&mut self.cur, &mut self.next);
+        if self.scheme == Scheme::Sbdf2 {
+            match &mut self.prev {
+                Some((h, n)) => {
+                    std::mem::swap(h, &mut self.next.hat);
+                    std::mem::swap(n, &mut self.next.nonlinear);
+                }
+                None => {
+                    let mut h = self.dev.spectrum()?;
+                    let mut n = self.dev.spectrum()?;
+                    let copy = |src: &Spectrum, dst: &mut Spectrum| {
+                        self.dev
+                            .stream
+                            .memcpy_dtod(src, dst)
+                            .map_err(failed("copying a spectrum"))
+                    };
+                    copy(&self.next.hat, &mut h)?;
+                    copy(&self.next.nonlinear, &mut n)?;
+                    self.prev = Some((h, n));
+                }
+            }
+        }
+        self.dt_prev = dt;
+        self.sigma = sigma;
+        self.host = HostCopies::default();
+        Ok(())
+    }
+}
+
+/// Why a step was not taken: the step's own reason (retried with a smaller Δt when adaptive)
+/// or a failure of the device (never retried).
+enum Rejected {
+    Step(String),
+    Device(String),
+}
+
+/// The evaluation after its first sweep (the CPU `Evaluator::finish`): `state.hat` holds φ̂,
+/// `state.nonlinear` a copy of it and `spare` −|k|²φ̂; computes φ, the measures, N̂ (in
+/// `state.nonlinear`) and, with `sigma`, the residual. Returns max|φ − old|.
+fn finish(
+    dev: &Device,
+    (eps, ec0, cell): (f64, f64, f64),
+    state: &mut State,
+    (spare, work, work2): (&mut Spectrum, &mut Field, &mut Field),
+    area: f64,
+    old: Option<&Field>,
+    sigma: Option<f64>,
+) -> Result<f64, String> {
+    let e2 = eps * eps;
+    dev.inverse(&mut state.nonlinear, &mut state.phi)?;
+    dev.inverse(spare, work)?;
+    let [phi_sq, phi_sum, max_abs, change] =
+        dev.pointwise(&mut state.phi, work, work2, old, e2, ec0)?;
+    dev.forward(work2, &mut state.nonlinear)?;
+    dev.forward(work, spare)?;
+    state.measures = Measures {
+        energy: phi_sq * cell,
+        area,
+        volume: 0.5 * (dev.points() as f64 + phi_sum) * cell,
+    };
+    if model::diverged(max_abs, state.measures.energy) {
+        return Err(format!(
+            "max|φ| = {max_abs:.3e}, F = {:.3e}: the state diverged",
+            state.measures.energy
+        ));
+    }
+    let tension = 2.0 * AREA_FACTOR * eps * sigma.unwrap_or(0.0);
+    let res = dev.combine(
+        &state.hat,
+        &mut state.nonlinear,
+        spare,
+        e2,
+        tension,
+        sigma.is_some(),
+    )?;
+    dev.hermitian(&mut state.nonlinear)?;
+    state.residual = match sigma {
+        Some(_) => (res / (dev.points() as f64 * cell)).sqrt(),
+        None => f64::NAN,
+    };
+    Ok(change)
+}
+
+impl Engine for GpuEngine {
+    fn phi(&self) -> &Array3<f64> {
+        self.host.phi.get_or_init(|| {
+            let v = self
+                .dev
+                .stream
+                .clone_dtoh(&self.cur.phi)
+                .expect("GPU: reading φ");
+            Array3::from_shape_vec(self.grid.shape, v).expect("field shape")
+        })
+    }
+
+    fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    fn measures(&self) -> Measures {
+        self.cur.measures
+    }
+
+    fn residual(&self) -> f64 {
+        self.cur.residual
+    }
+
+    fn set_area(&mut self, area: AreaConstraint) {
+        if area.method == AreaMethod::None {
+            self.sigma = 0.0;
+        }
+        self.area = area;
+    }
+
+    fn step(&mut self, _t: f64, dt: f64) -> Result<StepReport, Diverged> {
+        let mut dt = dt;
+        let mut rejected = 0;
+        loop {
+            match self.attempt(dt) {
+                Ok((_, sigma_after)) => {
+                    let f_old = self.cur.measures.energy;
+                    self.accept(sigma_after, dt).map_err(Diverged)?;
+                    let rate = self.max_change / dt;
+                    if let Some(a) = &self.adaptive {
+                        let f_new = self.cur.measures.energy;
+                        self.dt_next = Some(SpectralEngine::propose(a, dt, f_old, f_new));
+                    }
+                    return Ok(StepReport { dt, rate, rejected });
+                }
+                Err(Rejected::Device(why)) => return Err(Diverged(why)),
+                Err(Rejected::Step(reason)) => {
+                    let Some(a) = &self.adaptive else {
+                        return Err(Diverged(reason));
+                    };
+                    let dt_min = a.dt_min.unwrap_or(dt);
+                    rejected += 1;
+                    if dt <= dt_min {
+                        return Err(Diverged(format!(
+                            "step rejected at the smallest step dt_min = {dt_min:.3e}: {reason}"
+                        )));
+                    }
+                    dt = (dt * a.shrink).max(dt_min);
+                }
+            }
+        }
+    }
+
+    fn next_dt(&self, dt: f64) -> f64 {
+        self.dt_next.unwrap_or(dt)
+    }
+
+    fn guard_energy(&mut self, on: bool) {
+        self.energy_guard = on;
+    }
+
+    fn name(&self) -> &'static str {
+        "spectral (GPU)"
+    }
+
+    fn save(&self) -> Saved<'_> {
+        let shape = self.spectral_shape();
+        let hat = self
+            .host
+            .hat
+            .get_or_init(|| to_host(&self.dev, &self.cur.hat, shape));
+        let mut saved = Saved::default()
+            .scalar("sigma", self.sigma)
+            .scalar("volume0", self.volume0)
+            .scalar("dt_prev", self.dt_prev)
+            .scalar("dt_next", self.dt_next.unwrap_or(f64::NAN))
+            .array("phi_hat", SavedArray::Complex(hat.view().into()));
+        if let Some((h, n)) = &self.prev {
+            let (hat, nonlinear) = self
+                .host
+                .prev
+                .get_or_init(|| (to_host(&self.dev, h, shape), to_host(&self.dev, n, shape)));
+            saved = saved
+                .array("prev_phi_hat", SavedArray::Complex(hat.view().into()))
+                .array(
+                    "prev_nonlinear",
+                    SavedArray::Complex(nonlinear.view().into()),
+                );
+        }
+        saved
+    }
+
+    fn restore(&mut self, saved: &mut Saved<'_>, _t: f64) -> Result<(), String> {
+        let shape = self.spectral_shape();
+        let spectrum = |saved: &Saved<'_>, name: &str| -> Result<Array3<Complex64>, String> {
+            saved.complex(name, &shape).map(|v| v.to_owned())
+        };
+        self.cur.hat = to_device(&self.dev, &spectrum(saved, "phi_hat")?)?;
+        self.sigma = saved.get("sigma")?;
+        self.volume0 = saved.get("volume0")?;
+        self.dt_prev = saved.get("dt_prev")?;
+        let dt_next = saved.get("dt_next")?;
+        self.dt_next = (!dt_next.is_nan()).then_some(dt_next);
+        self.prev = match (self.scheme, spectrum(saved, "prev_phi_hat")) {
+            (Scheme::Sbdf2, Ok(hat)) => Some((
+                to_device(&self.dev, &hat)?,
+                to_device(&self.dev, &spectrum(saved, "prev_nonlinear")?)?,
+            )),
+            _ => None,
+        };
+        self.host = HostCopies::default();
+        self.evaluate_current(Some(self.sigma))
+    }
+}
