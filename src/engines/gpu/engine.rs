@@ -4,14 +4,13 @@
 //! σ from the area quadratic's three sums and checks the constraints; φ and the spectra come
 //! back to the host only when they are asked for (outputs, checkpoints).
 
-use super::kernels::{failed, Device, Field, Spectrum, UpdateArgs};
+use super::backend::{Backend, UpdateArgs};
 use crate::engines::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL};
 use crate::engines::spectral::SpectralEngine;
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer};
 use crate::problem::grid::Grid;
 use crate::problem::model::{self, Measures, C0};
-use cudarc::cufft::sys::double2;
 use ndarray::Array3;
 use num_complex::Complex64;
 use std::cell::OnceCell;
@@ -20,10 +19,10 @@ use std::cell::OnceCell;
 const AREA_FACTOR: f64 = 1.060_660_171_779_821_2;
 
 /// A state on the device.
-struct State {
-    hat: Spectrum,
-    nonlinear: Spectrum,
-    phi: Field,
+struct State<B: Backend> {
+    hat: B::Spectrum,
+    nonlinear: B::Spectrum,
+    phi: B::Field,
     measures: Measures,
     residual: f64,
 }
@@ -37,8 +36,11 @@ struct HostCopies {
 }
 
 /// The spectral conserved flow on the GPU.
-pub struct GpuEngine {
-    dev: Device,
+pub type GpuEngine = DeviceEngine<super::kernels::Device>;
+
+/// The spectral conserved flow on a [`Backend`].
+pub struct DeviceEngine<B: Backend> {
+    dev: B,
     grid: Grid,
     eps: f64,
     /// εC0 (uniform).
@@ -46,14 +48,14 @@ pub struct GpuEngine {
     stabilizer: Stabilizer,
     scheme: Scheme,
     adaptive: Option<AdaptiveSettings>,
-    cur: State,
-    next: State,
-    prev: Option<(Spectrum, Spectrum)>,
+    cur: State<B>,
+    next: State<B>,
+    prev: Option<(B::Spectrum, B::Spectrum)>,
     /// Scratch: the inverse transforms' second input (−|k|²φ̂), then FT[f].
-    spare: Spectrum,
+    spare: B::Spectrum,
     /// Real scratch: ∇²φ, then f; and f'Φ.
-    work: Field,
-    work2: Field,
+    work: B::Field,
+    work2: B::Field,
     dt_prev: f64,
     max_change: f64,
     sigma: f64,
@@ -64,35 +66,24 @@ pub struct GpuEngine {
     host: HostCopies,
 }
 
-// SAFETY: the engine is used by one thread at a time (the driver's loop); the host copies'
-// cells are only touched through it. cudarc's handles are Send.
-unsafe impl Send for GpuEngine {}
-
-fn to_device(dev: &Device, a: &Array3<Complex64>) -> Result<Spectrum, String> {
-    let host: Vec<double2> = a.iter().map(|c| double2 { x: c.re, y: c.im }).collect();
-    dev.stream
-        .clone_htod(&host)
-        .map_err(failed("copying a spectrum"))
-}
-
-fn to_host(dev: &Device, a: &Spectrum, shape: [usize; 3]) -> Array3<Complex64> {
-    let host = dev.stream.clone_dtoh(a).expect("GPU: reading a spectrum");
-    let values = host.iter().map(|v| Complex64::new(v.x, v.y)).collect();
-    Array3::from_shape_vec(shape, values).expect("spectrum shape")
-}
-
 impl GpuEngine {
-    /// Engine holding `phi` at t = 0, no area constraint yet.
+    /// Engine on the first GPU holding `phi` at t = 0, no area constraint yet.
     ///
     /// # Errors
     /// [`Diverged`] if the GPU cannot be set up or `phi` is not finite.
     pub fn new(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, Diverged> {
-        Self::build(scene, grid, c0, phi).map_err(Diverged)
+        let dev = super::kernels::Device::new(&grid, scene.laplacian).map_err(Diverged)?;
+        Self::on(dev, scene, grid, c0, phi).map_err(Diverged)
     }
+}
 
-    fn build(scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, String> {
-        let dev = Device::new(&grid, scene.laplacian)?;
-        let state = |dev: &Device| -> Result<State, String> {
+impl<B: Backend> DeviceEngine<B> {
+    /// Engine on `dev` holding `phi` at t = 0, no area constraint yet.
+    ///
+    /// # Errors
+    /// A sentence if the device fails or `phi` is not finite.
+    pub fn on(dev: B, scene: &Scene, grid: Grid, c0: C0, phi: Array3<f64>) -> Result<Self, String> {
+        let state = |dev: &B| -> Result<State<B>, String> {
             Ok(State {
                 hat: dev.spectrum()?,
                 nonlinear: dev.spectrum()?,
@@ -102,17 +93,14 @@ impl GpuEngine {
             })
         };
         let mut cur = state(&dev)?;
-        let host = phi.as_slice().expect("standard layout");
-        dev.stream
-            .memcpy_htod(host, &mut cur.phi)
-            .map_err(failed("copying φ"))?;
+        dev.upload_field(phi.as_slice().expect("standard layout"), &mut cur.phi)?;
         dev.forward(&cur.phi, &mut cur.hat)?;
         let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
             dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
             dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
             ..a
         });
-        let mut e = GpuEngine {
+        let mut e = DeviceEngine {
             next: state(&dev)?,
             spare: dev.spectrum()?,
             work: dev.field()?,
@@ -138,12 +126,6 @@ impl GpuEngine {
         e.evaluate_current(Some(0.0))?;
         e.volume0 = e.cur.measures.volume;
         Ok(e)
-    }
-
-    /// The spectral shape.
-    fn spectral_shape(&self) -> [usize; 3] {
-        let [n0, n1, s2, _] = self.dev.dims;
-        [n0 as usize, n1 as usize, s2 as usize]
     }
 
     /// Evaluate the current state from its φ̂ (the CPU `Evaluator::evaluate`).
@@ -200,7 +182,7 @@ impl GpuEngine {
     }
 
     /// φ̂ⁿ⁻¹, N̂ⁿ⁻¹ when this step's formula reads them.
-    fn prev_inputs(&self, dt: f64) -> Option<(&Spectrum, &Spectrum)> {
+    fn prev_inputs(&self, dt: f64) -> Option<(&B::Spectrum, &B::Spectrum)> {
         let a2 = self.coefficients(dt)[2];
         self.prev
             .as_ref()
@@ -313,14 +295,8 @@ impl GpuEngine {
                 None => {
                     let mut h = self.dev.spectrum()?;
                     let mut n = self.dev.spectrum()?;
-                    let copy = |src: &Spectrum, dst: &mut Spectrum| {
-                        self.dev
-                            .stream
-                            .memcpy_dtod(src, dst)
-                            .map_err(failed("copying a spectrum"))
-                    };
-                    copy(&self.next.hat, &mut h)?;
-                    copy(&self.next.nonlinear, &mut n)?;
+                    self.dev.copy_spectrum(&self.next.hat, &mut h)?;
+                    self.dev.copy_spectrum(&self.next.nonlinear, &mut n)?;
                     self.prev = Some((h, n));
                 }
             }
@@ -342,13 +318,13 @@ enum Rejected {
 /// The evaluation after its first sweep (the CPU `Evaluator::finish`): `state.hat` holds φ̂,
 /// `state.nonlinear` a copy of it and `spare` −|k|²φ̂; computes φ, the measures, N̂ (in
 /// `state.nonlinear`) and, with `sigma`, the residual. Returns max|φ − old|.
-fn finish(
-    dev: &Device,
+fn finish<B: Backend>(
+    dev: &B,
     (eps, ec0, cell): (f64, f64, f64),
-    state: &mut State,
-    (spare, work, work2): (&mut Spectrum, &mut Field, &mut Field),
+    state: &mut State<B>,
+    (spare, work, work2): (&mut B::Spectrum, &mut B::Field, &mut B::Field),
     area: f64,
-    old: Option<&Field>,
+    old: Option<&B::Field>,
     sigma: Option<f64>,
 ) -> Result<f64, String> {
     let e2 = eps * eps;
@@ -386,13 +362,15 @@ fn finish(
     Ok(change)
 }
 
-impl Engine for GpuEngine {
+impl<B: Backend> Engine for DeviceEngine<B>
+where
+    DeviceEngine<B>: Send,
+{
     fn phi(&self) -> &Array3<f64> {
         self.host.phi.get_or_init(|| {
             let v = self
                 .dev
-                .stream
-                .clone_dtoh(&self.cur.phi)
+                .download_field(&self.cur.phi)
                 .expect("GPU: reading φ");
             Array3::from_shape_vec(self.grid.shape, v).expect("field shape")
         })
@@ -463,11 +441,12 @@ impl Engine for GpuEngine {
     }
 
     fn save(&self) -> Saved<'_> {
-        let shape = self.spectral_shape();
-        let hat = self
-            .host
-            .hat
-            .get_or_init(|| to_host(&self.dev, &self.cur.hat, shape));
+        let download = |s: &B::Spectrum| {
+            self.dev
+                .download_spectrum(s)
+                .expect("GPU: reading a spectrum")
+        };
+        let hat = self.host.hat.get_or_init(|| download(&self.cur.hat));
         let mut saved = Saved::default()
             .scalar("sigma", self.sigma)
             .scalar("volume0", self.volume0)
@@ -475,10 +454,7 @@ impl Engine for GpuEngine {
             .scalar("dt_next", self.dt_next.unwrap_or(f64::NAN))
             .array("phi_hat", SavedArray::Complex(hat.view().into()));
         if let Some((h, n)) = &self.prev {
-            let (hat, nonlinear) = self
-                .host
-                .prev
-                .get_or_init(|| (to_host(&self.dev, h, shape), to_host(&self.dev, n, shape)));
+            let (hat, nonlinear) = self.host.prev.get_or_init(|| (download(h), download(n)));
             saved = saved
                 .array("prev_phi_hat", SavedArray::Complex(hat.view().into()))
                 .array(
@@ -490,11 +466,11 @@ impl Engine for GpuEngine {
     }
 
     fn restore(&mut self, saved: &mut Saved<'_>, _t: f64) -> Result<(), String> {
-        let shape = self.spectral_shape();
+        let shape = self.dev.spectral_shape();
         let spectrum = |saved: &Saved<'_>, name: &str| -> Result<Array3<Complex64>, String> {
             saved.complex(name, &shape).map(|v| v.to_owned())
         };
-        self.cur.hat = to_device(&self.dev, &spectrum(saved, "phi_hat")?)?;
+        self.cur.hat = self.dev.upload_spectrum(&spectrum(saved, "phi_hat")?)?;
         self.sigma = saved.get("sigma")?;
         self.volume0 = saved.get("volume0")?;
         self.dt_prev = saved.get("dt_prev")?;
@@ -502,8 +478,9 @@ impl Engine for GpuEngine {
         self.dt_next = (!dt_next.is_nan()).then_some(dt_next);
         self.prev = match (self.scheme, spectrum(saved, "prev_phi_hat")) {
             (Scheme::Sbdf2, Ok(hat)) => Some((
-                to_device(&self.dev, &hat)?,
-                to_device(&self.dev, &spectrum(saved, "prev_nonlinear")?)?,
+                self.dev.upload_spectrum(&hat)?,
+                self.dev
+                    .upload_spectrum(&spectrum(saved, "prev_nonlinear")?)?,
             )),
             _ => None,
         };

@@ -2,7 +2,7 @@
 //! (compiled by NVRTC), the cuFFT plans, the wavenumber and weight tables, and the launches,
 //! each returning its sums added in block order on the host (deterministic).
 
-use crate::engines::spectral::evaluator::axis_symbol;
+use super::backend::{tables, Backend, UpdateArgs};
 use crate::problem::config::Laplacian;
 use crate::problem::grid::Grid;
 use cudarc::cufft::sys::{cufftType, double2};
@@ -10,7 +10,8 @@ use cudarc::cufft::CudaFft;
 use cudarc::driver::{
     CudaContext, CudaFunction, CudaSlice, CudaStream, DeviceRepr, LaunchConfig, PushKernelArg,
 };
-use std::f64::consts::PI;
+use ndarray::Array3;
+use num_complex::Complex64;
 use std::sync::Arc;
 
 /// The kernels' source.
@@ -54,28 +55,12 @@ pub fn probe() -> Result<(), String> {
     Ok(())
 }
 
-/// The SBDF update's coefficients (the `Update` struct of `kernels.cu`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct UpdateArgs {
-    pub a0: f64,
-    pub a1: f64,
-    pub a2: f64,
-    pub b1: f64,
-    pub b2: f64,
-    pub dt: f64,
-    pub s2: f64,
-    pub s4e2: f64,
-    pub e4x2: f64,
-    pub c_sigma: f64,
-}
-
 // SAFETY: ten f64 fields, repr(C): the layout of the kernels' `Update`.
 unsafe impl DeviceRepr for UpdateArgs {}
 
 /// The device, its kernels, plans and tables for one grid.
 pub struct Device {
-    pub stream: Arc<CudaStream>,
+    stream: Arc<CudaStream>,
     hermitian: CudaFunction,
     inverse_inputs: CudaFunction,
     pointwise: CudaFunction,
@@ -88,7 +73,7 @@ pub struct Device {
     /// axis 0's).
     tables: [CudaSlice<f64>; 6],
     /// n0, n1, s2 = n2/2 + 1, n2.
-    pub dims: [i32; 4],
+    dims: [i32; 4],
     partials: CudaSlice<f64>,
 }
 
@@ -113,35 +98,7 @@ impl Device {
                 .map_err(|e| format!("GPU: cuFFT could not plan {n0}×{n1}×{n2} ({e:?})"))
         };
         let s2 = n2 / 2 + 1;
-        let k2 = |n: usize, len: usize| -> Vec<f64> {
-            (0..len)
-                .map(|j| {
-                    let m = if j <= n / 2 {
-                        j as f64
-                    } else {
-                        j as f64 - n as f64
-                    };
-                    axis_symbol(2.0 * PI * m / (n as f64 * grid.h), grid.h, laplacian)
-                })
-                .collect()
-        };
-        let dv = grid.cell_volume();
-        let weights = |n: usize, len: usize, last: bool, scale: f64| -> Vec<f64> {
-            (0..len)
-                .map(|j| {
-                    let doubled = last && j > 0 && 2 * j != n;
-                    scale * if doubled { 2.0 } else { 1.0 } / n as f64
-                })
-                .collect()
-        };
-        let host = [
-            k2(n0, n0),
-            k2(n1, n1),
-            k2(n2, s2),
-            weights(n0, n0, false, dv),
-            weights(n1, n1, false, 1.0),
-            weights(n2, s2, true, 1.0),
-        ];
+        let host = tables(grid, laplacian);
         let mut tables = Vec::new();
         for t in &host {
             tables.push(stream.clone_htod(t).map_err(failed("copying the tables"))?);
@@ -162,30 +119,6 @@ impl Device {
                 .map_err(failed("allocating"))?,
             stream,
         })
-    }
-
-    /// Modes of a spectrum.
-    pub fn modes(&self) -> usize {
-        self.dims[0] as usize * self.dims[1] as usize * self.dims[2] as usize
-    }
-
-    /// Points of a real field.
-    pub fn points(&self) -> usize {
-        self.dims[0] as usize * self.dims[1] as usize * self.dims[3] as usize
-    }
-
-    /// A spectrum of zeros.
-    pub fn spectrum(&self) -> Result<Spectrum, String> {
-        self.stream
-            .alloc_zeros::<double2>(self.modes())
-            .map_err(failed("allocating a spectrum"))
-    }
-
-    /// A real field of zeros.
-    pub fn field(&self) -> Result<Field, String> {
-        self.stream
-            .alloc_zeros::<f64>(self.points())
-            .map_err(failed("allocating a field"))
     }
 
     fn config() -> LaunchConfig {
@@ -223,10 +156,73 @@ impl Device {
         b.arg(&self.dims[1]);
         b.arg(&self.dims[2]);
     }
+}
+
+impl Backend for Device {
+    type Spectrum = Spectrum;
+    type Field = Field;
+
+    fn spectral_shape(&self) -> [usize; 3] {
+        [
+            self.dims[0] as usize,
+            self.dims[1] as usize,
+            self.dims[2] as usize,
+        ]
+    }
+
+    fn points(&self) -> usize {
+        self.dims[0] as usize * self.dims[1] as usize * self.dims[3] as usize
+    }
+
+    fn spectrum(&self) -> Result<Spectrum, String> {
+        self.stream
+            .alloc_zeros::<double2>(self.spectral_shape().iter().product())
+            .map_err(failed("allocating a spectrum"))
+    }
+
+    fn field(&self) -> Result<Field, String> {
+        self.stream
+            .alloc_zeros::<f64>(self.points())
+            .map_err(failed("allocating a field"))
+    }
+
+    fn upload_field(&self, from: &[f64], to: &mut Field) -> Result<(), String> {
+        self.stream
+            .memcpy_htod(from, to)
+            .map_err(failed("copying a field"))
+    }
+
+    fn download_field(&self, from: &Field) -> Result<Vec<f64>, String> {
+        self.stream
+            .clone_dtoh(from)
+            .map_err(failed("reading a field"))
+    }
+
+    fn upload_spectrum(&self, from: &Array3<Complex64>) -> Result<Spectrum, String> {
+        let host: Vec<double2> = from.iter().map(|c| double2 { x: c.re, y: c.im }).collect();
+        self.stream
+            .clone_htod(&host)
+            .map_err(failed("copying a spectrum"))
+    }
+
+    fn download_spectrum(&self, from: &Spectrum) -> Result<Array3<Complex64>, String> {
+        let host = self
+            .stream
+            .clone_dtoh(from)
+            .map_err(failed("reading a spectrum"))?;
+        let values = host.iter().map(|v| Complex64::new(v.x, v.y)).collect();
+        Ok(Array3::from_shape_vec(self.spectral_shape(), values).expect("spectrum shape"))
+    }
+
+    fn copy_spectrum(&self, from: &Spectrum, to: &mut Spectrum) -> Result<(), String> {
+        self.stream
+            .memcpy_dtod(from, to)
+            .map_err(failed("copying a spectrum"))
+    }
 
     /// X ← (X + conj X(−k0, −k1))/2 on the self-conjugate planes (see
     /// `Transform::hermitian_symmetrize`).
-    pub fn hermitian(&self, a: &mut Spectrum) -> Result<(), String> {
+    fn hermitian(&self, a: &mut Spectrum) -> Result<(), String> {
         let mut b = self.stream.launch_builder(&self.hermitian);
         b.arg(a);
         b.arg(&self.dims[0]);
@@ -239,7 +235,7 @@ impl Device {
     }
 
     /// copy = X̂, lap = −|k|²X̂; returns A = Σ (3/(2√2)) ε |k|² w |X̂|² (`ap` the prefactor).
-    pub fn inverse_inputs(
+    fn inverse_inputs(
         &self,
         hat: &Spectrum,
         copy: &mut Spectrum,
@@ -259,14 +255,14 @@ impl Device {
     }
 
     /// The unnormalised inverse transform of `input` (overwritten) into `out`.
-    pub fn inverse(&self, input: &mut Spectrum, out: &mut Field) -> Result<(), String> {
+    fn inverse(&self, input: &mut Spectrum, out: &mut Field) -> Result<(), String> {
         self.inverse
             .exec_z2d(input, out)
             .map_err(|e| format!("GPU: cuFFT inverse failed ({e:?})"))
     }
 
     /// The forward transform of `input` into `out`.
-    pub fn forward(&self, input: &Field, out: &mut Spectrum) -> Result<(), String> {
+    fn forward(&self, input: &Field, out: &mut Spectrum) -> Result<(), String> {
         self.forward
             .exec_d2z(input, out)
             .map_err(|e| format!("GPU: cuFFT forward failed ({e:?})"))
@@ -275,7 +271,7 @@ impl Device {
     /// The real-space pass (see `pointwise` in `kernels.cu`); returns (Σ Φ², Σ φ, max|φ|,
     /// max|φ − old|).
     #[allow(clippy::too_many_arguments)]
-    pub fn pointwise(
+    fn pointwise(
         &self,
         phi: &mut Field,
         lap: &mut Field,
@@ -307,7 +303,7 @@ impl Device {
     }
 
     /// N̂ from FT[f'Φ] (in `nl`) and FT[f] (`g`); returns Σ_{k≠0} w |μ̂|² when `residual`.
-    pub fn combine(
+    fn combine(
         &self,
         hat: &Spectrum,
         nl: &mut Spectrum,
@@ -332,7 +328,7 @@ impl Device {
     }
 
     /// (A_PP, A_PQ, A_QQ) of the step (`prev`: φ̂ⁿ⁻¹, N̂ⁿ⁻¹ when the formula reads them).
-    pub fn area_quadratic(
+    fn area_quadratic(
         &self,
         cur: (&Spectrum, &Spectrum),
         prev: Option<(&Spectrum, &Spectrum)>,
@@ -358,7 +354,7 @@ impl Device {
 
     /// φ̂ⁿ⁺¹ = P̂ + σQ̂ into `out`, with the inverse transforms' inputs; returns its area.
     #[allow(clippy::too_many_arguments)]
-    pub fn write_update(
+    fn write_update(
         &self,
         cur: (&Spectrum, &Spectrum),
         prev: Option<(&Spectrum, &Spectrum)>,

@@ -6,7 +6,11 @@
 //! sentence saying why ([`usable`]).
 
 #[cfg(feature = "gpu")]
+mod backend;
+#[cfg(feature = "gpu")]
 mod engine;
+#[cfg(all(feature = "gpu", test))]
+mod host;
 #[cfg(feature = "gpu")]
 mod kernels;
 
