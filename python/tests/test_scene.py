@@ -42,6 +42,7 @@ def test_the_scene_file_reads_back_through_the_command_line(tmp_path, cli):
         ({"dt": "fast"}, "dt"),
         ({"colour": 1}, "colour"),
         ({"n": [48]}, "n"),
+        ({"device": "gpu"}, "dim"),
     ],
 )
 def test_invalid_input_names_the_field_with_the_command_lines_message(tmp_path, cli, override, field):

@@ -87,7 +87,11 @@ impl Backend for HostDevice {
     fn hermitian(&self, a: &mut Self::Spectrum) -> Result<(), String> {
         let [n0, n1, _] = self.shape;
         let n2 = self.shape[2];
-        let planes: &[usize] = if n2.is_multiple_of(2) { &[0, n2 / 2] } else { &[0] };
+        let planes: &[usize] = if n2.is_multiple_of(2) {
+            &[0, n2 / 2]
+        } else {
+            &[0]
+        };
         for &i2 in planes {
             for i0 in 0..n0 {
                 for i1 in 0..n1 {
