@@ -6,6 +6,7 @@
 
 use super::backend::{Backend, UpdateArgs};
 use crate::engines::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL};
+use crate::engines::spectral::engine::{adaptive_settings, sbdf_coefficients};
 use crate::engines::spectral::SpectralEngine;
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer};
@@ -95,11 +96,7 @@ impl<B: Backend> DeviceEngine<B> {
         let mut cur = state(&dev)?;
         dev.upload_field(phi.as_slice().expect("standard layout"), &mut cur.phi)?;
         dev.forward(&cur.phi, &mut cur.hat)?;
-        let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
-            dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
-            dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
-            ..a
-        });
+        let adaptive = adaptive_settings(scene);
         let mut e = DeviceEngine {
             next: state(&dev)?,
             spare: dev.spectrum()?,
@@ -149,19 +146,7 @@ impl<B: Backend> DeviceEngine<B> {
 
     /// SBDF coefficients (a0, a1, a2, b1, b2) for this step (as the CPU engine's).
     fn coefficients(&self, dt: f64) -> [f64; 5] {
-        match (&self.scheme, &self.prev) {
-            (Scheme::Sbdf2, Some(_)) => {
-                let w = dt / self.dt_prev;
-                [
-                    (1.0 + 2.0 * w) / (1.0 + w),
-                    -(1.0 + w),
-                    w * w / (1.0 + w),
-                    1.0 + w,
-                    -w,
-                ]
-            }
-            _ => [1.0, -1.0, 0.0, 1.0, 0.0],
-        }
+        sbdf_coefficients(self.scheme, self.prev.is_some(), dt, self.dt_prev)
     }
 
     fn update(&self, dt: f64) -> UpdateArgs {

@@ -287,6 +287,34 @@ pub fn stability_bound(grid: &Grid, eps: f64, s: &Stabilizer, laplacian: Laplaci
     }
 }
 
+/// The variable-step SBDF coefficients (a0, a1, a2, b1, b2) of a step of `dt` after one of
+/// `dt_prev` (module documentation): SBDF2 once a previous step exists (`has_prev`), SBDF1
+/// otherwise.
+pub(crate) fn sbdf_coefficients(scheme: Scheme, has_prev: bool, dt: f64, dt_prev: f64) -> [f64; 5] {
+    if scheme == Scheme::Sbdf2 && has_prev {
+        let w = dt / dt_prev;
+        [
+            (1.0 + 2.0 * w) / (1.0 + w),
+            -(1.0 + w),
+            w * w / (1.0 + w),
+            1.0 + w,
+            -w,
+        ]
+    } else {
+        [1.0, -1.0, 0.0, 1.0, 0.0]
+    }
+}
+
+/// The scene's adaptive-step controller with `dt_min` and `dt_max` resolved (defaults 1e-3 and
+/// 1e3 times `dt`), or `None` for fixed steps.
+pub(crate) fn adaptive_settings(scene: &Scene) -> Option<AdaptiveSettings> {
+    scene.adaptive.settings().map(|a| AdaptiveSettings {
+        dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
+        dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
+        ..a
+    })
+}
+
 /// The spectral engine.
 pub struct SpectralEngine {
     ev: Evaluator,
@@ -327,11 +355,7 @@ impl SpectralEngine {
             scene.threads(),
         );
         let cur = ev.state_of(&phi, 0.0)?;
-        let adaptive = scene.adaptive.settings().map(|a| AdaptiveSettings {
-            dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
-            dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
-            ..a
-        });
+        let adaptive = adaptive_settings(scene);
         Ok(SpectralEngine {
             volume0: cur.measures.volume,
             next: ev.blank(),
@@ -353,19 +377,7 @@ impl SpectralEngine {
 
     /// SBDF coefficients (a0, a1, a2, b1, b2) for this step.
     fn coefficients(&self, dt: f64) -> [f64; 5] {
-        match (&self.scheme, &self.prev) {
-            (Scheme::Sbdf2, Some(_)) => {
-                let w = dt / self.dt_prev;
-                [
-                    (1.0 + 2.0 * w) / (1.0 + w),
-                    -(1.0 + w),
-                    w * w / (1.0 + w),
-                    1.0 + w,
-                    -w,
-                ]
-            }
-            _ => [1.0, -1.0, 0.0, 1.0, 0.0],
-        }
+        sbdf_coefficients(self.scheme, self.prev.is_some(), dt, self.dt_prev)
     }
 
     /// The step's update at this Δt.
