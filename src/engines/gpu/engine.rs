@@ -5,9 +5,8 @@
 //! back to the host only when they are asked for (outputs, checkpoints).
 
 use super::backend::{Backend, UpdateArgs};
-use crate::engines::numerics::{nearest_root, CONSTRAINT_TOL, ENERGY_RISE_TOL};
-use crate::engines::spectral::engine::{adaptive_settings, sbdf_coefficients};
-use crate::engines::spectral::SpectralEngine;
+use crate::engines::numerics::nearest_root;
+use crate::engines::spectral::control::{self, Rejection};
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer};
 use crate::problem::grid::Grid;
@@ -96,7 +95,7 @@ impl<B: Backend> DeviceEngine<B> {
         let mut cur = state(&dev)?;
         dev.upload_field(phi.as_slice().expect("standard layout"), &mut cur.phi)?;
         dev.forward(&cur.phi, &mut cur.hat)?;
-        let adaptive = adaptive_settings(scene);
+        let adaptive = control::adaptive_settings(scene);
         let mut e = DeviceEngine {
             next: state(&dev)?,
             spare: dev.spectrum()?,
@@ -140,13 +139,14 @@ impl<B: Backend> DeviceEngine<B> {
             area,
             None,
             sigma,
-        )?;
+        )?
+        .map_err(|d| d.0)?;
         Ok(())
     }
 
     /// SBDF coefficients (a0, a1, a2, b1, b2) for this step (as the CPU engine's).
     fn coefficients(&self, dt: f64) -> [f64; 5] {
-        sbdf_coefficients(self.scheme, self.prev.is_some(), dt, self.dt_prev)
+        control::sbdf_coefficients(self.scheme, self.prev.is_some(), dt, self.dt_prev)
     }
 
     fn update(&self, dt: f64) -> UpdateArgs {
@@ -190,25 +190,15 @@ impl<B: Backend> DeviceEngine<B> {
         })
     }
 
-    fn sigma_after(&self, step_sigma: f64) -> f64 {
-        match self.area.method {
-            AreaMethod::Lagrangian => {
-                self.sigma + self.area.alpha * (self.cur.measures.area - self.area.target)
-            }
-            _ => step_sigma,
-        }
-    }
-
-    /// Try one step of `dt` into `next`; `Err` with the reason it was rejected.
-    fn attempt(&mut self, dt: f64) -> Result<(f64, f64), Rejected> {
-        let sigma = self
-            .choose_sigma(dt)
-            .map_err(Rejected::Device)?
-            .ok_or_else(|| Rejected::Step("the area projection has no real root".into()))?;
+    /// Try one step of `dt` into `next`: the σ of the update and of the new state, or why the
+    /// step was rejected; `Err` if the device failed.
+    fn attempt(&mut self, dt: f64) -> Result<Result<(f64, f64), Rejection>, Diverged> {
+        let Some(sigma) = self.choose_sigma(dt).map_err(Diverged)? else {
+            return Ok(Err(Rejection::NoRealRoot));
+        };
         let ap = AREA_FACTOR * self.eps;
         let u = self.update(dt);
-        let a2 = u.a2;
-        let prev = self.prev.as_ref().filter(|_| a2 != 0.0);
+        let prev = self.prev.as_ref().filter(|_| u.a2 != 0.0);
         let area = self
             .dev
             .write_update(
@@ -221,9 +211,10 @@ impl<B: Backend> DeviceEngine<B> {
                 &mut self.next.nonlinear,
                 &mut self.spare,
             )
-            .map_err(Rejected::Device)?;
-        let sigma_after = self.sigma_after(sigma);
-        self.max_change = finish(
+            .map_err(Diverged)?;
+        let sigma_after =
+            control::sigma_after(&self.area, self.sigma, self.cur.measures.area, sigma);
+        let finished = finish(
             &self.dev,
             (self.eps, self.ec0, self.grid.cell_volume()),
             &mut self.next,
@@ -232,41 +223,17 @@ impl<B: Backend> DeviceEngine<B> {
             Some(&self.cur.phi),
             Some(sigma_after),
         )
-        .map_err(Rejected::Step)?;
-        self.check_constraints(sigma)?;
-        Ok((sigma, sigma_after))
-    }
-
-    /// The CPU engine's checks: volume, area (projection), F_eff not rising where the scheme
-    /// is dissipative.
-    fn check_constraints(&self, sigma: f64) -> Result<(), Rejected> {
-        let m = self.next.measures;
-        let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
-        if dv > CONSTRAINT_TOL {
-            return Err(Rejected::Step(format!(
-                "volume drifted by {dv:.2e} (relative)"
-            )));
-        }
-        if self.area.method == AreaMethod::Projection {
-            let da = (m.area - self.area.target).abs() / self.area.target;
-            if da > CONSTRAINT_TOL {
-                return Err(Rejected::Step(format!(
-                    "area off its target by {da:.2e} (relative)"
-                )));
-            }
-        }
-        let dissipative = self.adaptive.is_some() || self.scheme == Scheme::Sbdf1;
-        if self.energy_guard && dissipative {
-            let before = self.cur.measures.energy + sigma * self.cur.measures.area;
-            let after = m.energy + sigma * m.area;
-            if after > before + ENERGY_RISE_TOL * before.abs() {
-                return Err(Rejected::Step(format!(
-                    "F_eff rose from {before:.12e} to {after:.12e}: the step is not \
-                     dissipative at this Δt; lower dt or use adaptive steps"
-                )));
-            }
-        }
-        Ok(())
+        .map_err(Diverged)?;
+        self.max_change = match finished {
+            Ok(change) => change,
+            Err(d) => return Ok(Err(Rejection::Diverged(d))),
+        };
+        let guard = self.energy_guard && control::dissipative(self.adaptive.as_ref(), self.scheme);
+        let (before, after) = (&self.cur.measures, &self.next.measures);
+        Ok(
+            control::check_step(before, after, sigma, self.volume0, &self.area, guard)
+                .map(|()| (sigma, sigma_after)),
+        )
     }
 
     fn accept(&mut self, sigma: f64, dt: f64) -> Result<(), String> {
@@ -293,16 +260,10 @@ impl<B: Backend> DeviceEngine<B> {
     }
 }
 
-/// Why a step was not taken: the step's own reason (retried with a smaller Δt when adaptive)
-/// or a failure of the device (never retried).
-enum Rejected {
-    Step(String),
-    Device(String),
-}
-
 /// The evaluation after its first sweep (the CPU `Evaluator::finish`): `state.hat` holds φ̂,
 /// `state.nonlinear` a copy of it and `spare` −|k|²φ̂; computes φ, the measures, N̂ (in
-/// `state.nonlinear`) and, with `sigma`, the residual. Returns max|φ − old|.
+/// `state.nonlinear`) and, with `sigma`, the residual. Returns max|φ − old|, or `Diverged` if
+/// the state diverged; `Err` if the device failed.
 fn finish<B: Backend>(
     dev: &B,
     (eps, ec0, cell): (f64, f64, f64),
@@ -311,7 +272,7 @@ fn finish<B: Backend>(
     area: f64,
     old: Option<&B::Field>,
     sigma: Option<f64>,
-) -> Result<f64, String> {
+) -> Result<Result<f64, Diverged>, String> {
     let e2 = eps * eps;
     dev.inverse(&mut state.nonlinear, &mut state.phi)?;
     dev.inverse(spare, work)?;
@@ -325,10 +286,10 @@ fn finish<B: Backend>(
         volume: 0.5 * (dev.points() as f64 + phi_sum) * cell,
     };
     if model::diverged(max_abs, state.measures.energy) {
-        return Err(format!(
+        return Ok(Err(Diverged(format!(
             "max|φ| = {max_abs:.3e}, F = {:.3e}: the state diverged",
             state.measures.energy
-        ));
+        ))));
     }
     let tension = 2.0 * AREA_FACTOR * eps * sigma.unwrap_or(0.0);
     let res = dev.combine(
@@ -344,7 +305,7 @@ fn finish<B: Backend>(
         Some(_) => (res / (dev.points() as f64 * cell)).sqrt(),
         None => f64::NAN,
     };
-    Ok(change)
+    Ok(Ok(change))
 }
 
 impl<B: Backend> Engine for DeviceEngine<B>
@@ -381,36 +342,16 @@ where
     }
 
     fn step(&mut self, _t: f64, dt: f64) -> Result<StepReport, Diverged> {
-        let mut dt = dt;
-        let mut rejected = 0;
-        loop {
-            match self.attempt(dt) {
-                Ok((_, sigma_after)) => {
-                    let f_old = self.cur.measures.energy;
-                    self.accept(sigma_after, dt).map_err(Diverged)?;
-                    let rate = self.max_change / dt;
-                    if let Some(a) = &self.adaptive {
-                        let f_new = self.cur.measures.energy;
-                        self.dt_next = Some(SpectralEngine::propose(a, dt, f_old, f_new));
-                    }
-                    return Ok(StepReport { dt, rate, rejected });
-                }
-                Err(Rejected::Device(why)) => return Err(Diverged(why)),
-                Err(Rejected::Step(reason)) => {
-                    let Some(a) = &self.adaptive else {
-                        return Err(Diverged(reason));
-                    };
-                    let dt_min = a.dt_min.unwrap_or(dt);
-                    rejected += 1;
-                    if dt <= dt_min {
-                        return Err(Diverged(format!(
-                            "step rejected at the smallest step dt_min = {dt_min:.3e}: {reason}"
-                        )));
-                    }
-                    dt = (dt * a.shrink).max(dt_min);
-                }
-            }
+        let adaptive = self.adaptive.clone();
+        let ((_, sigma_after), dt, rejected) =
+            control::with_retries(adaptive.as_ref(), dt, |dt| self.attempt(dt))?;
+        let f_old = self.cur.measures.energy;
+        self.accept(sigma_after, dt).map_err(Diverged)?;
+        let rate = self.max_change / dt;
+        if let Some(a) = &self.adaptive {
+            self.dt_next = Some(control::propose(a, dt, f_old, self.cur.measures.energy));
         }
+        Ok(StepReport { dt, rate, rejected })
     }
 
     fn next_dt(&self, dt: f64) -> f64 {

@@ -40,6 +40,21 @@ impl HostDevice {
             t[3][i0] * t[4][i1] * t[5][i2],
         )
     }
+
+    /// |k|², w, P̂ and Q̂ of the update `u` at mode `ix` (`update_at` of `kernels.cu`).
+    fn update_at(
+        &self,
+        ix: (usize, usize, usize),
+        cur: (&Array3<Complex64>, &Array3<Complex64>),
+        prev: Option<(&Array3<Complex64>, &Array3<Complex64>)>,
+        u: &UpdateArgs,
+    ) -> (f64, f64, Complex64, Complex64) {
+        let (k, w) = self.at(ix);
+        let zero = Complex64::new(0.0, 0.0);
+        let (x0, n0) = prev.map_or((zero, zero), |(h, n)| (h[ix], n[ix]));
+        let (p, q) = u.apply(k, prev.is_some(), [cur.0[ix], cur.1[ix], x0, n0]);
+        (k, w, p, q)
+    }
 }
 
 impl Backend for HostDevice {
@@ -201,11 +216,8 @@ impl Backend for HostDevice {
         ap: f64,
     ) -> Result<[f64; 3], String> {
         let mut s = [0.0; 3];
-        for (ix, x) in cur.0.indexed_iter() {
-            let (k, w) = self.at(ix);
-            let zero = Complex64::new(0.0, 0.0);
-            let (x0, n0) = prev.map_or((zero, zero), |(h, n)| (h[ix], n[ix]));
-            let (p, q) = u.apply(k, prev.is_some(), [*x, cur.1[ix], x0, n0]);
+        for ix in ndarray::indices(cur.0.dim()) {
+            let (k, w, p, q) = self.update_at(ix, cur, prev, &u);
             let a = ap * k * w;
             s[0] += a * p.norm_sqr();
             s[1] += a * (p.re * q.re + p.im * q.im);
@@ -227,10 +239,7 @@ impl Backend for HostDevice {
     ) -> Result<f64, String> {
         let mut area = 0.0;
         for (ix, o) in out.indexed_iter_mut() {
-            let (k, w) = self.at(ix);
-            let zero = Complex64::new(0.0, 0.0);
-            let (x0, n0) = prev.map_or((zero, zero), |(h, n)| (h[ix], n[ix]));
-            let (p, q) = u.apply(k, prev.is_some(), [cur.0[ix], cur.1[ix], x0, n0]);
+            let (k, w, p, q) = self.update_at(ix, cur, prev, &u);
             let x = p + q * sigma;
             *o = x;
             copy[ix] = x;

@@ -33,11 +33,13 @@ __device__ __forceinline__ double2 d2(double x, double y) {
     return r;
 }
 
-__device__ __forceinline__ void mode_of(long m, int n1, int s2, int* i0, int* i1, int* i2) {
-    *i2 = (int)(m % s2);
-    long r = m / s2;
-    *i1 = (int)(r % n1);
-    *i0 = (int)(r / n1);
+// |k|^2 and the Parseval weight w of mode m (row-major over n0 x n1 x s2).
+__device__ __forceinline__ void symbols(const Tables& t, long m, double* k, double* w) {
+    int i2 = (int)(m % t.s2);
+    long r = m / t.s2;
+    int i1 = (int)(r % t.n1), i0 = (int)(r / t.n1);
+    *k = t.kx2[i0] + t.ky2[i1] + t.kz2[i2];
+    *w = t.wx[i0] * t.wy[i1] * t.wz[i2];
 }
 
 // Block sum of v into out[blockIdx.x] (all threads of the block must call it).
@@ -96,10 +98,8 @@ extern "C" __global__ void inverse_inputs(const double2* hat, double2* copy, dou
     double area = 0.0;
     for (long m = blockIdx.x * (long)blockDim.x + threadIdx.x; m < len;
          m += (long)gridDim.x * blockDim.x) {
-        int i0, i1, i2;
-        mode_of(m, t.n1, t.s2, &i0, &i1, &i2);
-        double k = t.kx2[i0] + t.ky2[i1] + t.kz2[i2];
-        double w = t.wx[i0] * t.wy[i1] * t.wz[i2];
+        double k, w;
+        symbols(t, m, &k, &w);
         double2 h = hat[m];
         copy[m] = h;
         lap[m] = d2(-(h.x * k), -(h.y * k));
@@ -148,10 +148,8 @@ extern "C" __global__ void combine(const double2* hat, double2* nl, const double
     double res = 0.0;
     for (long m = blockIdx.x * (long)blockDim.x + threadIdx.x; m < len;
          m += (long)gridDim.x * blockDim.x) {
-        int i0, i1, i2;
-        mode_of(m, t.n1, t.s2, &i0, &i1, &i2);
-        double k = t.kx2[i0] + t.ky2[i1] + t.kz2[i2];
-        double w = t.wx[i0] * t.wy[i1] * t.wz[i2];
+        double k, w;
+        symbols(t, m, &k, &w);
         double fnl = -2.0 * k, fg = -2.0 * e2 * k * k;
         double gk = 2.0 * e2 * k, hk = 2.0 * e2 * e2 * k * k + tension * k;
         double2 n = nl[m], gv = g[m], h = hat[m];
@@ -200,6 +198,17 @@ __device__ __forceinline__ void p_and_q(const Factors& f, double2 x, double2 n, 
     q->y = x.y * f.q1 + x0.y * f.q0;
 }
 
+// |k|^2, w, P and Q at mode m of the update u (X', N' read only when prev).
+__device__ __forceinline__ void update_at(const Tables& t, const Update& u, long m,
+                                          const double2* hat, const double2* nl,
+                                          const double2* hat0, const double2* nl0, int prev,
+                                          double* k, double* w, double2* p, double2* q) {
+    symbols(t, m, k, w);
+    Factors f = factors(u, *k, prev);
+    double2 zero = d2(0.0, 0.0);
+    p_and_q(f, hat[m], nl[m], prev ? hat0[m] : zero, prev ? nl0[m] : zero, p, q);
+}
+
 // Partials of (A_PP, A_PQ, A_QQ) = sums of a (|P|^2, Re P conj Q, |Q|^2), a = ap |k|^2 w.
 extern "C" __global__ void area_quadratic(const double2* hat, const double2* nl,
                                           const double2* hat0, const double2* nl0, int prev,
@@ -209,14 +218,9 @@ extern "C" __global__ void area_quadratic(const double2* hat, const double2* nl,
     double pp = 0.0, pq = 0.0, qq = 0.0;
     for (long m = blockIdx.x * (long)blockDim.x + threadIdx.x; m < len;
          m += (long)gridDim.x * blockDim.x) {
-        int i0, i1, i2;
-        mode_of(m, t.n1, t.s2, &i0, &i1, &i2);
-        double k = t.kx2[i0] + t.ky2[i1] + t.kz2[i2];
-        double w = t.wx[i0] * t.wy[i1] * t.wz[i2];
-        Factors f = factors(u, k, prev);
-        double2 zero = d2(0.0, 0.0);
+        double k, w;
         double2 p, q;
-        p_and_q(f, hat[m], nl[m], prev ? hat0[m] : zero, prev ? nl0[m] : zero, &p, &q);
+        update_at(t, u, m, hat, nl, hat0, nl0, prev, &k, &w, &p, &q);
         double a = ap * k * w;
         pp += a * (p.x * p.x + p.y * p.y);
         pq += a * (p.x * q.x + p.y * q.y);
@@ -239,14 +243,9 @@ extern "C" __global__ void write_update(const double2* hat, const double2* nl,
     double area = 0.0;
     for (long m = blockIdx.x * (long)blockDim.x + threadIdx.x; m < len;
          m += (long)gridDim.x * blockDim.x) {
-        int i0, i1, i2;
-        mode_of(m, t.n1, t.s2, &i0, &i1, &i2);
-        double k = t.kx2[i0] + t.ky2[i1] + t.kz2[i2];
-        double w = t.wx[i0] * t.wy[i1] * t.wz[i2];
-        Factors f = factors(u, k, prev);
-        double2 zero = d2(0.0, 0.0);
+        double k, w;
         double2 p, q;
-        p_and_q(f, hat[m], nl[m], prev ? hat0[m] : zero, prev ? nl0[m] : zero, &p, &q);
+        update_at(t, u, m, hat, nl, hat0, nl0, prev, &k, &w, &p, &q);
         double2 x = d2(p.x + sigma * q.x, p.y + sigma * q.y);
         out[m] = x;
         copy[m] = x;

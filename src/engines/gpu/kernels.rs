@@ -156,6 +156,28 @@ impl Device {
         b.arg(&self.dims[1]);
         b.arg(&self.dims[2]);
     }
+
+    /// Push the update kernels' leading arguments: φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (the current ones again
+    /// when the formula does not read them), the flag, the coefficients, the tables and the area
+    /// prefactor.
+    fn push_update<'a>(
+        &'a self,
+        b: &mut cudarc::driver::LaunchArgs<'a>,
+        cur: (&'a Spectrum, &'a Spectrum),
+        prev: Option<(&'a Spectrum, &'a Spectrum)>,
+        u: &'a UpdateArgs,
+        ap: &'a f64,
+    ) {
+        let (h0, n0) = prev.unwrap_or(cur);
+        b.arg(cur.0);
+        b.arg(cur.1);
+        b.arg(h0);
+        b.arg(n0);
+        b.arg(if prev.is_some() { &1i32 } else { &0i32 });
+        b.arg(u);
+        self.push_tables(b);
+        b.arg(ap);
+    }
 }
 
 impl Backend for Device {
@@ -335,17 +357,8 @@ impl Backend for Device {
         u: UpdateArgs,
         ap: f64,
     ) -> Result<[f64; 3], String> {
-        let (h0, n0) = prev.unwrap_or(cur);
-        let with = i32::from(prev.is_some());
         let mut b = self.stream.launch_builder(&self.area_quadratic);
-        b.arg(cur.0);
-        b.arg(cur.1);
-        b.arg(h0);
-        b.arg(n0);
-        b.arg(&with);
-        b.arg(&u);
-        self.push_tables(&mut b);
-        b.arg(&ap);
+        self.push_update(&mut b, cur, prev, &u, &ap);
         b.arg(&self.partials);
         // SAFETY: as in `hermitian`.
         unsafe { b.launch(Self::config()) }.map_err(failed("area_quadratic"))?;
@@ -365,17 +378,8 @@ impl Backend for Device {
         copy: &mut Spectrum,
         lap: &mut Spectrum,
     ) -> Result<f64, String> {
-        let (h0, n0) = prev.unwrap_or(cur);
-        let with = i32::from(prev.is_some());
         let mut b = self.stream.launch_builder(&self.write_update);
-        b.arg(cur.0);
-        b.arg(cur.1);
-        b.arg(h0);
-        b.arg(n0);
-        b.arg(&with);
-        b.arg(&u);
-        self.push_tables(&mut b);
-        b.arg(&ap);
+        self.push_update(&mut b, cur, prev, &u, &ap);
         b.arg(&sigma);
         b.arg(out);
         b.arg(copy);

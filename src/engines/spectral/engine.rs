@@ -18,11 +18,12 @@
 //! quadratic computed by Parseval with no extra transform; the exact projection takes the root
 //! nearest the last σ and rejects a step with no real root.
 
+use super::control::{self, Rejection};
 use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm, State};
 use super::kernels::{sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::saved::spectrum;
-use crate::engines::numerics::{nearest_root, sum_in_fixed_tree, CONSTRAINT_TOL, ENERGY_RISE_TOL};
+use crate::engines::numerics::{nearest_root, sum_in_fixed_tree};
 use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
 use crate::problem::config::{
     AdaptiveSettings, AreaMethod, Laplacian, Scene, Scheme, Stabilizer, VolumeRamp,
@@ -229,38 +230,6 @@ impl<'a> Inputs<'a> {
     }
 }
 
-/// Why an attempted step was rejected (no allocation: adaptive runs reject routinely).
-#[derive(Debug)]
-enum Rejection {
-    /// A(φ^{n+1}(σ)) = A0 has no real root.
-    NoRealRoot,
-    /// The new state is not finite or |φ| is too large.
-    Diverged(Diverged),
-    /// V drifted by this relative amount.
-    VolumeDrift(f64),
-    /// A is off its target by this relative amount (projection).
-    AreaDrift(f64),
-    /// F_eff rose (adaptive steps).
-    EnergyRise { before: f64, after: f64 },
-}
-
-impl std::fmt::Display for Rejection {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Rejection::NoRealRoot => write!(f, "the area projection has no real root"),
-            Rejection::Diverged(d) => write!(f, "{}", d.0),
-            Rejection::VolumeDrift(d) => write!(f, "volume drifted by {d:.2e} (relative)"),
-            Rejection::AreaDrift(d) => write!(f, "area off its target by {d:.2e} (relative)"),
-            Rejection::EnergyRise { before, after } => write!(
-                f,
-                "F_eff rose from {before:.12e} to {after:.12e} (relative {:.2e}): the step is not \
-                 dissipative at this Δt; lower dt or use adaptive steps",
-                (after - before) / before.abs()
-            ),
-        }
-    }
-}
-
 /// Frozen-coefficient stability bound of the semi-implicit step at σ = 0:
 /// with the bulk linearisation −2k²(2 + ε²k²)² split into implicit b = 2ε⁴k⁶ + S and explicit
 /// a = 8k² + 8ε²k⁴, the amplification (1 + Δt(S − a))/(1 + Δt(b + S)) stays in [−1, 1] for
@@ -285,34 +254,6 @@ pub fn stability_bound(grid: &Grid, eps: f64, s: &Stabilizer, laplacian: Laplaci
     } else {
         f64::INFINITY
     }
-}
-
-/// The variable-step SBDF coefficients (a0, a1, a2, b1, b2) of a step of `dt` after one of
-/// `dt_prev` (module documentation): SBDF2 once a previous step exists (`has_prev`), SBDF1
-/// otherwise.
-pub(crate) fn sbdf_coefficients(scheme: Scheme, has_prev: bool, dt: f64, dt_prev: f64) -> [f64; 5] {
-    if scheme == Scheme::Sbdf2 && has_prev {
-        let w = dt / dt_prev;
-        [
-            (1.0 + 2.0 * w) / (1.0 + w),
-            -(1.0 + w),
-            w * w / (1.0 + w),
-            1.0 + w,
-            -w,
-        ]
-    } else {
-        [1.0, -1.0, 0.0, 1.0, 0.0]
-    }
-}
-
-/// The scene's adaptive-step controller with `dt_min` and `dt_max` resolved (defaults 1e-3 and
-/// 1e3 times `dt`), or `None` for fixed steps.
-pub(crate) fn adaptive_settings(scene: &Scene) -> Option<AdaptiveSettings> {
-    scene.adaptive.settings().map(|a| AdaptiveSettings {
-        dt_min: Some(a.dt_min.unwrap_or(1e-3 * scene.dt)),
-        dt_max: Some(a.dt_max.unwrap_or(1e3 * scene.dt)),
-        ..a
-    })
 }
 
 /// The spectral engine.
@@ -355,7 +296,7 @@ impl SpectralEngine {
             scene.threads(),
         );
         let cur = ev.state_of(&phi, 0.0)?;
-        let adaptive = adaptive_settings(scene);
+        let adaptive = control::adaptive_settings(scene);
         Ok(SpectralEngine {
             volume0: cur.measures.volume,
             next: ev.blank(),
@@ -377,7 +318,7 @@ impl SpectralEngine {
 
     /// SBDF coefficients (a0, a1, a2, b1, b2) for this step.
     fn coefficients(&self, dt: f64) -> [f64; 5] {
-        sbdf_coefficients(self.scheme, self.prev.is_some(), dt, self.dt_prev)
+        control::sbdf_coefficients(self.scheme, self.prev.is_some(), dt, self.dt_prev)
     }
 
     /// The step's update at this Δt.
@@ -493,12 +434,7 @@ impl SpectralEngine {
     /// σ of the state after a step that used `step_sigma`: the same, except under the Lagrangian
     /// update σ^{n+1} = σ^n + α (A^n − A0).
     fn sigma_after(&self, step_sigma: f64) -> f64 {
-        match self.area.method {
-            AreaMethod::Lagrangian => {
-                self.sigma + self.area.alpha * (self.cur.measures.area - self.area.target)
-            }
-            _ => step_sigma,
-        }
+        control::sigma_after(&self.area, self.sigma, self.cur.measures.area, step_sigma)
     }
 
     /// The volume the state must have at time `t`: V0(t) of the ramp, else V of the prepared
@@ -557,28 +493,20 @@ impl SpectralEngine {
     /// vesicle, so F may rise; once V0 is constant the guard holds again. The volume is checked
     /// against its target at the step's end, `t_new`.
     fn check_constraints(&self, sigma: f64, t: f64, t_new: f64) -> Result<(), Rejection> {
-        let m = self.next.measures;
-        let target = self.volume_target(t_new);
-        let dv = (m.volume - target).abs() / target.abs().max(1e-300);
-        if dv > CONSTRAINT_TOL {
-            return Err(Rejection::VolumeDrift(dv));
-        }
-        if self.area.method == AreaMethod::Projection {
-            let da = (m.area - self.area.target).abs() / self.area.target;
-            if da > CONSTRAINT_TOL {
-                return Err(Rejection::AreaDrift(da));
-            }
-        }
-        let dissipative = self.adaptive.is_some() || self.scheme == Scheme::Sbdf1;
         let ramping = self.volume_ramp.is_some_and(|r| t < r.ramp_time);
-        if self.energy_guard && dissipative && !ramping && !self.ev.c0.is_ramped() {
-            let before = self.cur.measures.energy + sigma * self.cur.measures.area;
-            let after = m.energy + sigma * m.area;
-            if after > before + ENERGY_RISE_TOL * before.abs() {
-                return Err(Rejection::EnergyRise { before, after });
-            }
-        }
-        Ok(())
+        let guard = self.energy_guard
+            && control::dissipative(self.adaptive.as_ref(), self.scheme)
+            && !ramping
+            && !self.ev.c0.is_ramped();
+        let target = self.volume_target(t_new);
+        control::check_step(
+            &self.cur.measures,
+            &self.next.measures,
+            sigma,
+            target,
+            &self.area,
+            guard,
+        )
     }
 
     /// Make `next` the current state with multiplier `sigma`; keep the old one for SBDF2.
@@ -595,17 +523,6 @@ impl SpectralEngine {
         }
         self.dt_prev = dt;
         self.sigma = sigma;
-    }
-
-    /// Energy-based proposal for the next step (Qiao–Zhang–Tang), limited by `growth`:
-    /// `clamp(dt_max / √(1 + α (Ḟ/F)²), dt_min, growth · Δt)`.
-    pub(crate) fn propose(a: &AdaptiveSettings, dt: f64, f_old: f64, f_new: f64) -> f64 {
-        let rate = (f_new - f_old).abs() / dt / f_new.abs().max(1e-300);
-        let (dt_min, dt_max) = (a.dt_min.unwrap_or(dt), a.dt_max.unwrap_or(dt));
-        let target = dt_max / (1.0 + a.energy_alpha * rate * rate).sqrt();
-        target
-            .clamp(dt_min, (a.growth * dt).max(dt_min))
-            .min(dt_max)
     }
 }
 
@@ -634,35 +551,16 @@ impl Engine for SpectralEngine {
     }
 
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
-        let mut dt = dt;
-        let mut rejected = 0;
-        loop {
-            match self.attempt(t, dt) {
-                Ok((_, sigma_after)) => {
-                    let f_old = self.cur.measures.energy;
-                    self.accept(sigma_after, dt);
-                    let rate = self.max_change / dt;
-                    if let Some(a) = &self.adaptive {
-                        let f_new = self.cur.measures.energy;
-                        self.dt_next = Some(Self::propose(a, dt, f_old, f_new));
-                    }
-                    return Ok(StepReport { dt, rate, rejected });
-                }
-                Err(reason) => {
-                    let Some(a) = &self.adaptive else {
-                        return Err(Diverged(reason.to_string()));
-                    };
-                    let dt_min = a.dt_min.unwrap_or(dt);
-                    rejected += 1;
-                    if dt <= dt_min {
-                        return Err(Diverged(format!(
-                            "step rejected at the smallest step dt_min = {dt_min:.3e}: {reason}"
-                        )));
-                    }
-                    dt = (dt * a.shrink).max(dt_min);
-                }
-            }
+        let adaptive = self.adaptive.clone();
+        let ((_, sigma_after), dt, rejected) =
+            control::with_retries(adaptive.as_ref(), dt, |dt| Ok(self.attempt(t, dt)))?;
+        let f_old = self.cur.measures.energy;
+        self.accept(sigma_after, dt);
+        let rate = self.max_change / dt;
+        if let Some(a) = &self.adaptive {
+            self.dt_next = Some(control::propose(a, dt, f_old, self.cur.measures.energy));
         }
+        Ok(StepReport { dt, rate, rejected })
     }
 
     fn next_dt(&self, dt: f64) -> f64 {
