@@ -14,6 +14,9 @@
 # 2. Step time: the spectral SBDF1 step with no area constraint (the floor's step) and with the
 #    exact projection, at 128³, 256³ and 512³, from the run's own wall clock between two records
 #    (set-up left out); the CPU step at 256³ on every core for the GPU/CPU ratio.
+# 0. Conformance: each GPU pass against its CPU pass on random fields, and whole runs
+#    (`cargo test --release --features gpu --lib gpu -- --ignored`, the tests of
+#    src/engines/gpu/conformance.rs; needs cargo on the machine, else skipped and said so).
 # 3. The floors, in the same run: FLOORS/gpu_step.py (CuPy and cuFFT) when CuPy imports, and
 #    FLOORS/fft_limit (FFTW, built here with `make` when FFTW's headers are present) at 128³ and
 #    256³ on 1, 4, 8 and 16 threads beside our CPU step on as many (no area constraint, the
@@ -35,6 +38,16 @@ run() { # NAME then --set overrides: one quiet run into $out/NAME (replaced)
         return 1
     }
 }
+
+conformance="skipped: no cargo"
+if command -v cargo >/dev/null; then
+    if cargo test --release --features gpu --lib gpu -- --ignored >"$out/conformance.log" 2>&1; then
+        conformance="passed"
+    else
+        conformance="FAILED (see conformance.log)"
+    fi
+    tail -5 "$out/conformance.log"
+fi
 
 fixed=(--set max_steps=100 --set stop_residual=null --set adaptive=false)
 for device in cpu gpu; do
@@ -78,10 +91,11 @@ rows = [json.loads(l) for l in sys.stdin if l.strip()]
 print(json.dumps(rows))')
 fi
 
-python3 - "$out" "$cores" "$floor" "$fftw" <<'PY'
+python3 - "$out" "$cores" "$floor" "$fftw" "$conformance" <<'PY'
 import csv, json, sys
 import numpy as np
 out, cores, floor, fftw = sys.argv[1], int(sys.argv[2]), json.loads(sys.argv[3]), json.loads(sys.argv[4])
+conformance = sys.argv[5]
 
 def phi(name):
     return np.load(f"{out}/{name}/phi_final.npy")
@@ -94,7 +108,7 @@ def step_ms(name):
     a, b = rows[1], rows[-1]  # from the first record after step 0: set-up left out
     return 1e3 * (float(b["wall_seconds"]) - float(a["wall_seconds"])) / (int(b["step"]) - int(a["step"]))
 
-report = {"agreement": {}, "step_ms": {}, "cpu_cores": cores, "floor": floor, "fftw": fftw}
+report = {"conformance": conformance, "agreement": {}, "step_ms": {}, "cpu_cores": cores, "floor": floor, "fftw": fftw}
 for s in ["sbdf1", "sbdf2"]:
     report["agreement"][f"{s}_100_steps_max_abs_dphi"] = float(np.abs(phi(f"{s}_gpu") - phi(f"{s}_cpu")).max())
 e_cpu, e_gpu = final("stationary_cpu")["energy"], final("stationary_gpu")["energy"]

@@ -44,7 +44,10 @@ impl Scene {
         for o in overrides {
             check(py, config::apply_override(&mut with, o))?;
         }
-        let scene = check(py, config::load_value(value, overrides, file.as_deref()))?;
+        let scene = check(
+            py,
+            supported(config::load_value(value, overrides, file.as_deref())),
+        )?;
         Ok(Scene {
             scene,
             value: with,
@@ -115,7 +118,7 @@ impl Scene {
         if spec.is_instance_of::<PyString>() || spec.hasattr("__fspath__")? {
             let path: PathBuf = spec.extract()?;
             // The library's own reading: the same messages for a missing file or bad JSON.
-            let scene = check(py, config::load(&path, overrides))?;
+            let scene = check(py, supported(config::load(&path, overrides)))?;
             let bytes = std::fs::read(&path).map_err(|e| {
                 pyo3::exceptions::PyOSError::new_err(format!("{}: {e}", path.display()))
             })?;
@@ -202,4 +205,14 @@ impl Scene {
             self.scene.dim, self.scene.n, self.scene.h, self.scene.eps, self.scene.dt
         )
     }
+}
+
+/// A loaded scene refused, as the command line refuses it, when the engine it asks for cannot
+/// run it (no hardware is touched).
+fn supported(
+    scene: vesicle::error::Result<config::Scene>,
+) -> vesicle::error::Result<config::Scene> {
+    let scene = scene?;
+    vesicle::driver::simulation::check_engine(&scene)?;
+    Ok(scene)
 }

@@ -327,7 +327,9 @@ fn load(args: &SceneArgs) -> Result<Scene, Error> {
             format!("{} does not exist", args.scene.display()),
         ));
     }
-    config::load(&args.scene, &args.set)
+    let scene = config::load(&args.scene, &args.set)?;
+    crate::driver::simulation::check_engine(&scene)?;
+    Ok(scene)
 }
 
 /// Run `f` in a pool of the scene's [`Scene::threads`].
@@ -380,6 +382,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Check { scene: args } => {
             let scene = load(&args)?;
+            // The hardware, probed as the run would when it builds the engine.
+            if scene.device == config::Device::Gpu {
+                crate::engines::gpu::usable().map_err(|why| Error::config("device", why))?;
+            }
             let problem = crate::problem::setup::build(&scene)?;
             crate::driver::simulation::check_stability(&scene, &problem.grid)?;
             let resolved = with_threads(&scene, || {

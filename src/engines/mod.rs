@@ -63,6 +63,28 @@ pub struct StepReport {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Diverged(pub String);
 
+/// A scene key an engine cannot honour ([`supports`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unsupported {
+    /// The dotted scene key.
+    pub field: &'static str,
+    /// Why, for the user.
+    pub why: String,
+}
+
+/// Whether the engine `scene` asks for can run it, decided from the scene alone (no hardware
+/// is touched: a GPU is probed where its engine is built). Every CPU engine runs every valid
+/// scene; the GPU engine states its limits in [`gpu::supports`].
+///
+/// # Errors
+/// The key the engine cannot honour, and why.
+pub fn supports(scene: &crate::problem::config::Scene) -> Result<(), Unsupported> {
+    match scene.device {
+        crate::problem::config::Device::Cpu => Ok(()),
+        crate::problem::config::Device::Gpu => gpu::supports(scene),
+    }
+}
+
 /// A time stepper holding the current state φ, σ and its measures.
 pub trait Engine {
     /// Current φ on the computed grid.

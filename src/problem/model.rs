@@ -19,6 +19,10 @@ use ndarray::Array3;
 /// 3/(2√2): the area density prefactor, a = (3/(2√2)) ε |∇φ|².
 pub const AREA_PREFACTOR: f64 = 1.060_660_171_779_821_2;
 
+/// 3/√2: the tension term's prefactor in μ, (3/√2) ε σ ∇²φ (twice [`AREA_PREFACTOR`], the
+/// derivative of A's density).
+pub const TENSION_FACTOR: f64 = 3.0 / std::f64::consts::SQRT_2;
+
 /// The spontaneous-curvature field, stored as εC0 (the combination the model uses).
 #[derive(Clone, Debug)]
 pub enum SpontaneousCurvature {

@@ -18,7 +18,7 @@
 mod start;
 mod stop;
 
-pub use start::{build_engine, check_stability, stability_bound, Prepared};
+pub use start::{build_engine, check_engine, check_stability, stability_bound, Prepared};
 pub use stop::{StopRules, Stopped};
 
 use crate::driver::awake::KeepAwake;

@@ -26,6 +26,15 @@ pub fn stability_bound(scene: &Scene, grid: &Grid) -> Option<f64> {
     }
 }
 
+/// Refuse a scene the engine it asks for cannot run ([`crate::engines::supports`]; no hardware
+/// is touched).
+///
+/// # Errors
+/// `Error::Config` on the key the engine cannot honour.
+pub fn check_engine(scene: &Scene) -> Result<()> {
+    crate::engines::supports(scene).map_err(|u| Error::config(u.field, u.why))
+}
+
 /// Refuse a fixed Δt above the method's bound unless the scene allows it.
 ///
 /// # Errors
@@ -60,6 +69,7 @@ pub fn check_stability(scene: &Scene, grid: &Grid) -> Result<()> {
 /// # Errors
 /// `Error::Config` on field `initial` if the initial field is not finite.
 pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine + Send>> {
+    check_engine(scene)?;
     let grid = problem.grid.clone();
     let c0 = problem.c0.clone();
     let phi = problem.phi.clone();
@@ -81,7 +91,8 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
     Ok(engine)
 }
 
-/// The GPU engine (`"device": "gpu"`, validated: the spectral conserved flow on the full box).
+/// The GPU engine (`"device": "gpu"`, supported: [`check_engine`]); the hardware is probed
+/// here, where the engine is built.
 ///
 /// # Errors
 /// `Error::Config` on field `device` if the GPU cannot be set up or this binary has no GPU

@@ -161,57 +161,46 @@ extern "C" __global__ void combine(const double2* hat, double2* nl, const double
     block_sum(res, partials);
 }
 
-// The SBDF update's factors at |k|^2 = k (see engine.rs, `Update`).
+// The SBDF update of one step (engines/spectral/update.rs, `Update`, laid out the same): the
+// coefficients a0, a_1..a_L, b_1..b_L (history j = 1 the current step), dt and the implicit
+// operator's constants.
+#define MAX_LEVELS 2
 struct Update {
-    double a0, a1, a2, b1, b2, dt, s2, s4e2, e4x2, c_sigma;
+    double a[MAX_LEVELS + 1], b[MAX_LEVELS], dt, s2, s4e2, e4x2, c_sigma;
 };
 
-struct Factors {
-    double h1, n1, h0, n0, q1, q0;
-};
-
-__device__ __forceinline__ Factors factors(const Update& u, double k, int prev) {
-    double s = u.s2 * k + u.s4e2 * k * k;
-    double inv = 1.0 / (u.a0 + u.dt * (u.e4x2 * k * k * k + s));
-    double qc = -u.dt * u.c_sigma * k * k * inv;
-    Factors f;
-    f.h1 = (-u.a1 + u.dt * u.b1 * s) * inv;
-    f.n1 = u.dt * u.b1 * inv;
-    f.q1 = u.b1 * qc;
-    f.h0 = 0.0;
-    f.n0 = 0.0;
-    f.q0 = 0.0;
-    if (prev) {
-        f.h0 = (-u.a2 + u.dt * u.b2 * s) * inv;
-        f.n0 = u.dt * u.b2 * inv;
-        f.q0 = u.b2 * qc;
-    }
-    return f;
-}
-
-// P = h1 X + n1 N + h0 X' + n0 N',  Q = q1 X + q0 X' (X', N' of the step before).
-__device__ __forceinline__ void p_and_q(const Factors& f, double2 x, double2 n, double2 x0,
-                                        double2 n0, double2* p, double2* q) {
-    p->x = x.x * f.h1 + n.x * f.n1 + x0.x * f.h0 + n0.x * f.n0;
-    p->y = x.y * f.h1 + n.y * f.n1 + x0.y * f.h0 + n0.y * f.n0;
-    q->x = x.x * f.q1 + x0.x * f.q0;
-    q->y = x.y * f.q1 + x0.y * f.q0;
-}
-
-// |k|^2, w, P and Q at mode m of the update u (X', N' read only when prev).
+// |k|^2, w, P and Q at mode m of the update u over `levels` levels of history (the current
+// step's X, N and the previous step's X', N'):
+// P = sum_j h_j X_j + n_j N_j,  Q = sum_j q_j X_j,  h_j = (-a_j + dt b_j S)/D, n_j = dt b_j/D,
+// q_j = -dt c_sigma k^2 b_j/D,  D = a0 + dt (2 eps^4 k^3 + S),  S = s2 k + s4e2 k^2.
 __device__ __forceinline__ void update_at(const Tables& t, const Update& u, long m,
                                           const double2* hat, const double2* nl,
-                                          const double2* hat0, const double2* nl0, int prev,
+                                          const double2* hat0, const double2* nl0, int levels,
                                           double* k, double* w, double2* p, double2* q) {
     symbols(t, m, k, w);
-    Factors f = factors(u, *k, prev);
-    double2 zero = d2(0.0, 0.0);
-    p_and_q(f, hat[m], nl[m], prev ? hat0[m] : zero, prev ? nl0[m] : zero, p, q);
+    double kk = *k;
+    double s = u.s2 * kk + u.s4e2 * kk * kk;
+    double inv = 1.0 / (u.a[0] + u.dt * (u.e4x2 * kk * kk * kk + s));
+    double qc = -u.dt * u.c_sigma * kk * kk * inv;
+    const double2* xs[MAX_LEVELS] = {hat, hat0};
+    const double2* ns[MAX_LEVELS] = {nl, nl0};
+    *p = d2(0.0, 0.0);
+    *q = d2(0.0, 0.0);
+    for (int j = 0; j < levels; ++j) {
+        double h = (-u.a[j + 1] + u.dt * u.b[j] * s) * inv;
+        double n = u.dt * u.b[j] * inv;
+        double qj = u.b[j] * qc;
+        double2 x = xs[j][m], y = ns[j][m];
+        p->x += x.x * h + y.x * n;
+        p->y += x.y * h + y.y * n;
+        q->x += x.x * qj;
+        q->y += x.y * qj;
+    }
 }
 
 // Partials of (A_PP, A_PQ, A_QQ) = sums of a (|P|^2, Re P conj Q, |Q|^2), a = ap |k|^2 w.
 extern "C" __global__ void area_quadratic(const double2* hat, const double2* nl,
-                                          const double2* hat0, const double2* nl0, int prev,
+                                          const double2* hat0, const double2* nl0, int levels,
                                           Update u, TABLE_ARGS, double ap, double* partials) {
     TABLES;
     long len = (long)t.n0 * t.n1 * t.s2;
@@ -220,7 +209,7 @@ extern "C" __global__ void area_quadratic(const double2* hat, const double2* nl,
          m += (long)gridDim.x * blockDim.x) {
         double k, w;
         double2 p, q;
-        update_at(t, u, m, hat, nl, hat0, nl0, prev, &k, &w, &p, &q);
+        update_at(t, u, m, hat, nl, hat0, nl0, levels, &k, &w, &p, &q);
         double a = ap * k * w;
         pp += a * (p.x * p.x + p.y * p.y);
         pq += a * (p.x * q.x + p.y * q.y);
@@ -234,7 +223,7 @@ extern "C" __global__ void area_quadratic(const double2* hat, const double2* nl,
 // The update X_new = P + sigma Q into out, with the inverse transforms' inputs (copy = X_new,
 // lap = -|k|^2 X_new); partial sums of the new area.
 extern "C" __global__ void write_update(const double2* hat, const double2* nl,
-                                        const double2* hat0, const double2* nl0, int prev,
+                                        const double2* hat0, const double2* nl0, int levels,
                                         Update u, TABLE_ARGS, double ap, double sigma,
                                         double2* out, double2* copy, double2* lap,
                                         double* partials) {
@@ -245,7 +234,7 @@ extern "C" __global__ void write_update(const double2* hat, const double2* nl,
          m += (long)gridDim.x * blockDim.x) {
         double k, w;
         double2 p, q;
-        update_at(t, u, m, hat, nl, hat0, nl0, prev, &k, &w, &p, &q);
+        update_at(t, u, m, hat, nl, hat0, nl0, levels, &k, &w, &p, &q);
         double2 x = d2(p.x + sigma * q.x, p.y + sigma * q.y);
         out[m] = x;
         copy[m] = x;
@@ -253,4 +242,13 @@ extern "C" __global__ void write_update(const double2* hat, const double2* nl,
         area += ap * k * w * (x.x * x.x + x.y * x.y);
     }
     block_sum(area, partials);
+}
+
+// The mean mode: the real part of mode 0 of the update (out) and of its copy set to `value`
+// (a volume ramp's target); one thread.
+extern "C" __global__ void set_mean_mode(double2* out, double2* copy, double value) {
+    if (blockIdx.x == 0 && threadIdx.x == 0) {
+        out[0].x = value;
+        copy[0].x = value;
+    }
 }

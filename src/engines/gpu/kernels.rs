@@ -2,7 +2,9 @@
 //! (compiled by NVRTC), the cuFFT plans, the wavenumber and weight tables, and the launches,
 //! each returning its sums added in block order on the host (deterministic).
 
-use super::backend::{tables, Backend, UpdateArgs};
+use crate::engines::spectral::evaluator::axis_symbol;
+use crate::engines::spectral::update::Update;
+use crate::engines::spectral::DeviceFailure;
 use crate::problem::config::Laplacian;
 use crate::problem::grid::Grid;
 use cudarc::cufft::sys::{cufftType, double2};
@@ -12,6 +14,7 @@ use cudarc::driver::{
 };
 use ndarray::Array3;
 use num_complex::Complex64;
+use std::f64::consts::PI;
 use std::sync::Arc;
 
 /// The kernels' source.
@@ -25,13 +28,56 @@ pub type Spectrum = CudaSlice<double2>;
 /// A real field on the device.
 pub type Field = CudaSlice<f64>;
 
+/// Device results: a failure is fatal to the run (no smaller step mends it).
+type Result<T> = std::result::Result<T, DeviceFailure>;
+
 /// Any failure of the device, as a sentence.
-pub fn failed(what: &str) -> impl Fn(cudarc::driver::DriverError) -> String + '_ {
-    move |e| format!("GPU: {what} failed ({e})")
+fn failed(what: &str) -> impl Fn(cudarc::driver::DriverError) -> DeviceFailure + '_ {
+    move |e| DeviceFailure(format!("GPU: {what} failed ({e})"))
+}
+
+/// |k|² per axis (the spectral symbol or the FD stencil's) and the Parseval weights per axis,
+/// the cell volume folded into axis 0's: `[kx2, ky2, kz2, wx, wy, wz]`, so that the integral of
+/// u v over the box is Σ w Re(û v̂*) over the half spectrum n0 × n1 × (n2/2 + 1) of cuFFT's
+/// real-to-complex transforms (the CPU's `Symbols` of the same box).
+fn tables(grid: &Grid, laplacian: Laplacian) -> [Vec<f64>; 6] {
+    let [n0, n1, n2] = grid.shape;
+    let s2 = n2 / 2 + 1;
+    let k2 = |n: usize, len: usize| -> Vec<f64> {
+        (0..len)
+            .map(|j| {
+                let m = if j <= n / 2 {
+                    j as f64
+                } else {
+                    j as f64 - n as f64
+                };
+                axis_symbol(2.0 * PI * m / (n as f64 * grid.h), grid.h, laplacian)
+            })
+            .collect()
+    };
+    let weights = |n: usize, len: usize, last: bool, scale: f64| -> Vec<f64> {
+        (0..len)
+            .map(|j| {
+                let doubled = last && j > 0 && 2 * j != n;
+                scale * if doubled { 2.0 } else { 1.0 } / n as f64
+            })
+            .collect()
+    };
+    [
+        k2(n0, n0),
+        k2(n1, n1),
+        k2(n2, s2),
+        weights(n0, n0, false, grid.cell_volume()),
+        weights(n1, n1, false, 1.0),
+        weights(n2, s2, true, 1.0),
+    ]
 }
 
 /// The GPU can be used: the libraries load, a device exists and the kernels compile.
-pub fn probe() -> Result<(), String> {
+///
+/// # Errors
+/// Which library is missing, or that no device was found or the kernels do not compile.
+pub fn probe() -> std::result::Result<(), String> {
     // SAFETY: these only try to open the shared libraries.
     let present = unsafe {
         [
@@ -55,8 +101,9 @@ pub fn probe() -> Result<(), String> {
     Ok(())
 }
 
-// SAFETY: ten f64 fields, repr(C): the layout of the kernels' `Update`.
-unsafe impl DeviceRepr for UpdateArgs {}
+// SAFETY: `Update` is repr(C) and holds ten f64 (a0, a1, a2, b1, b2, dt, s2, s4e2, e4x2,
+// c_sigma, in this order): the layout of the kernels' `Update`.
+unsafe impl DeviceRepr for Update {}
 
 /// The device, its kernels, plans and tables for one grid.
 pub struct Device {
@@ -67,6 +114,7 @@ pub struct Device {
     combine: CudaFunction,
     area_quadratic: CudaFunction,
     write_update: CudaFunction,
+    set_mean_mode: CudaFunction,
     forward: CudaFft,
     inverse: CudaFft,
     /// |k|² per axis (spectral or FD symbol) and Parseval weights per axis (cell volume in
@@ -79,11 +127,15 @@ pub struct Device {
 
 impl Device {
     /// The first GPU, set up for the full periodic box `grid` (3D, even lengths).
-    pub fn new(grid: &Grid, laplacian: Laplacian) -> Result<Self, String> {
+    ///
+    /// # Errors
+    /// If the context, the kernels, the plans or the tables cannot be set up.
+    pub fn new(grid: &Grid, laplacian: Laplacian) -> Result<Self> {
         let ctx = CudaContext::new(0).map_err(failed("starting the CUDA context"))?;
         let stream = ctx.default_stream();
-        let ptx = cudarc::nvrtc::compile_ptx(SOURCE)
-            .map_err(|e| format!("GPU: NVRTC could not compile the kernels ({e})"))?;
+        let ptx = cudarc::nvrtc::compile_ptx(SOURCE).map_err(|e| {
+            DeviceFailure(format!("GPU: NVRTC could not compile the kernels ({e})"))
+        })?;
         let module = ctx
             .load_module(ptx)
             .map_err(failed("loading the kernels"))?;
@@ -94,8 +146,9 @@ impl Device {
         };
         let [n0, n1, n2] = grid.shape;
         let plan = |kind| {
-            CudaFft::plan_3d(n0 as i32, n1 as i32, n2 as i32, kind, stream.clone())
-                .map_err(|e| format!("GPU: cuFFT could not plan {n0}×{n1}×{n2} ({e:?})"))
+            CudaFft::plan_3d(n0 as i32, n1 as i32, n2 as i32, kind, stream.clone()).map_err(|e| {
+                DeviceFailure(format!("GPU: cuFFT could not plan {n0}×{n1}×{n2} ({e:?})"))
+            })
         };
         let s2 = n2 / 2 + 1;
         let host = tables(grid, laplacian);
@@ -110,6 +163,7 @@ impl Device {
             combine: f("combine")?,
             area_quadratic: f("area_quadratic")?,
             write_update: f("write_update")?,
+            set_mean_mode: f("set_mean_mode")?,
             forward: plan(cufftType::CUFFT_D2Z)?,
             inverse: plan(cufftType::CUFFT_Z2D)?,
             tables: tables.try_into().expect("six tables"),
@@ -131,7 +185,7 @@ impl Device {
 
     /// The first `count` sums of the last launch, each added over the blocks in order (or the
     /// maximum, for the sums listed in `max`).
-    fn sums<const N: usize>(&self, max: [bool; N]) -> Result<[f64; N], String> {
+    fn sums<const N: usize>(&self, max: [bool; N]) -> Result<[f64; N]> {
         let mut host = vec![0.0; 4 * BLOCKS as usize];
         self.stream
             .memcpy_dtoh(&self.partials, &mut host)
@@ -165,7 +219,7 @@ impl Device {
         b: &mut cudarc::driver::LaunchArgs<'a>,
         cur: (&'a Spectrum, &'a Spectrum),
         prev: Option<(&'a Spectrum, &'a Spectrum)>,
-        u: &'a UpdateArgs,
+        u: &'a Update,
         ap: &'a f64,
     ) {
         let (h0, n0) = prev.unwrap_or(cur);
@@ -173,18 +227,19 @@ impl Device {
         b.arg(cur.1);
         b.arg(h0);
         b.arg(n0);
-        b.arg(if prev.is_some() { &1i32 } else { &0i32 });
+        b.arg(if prev.is_some() { &2i32 } else { &1i32 });
         b.arg(u);
         self.push_tables(b);
         b.arg(ap);
     }
 }
 
-impl Backend for Device {
-    type Spectrum = Spectrum;
-    type Field = Field;
-
-    fn spectral_shape(&self) -> [usize; 3] {
+/// The passes of `kernels.cu` and the transforms, each returning its sums added in block order.
+/// Spectra are cuFFT's half spectra n0 × n1 × (n2/2 + 1), row-major; `forward` and `inverse`
+/// are unnormalised.
+impl Device {
+    /// The spectral shape n0 × n1 × (n2/2 + 1).
+    pub fn spectral_shape(&self) -> [usize; 3] {
         [
             self.dims[0] as usize,
             self.dims[1] as usize,
@@ -192,42 +247,42 @@ impl Backend for Device {
         ]
     }
 
-    fn points(&self) -> usize {
+    pub fn points(&self) -> usize {
         self.dims[0] as usize * self.dims[1] as usize * self.dims[3] as usize
     }
 
-    fn spectrum(&self) -> Result<Spectrum, String> {
+    pub fn spectrum(&self) -> Result<Spectrum> {
         self.stream
             .alloc_zeros::<double2>(self.spectral_shape().iter().product())
             .map_err(failed("allocating a spectrum"))
     }
 
-    fn field(&self) -> Result<Field, String> {
+    pub fn field(&self) -> Result<Field> {
         self.stream
             .alloc_zeros::<f64>(self.points())
             .map_err(failed("allocating a field"))
     }
 
-    fn upload_field(&self, from: &[f64], to: &mut Field) -> Result<(), String> {
+    pub fn upload_field(&self, from: &[f64], to: &mut Field) -> Result<()> {
         self.stream
             .memcpy_htod(from, to)
             .map_err(failed("copying a field"))
     }
 
-    fn download_field(&self, from: &Field) -> Result<Vec<f64>, String> {
+    pub fn download_field(&self, from: &Field) -> Result<Vec<f64>> {
         self.stream
             .clone_dtoh(from)
             .map_err(failed("reading a field"))
     }
 
-    fn upload_spectrum(&self, from: &Array3<Complex64>) -> Result<Spectrum, String> {
+    pub fn upload_spectrum(&self, from: &Array3<Complex64>) -> Result<Spectrum> {
         let host: Vec<double2> = from.iter().map(|c| double2 { x: c.re, y: c.im }).collect();
         self.stream
             .clone_htod(&host)
             .map_err(failed("copying a spectrum"))
     }
 
-    fn download_spectrum(&self, from: &Spectrum) -> Result<Array3<Complex64>, String> {
+    pub fn download_spectrum(&self, from: &Spectrum) -> Result<Array3<Complex64>> {
         let host = self
             .stream
             .clone_dtoh(from)
@@ -236,7 +291,7 @@ impl Backend for Device {
         Ok(Array3::from_shape_vec(self.spectral_shape(), values).expect("spectrum shape"))
     }
 
-    fn copy_spectrum(&self, from: &Spectrum, to: &mut Spectrum) -> Result<(), String> {
+    pub fn copy_spectrum(&self, from: &Spectrum, to: &mut Spectrum) -> Result<()> {
         self.stream
             .memcpy_dtod(from, to)
             .map_err(failed("copying a spectrum"))
@@ -244,7 +299,7 @@ impl Backend for Device {
 
     /// X ← (X + conj X(−k0, −k1))/2 on the self-conjugate planes (see
     /// `Transform::hermitian_symmetrize`).
-    fn hermitian(&self, a: &mut Spectrum) -> Result<(), String> {
+    pub fn hermitian(&self, a: &mut Spectrum) -> Result<()> {
         let mut b = self.stream.launch_builder(&self.hermitian);
         b.arg(a);
         b.arg(&self.dims[0]);
@@ -257,13 +312,13 @@ impl Backend for Device {
     }
 
     /// copy = X̂, lap = −|k|²X̂; returns A = Σ (3/(2√2)) ε |k|² w |X̂|² (`ap` the prefactor).
-    fn inverse_inputs(
+    pub fn inverse_inputs(
         &self,
         hat: &Spectrum,
         copy: &mut Spectrum,
         lap: &mut Spectrum,
         ap: f64,
-    ) -> Result<f64, String> {
+    ) -> Result<f64> {
         let mut b = self.stream.launch_builder(&self.inverse_inputs);
         b.arg(hat);
         b.arg(copy);
@@ -277,23 +332,23 @@ impl Backend for Device {
     }
 
     /// The unnormalised inverse transform of `input` (overwritten) into `out`.
-    fn inverse(&self, input: &mut Spectrum, out: &mut Field) -> Result<(), String> {
+    pub fn inverse(&self, input: &mut Spectrum, out: &mut Field) -> Result<()> {
         self.inverse
             .exec_z2d(input, out)
-            .map_err(|e| format!("GPU: cuFFT inverse failed ({e:?})"))
+            .map_err(|e| DeviceFailure(format!("GPU: cuFFT inverse failed ({e:?})")))
     }
 
     /// The forward transform of `input` into `out`.
-    fn forward(&self, input: &Field, out: &mut Spectrum) -> Result<(), String> {
+    pub fn forward(&self, input: &Field, out: &mut Spectrum) -> Result<()> {
         self.forward
             .exec_d2z(input, out)
-            .map_err(|e| format!("GPU: cuFFT forward failed ({e:?})"))
+            .map_err(|e| DeviceFailure(format!("GPU: cuFFT forward failed ({e:?})")))
     }
 
     /// The real-space pass (see `pointwise` in `kernels.cu`); returns (Σ Φ², Σ φ, max|φ|,
     /// max|φ − old|).
     #[allow(clippy::too_many_arguments)]
-    fn pointwise(
+    pub fn pointwise(
         &self,
         phi: &mut Field,
         lap: &mut Field,
@@ -301,7 +356,7 @@ impl Backend for Device {
         old: Option<&Field>,
         e2: f64,
         ec0: f64,
-    ) -> Result<[f64; 4], String> {
+    ) -> Result<[f64; 4]> {
         let len = self.points() as i64;
         let inv_n = 1.0 / len as f64;
         let has_old = i32::from(old.is_some());
@@ -325,7 +380,7 @@ impl Backend for Device {
     }
 
     /// N̂ from FT[f'Φ] (in `nl`) and FT[f] (`g`); returns Σ_{k≠0} w |μ̂|² when `residual`.
-    fn combine(
+    pub fn combine(
         &self,
         hat: &Spectrum,
         nl: &mut Spectrum,
@@ -333,7 +388,7 @@ impl Backend for Device {
         e2: f64,
         tension: f64,
         residual: bool,
-    ) -> Result<f64, String> {
+    ) -> Result<f64> {
         let with = i32::from(residual);
         let mut b = self.stream.launch_builder(&self.combine);
         b.arg(hat);
@@ -350,15 +405,15 @@ impl Backend for Device {
     }
 
     /// (A_PP, A_PQ, A_QQ) of the step (`prev`: φ̂ⁿ⁻¹, N̂ⁿ⁻¹ when the formula reads them).
-    fn area_quadratic(
+    pub fn area_quadratic(
         &self,
         cur: (&Spectrum, &Spectrum),
         prev: Option<(&Spectrum, &Spectrum)>,
-        u: UpdateArgs,
+        u: &Update,
         ap: f64,
-    ) -> Result<[f64; 3], String> {
+    ) -> Result<[f64; 3]> {
         let mut b = self.stream.launch_builder(&self.area_quadratic);
-        self.push_update(&mut b, cur, prev, &u, &ap);
+        self.push_update(&mut b, cur, prev, u, &ap);
         b.arg(&self.partials);
         // SAFETY: as in `hermitian`.
         unsafe { b.launch(Self::config()) }.map_err(failed("area_quadratic"))?;
@@ -367,19 +422,19 @@ impl Backend for Device {
 
     /// φ̂ⁿ⁺¹ = P̂ + σQ̂ into `out`, with the inverse transforms' inputs; returns its area.
     #[allow(clippy::too_many_arguments)]
-    fn write_update(
+    pub fn write_update(
         &self,
         cur: (&Spectrum, &Spectrum),
         prev: Option<(&Spectrum, &Spectrum)>,
-        u: UpdateArgs,
+        u: &Update,
         ap: f64,
         sigma: f64,
         out: &mut Spectrum,
         copy: &mut Spectrum,
         lap: &mut Spectrum,
-    ) -> Result<f64, String> {
+    ) -> Result<f64> {
         let mut b = self.stream.launch_builder(&self.write_update);
-        self.push_update(&mut b, cur, prev, &u, &ap);
+        self.push_update(&mut b, cur, prev, u, &ap);
         b.arg(&sigma);
         b.arg(out);
         b.arg(copy);
@@ -389,7 +444,19 @@ impl Backend for Device {
         unsafe { b.launch(Self::config()) }.map_err(failed("write_update"))?;
         Ok(self.sums([false])?[0])
     }
+
+    /// The real part of mode 0 of `out` and of `copy` ← `value` (the volume ramp's mean mode).
+    pub fn set_mean_mode(&self, out: &mut Spectrum, copy: &mut Spectrum, value: f64) -> Result<()> {
+        let mut b = self.stream.launch_builder(&self.set_mean_mode);
+        b.arg(out);
+        b.arg(copy);
+        b.arg(&value);
+        // SAFETY: as in `hermitian`; one thread writes mode 0 of two spectra.
+        unsafe { b.launch(LaunchConfig::for_num_elems(1)) }.map_err(failed("set_mean_mode"))?;
+        Ok(())
+    }
 }
+
 
 #[cfg(test)]
 mod tests {

@@ -1,30 +1,11 @@
-//! The step controller the spectral engines share (the CPU engine and the GPU engine): the
-//! SBDF coefficients, the multiplier after a step, the checks a step must pass, the rejection
-//! and retry of adaptive steps and the proposal of the next step
-//! (docs/src/theory/spectral.md, "The adaptive step").
+//! The step controller of the spectral step ([`super::stepper`]): the multiplier after a step,
+//! the checks a step must pass, the rejection and retry of adaptive steps and the proposal of the
+//! next step (docs/src/theory/spectral.md, "The adaptive step").
 
 use crate::engines::numerics::{CONSTRAINT_TOL, ENERGY_RISE_TOL};
 use crate::engines::{AreaConstraint, Diverged};
 use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme};
 use crate::problem::model::Measures;
-
-/// The variable-step SBDF coefficients (a0, a1, a2, b1, b2) of a step of `dt` after one of
-/// `dt_prev` (module documentation): SBDF2 once a previous step exists (`has_prev`), SBDF1
-/// otherwise.
-pub(crate) fn sbdf_coefficients(scheme: Scheme, has_prev: bool, dt: f64, dt_prev: f64) -> [f64; 5] {
-    if scheme == Scheme::Sbdf2 && has_prev {
-        let w = dt / dt_prev;
-        [
-            (1.0 + 2.0 * w) / (1.0 + w),
-            -(1.0 + w),
-            w * w / (1.0 + w),
-            1.0 + w,
-            -w,
-        ]
-    } else {
-        [1.0, -1.0, 0.0, 1.0, 0.0]
-    }
-}
 
 /// The scene's adaptive-step controller with `dt_min` and `dt_max` resolved (defaults 1e-3 and
 /// 1e3 times `dt`), or `None` for fixed steps.

@@ -8,6 +8,9 @@ pub(crate) mod kernels;
 pub(crate) mod pieces;
 pub(crate) mod real_rows;
 pub(crate) mod saved;
+pub mod stepper;
 pub mod transform;
+pub mod update;
 
-pub use engine::{stability_bound, SpectralEngine};
+pub use engine::{stability_bound, CpuPasses, SpectralEngine};
+pub use stepper::{DeviceFailure, Passes, Stepper};

@@ -2,7 +2,7 @@
 //! key and the reason.
 
 use super::c0::{C0Field, C0Spec};
-use super::scene::{axis_index, AreaMethod, Device, Dynamics, Method, Scene, Scheme, Symmetry};
+use super::scene::{axis_index, AreaMethod, Dynamics, Method, Scene, Scheme, Symmetry};
 use super::shapes::{AxisymBranch, Initial, Shape};
 use crate::error::{Error, Result};
 
@@ -57,7 +57,6 @@ impl Scene {
             return Err(Error::config("threads", "must be at least 1"));
         }
         self.validate_method()?;
-        self.validate_device()?;
         self.validate_area()?;
         self.validate_volume()?;
         self.validate_c0()?;
@@ -305,43 +304,6 @@ impl Scene {
             }
         }
         Ok(())
-    }
-
-    /// `"device": "gpu"`: the GPU engine runs the spectral conserved flow on the full periodic
-    /// 3D box with a uniform c0 and a constant volume, in a binary built with the `gpu` feature,
-    /// where a GPU can be used.
-    fn validate_device(&self) -> Result<()> {
-        if self.device == Device::Cpu {
-            return Ok(());
-        }
-        let refuse = |field: &str, why: &str| {
-            Err(Error::config(
-                field,
-                format!("{why}: \"device\": \"gpu\" runs the spectral conserved flow on the full periodic 3D box"),
-            ))
-        };
-        if self.method != Method::Spectral {
-            return refuse("method", "the GPU engine is spectral");
-        }
-        if self.dynamics != Dynamics::Conserved {
-            return refuse("dynamics", "the GPU engine runs conserved dynamics only");
-        }
-        if self.dim != 3 {
-            return refuse("dim", "the GPU engine is 3D only");
-        }
-        if !matches!(&self.symmetry, Symmetry::Axes(a) if a.is_empty()) {
-            return refuse("symmetry", "the GPU engine has no mirror-reduced boxes");
-        }
-        if self.n.iter().any(|m| m % 2 != 0) {
-            return refuse("n", "the GPU engine needs even lengths");
-        }
-        if matches!(self.c0, C0Spec::Field(_)) {
-            return refuse("c0", "the GPU engine takes a uniform c0 only");
-        }
-        if self.volume.is_some() {
-            return refuse("volume", "the GPU engine holds the volume constant");
-        }
-        crate::engines::gpu::usable().map_err(|why| Error::config("device", why))
     }
 }
 

@@ -1,0 +1,342 @@
+//! The spectral step, written once for every device (docs/src/theory/spectral.md). A
+//! [`Stepper`] holds the step's scalars and logic: the scheme's coefficients
+//! ([`super::update::SCHEMES`]), the choice of σ (the exact area projection, the Lagrangian
+//! update, or none), the volume target, the checks a step must pass, the retries of rejected
+//! adaptive steps, the proposal of the next step and the checkpoint's keys. What touches the
+//! arrays is a device's [`Passes`]: the CPU sweeps ([`super::engine::CpuPasses`]) or the GPU
+//! kernels (`engines::gpu`).
+//!
+//! φ̂^{n+1} = P̂ + σQ̂ is affine in σ ([`super::update`]), so the area A(φ^{n+1}) = A_PP +
+//! 2σ A_PQ + σ² A_QQ is a quadratic computed by Parseval with no extra transform; the exact
+//! projection takes the root nearest the last σ and rejects a step with no real root.
+
+use super::control::{self, Rejection};
+use super::update::{self, Update};
+use crate::engines::numerics::nearest_root;
+use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
+use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer, VolumeRamp};
+use crate::problem::grid::Grid;
+use crate::problem::model::Measures;
+use ndarray::{Array3, CowArray, Ix3};
+use num_complex::Complex64;
+
+/// A failure of the device itself (a GPU out of memory, a kernel that failed to launch): no
+/// smaller step mends it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviceFailure(pub String);
+
+/// The passes of the spectral step on one device. The device holds the current state (φ̂, N̂,
+/// φ and their measures), the state a step writes (the next), and the history the scheme
+/// reads (φ̂ⁿ⁻¹, N̂ⁿ⁻¹). Each pass states the formula it implements.
+pub trait Passes {
+    /// The grid the device computes on.
+    fn grid(&self) -> &Grid;
+    /// φ of the current state on the grid.
+    fn phi(&self) -> &Array3<f64>;
+    /// F_sc, A, V of the current state (full-box values).
+    fn measures(&self) -> Measures;
+    /// F_sc, A, V of the state the last attempt wrote.
+    fn next_measures(&self) -> Measures;
+    /// The current state's stationarity residual at its σ.
+    fn residual(&self) -> f64;
+    /// Whether the history holds φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (after the first accepted step of a two-level
+    /// scheme).
+    fn has_history(&self) -> bool;
+    /// (A_PP, A_PQ, A_QQ) = Σ_k a (|P̂|², Re P̂Q̂*, |Q̂|²), a = (3/(2√2)) ε |k|² w, of the update
+    /// `u` from the current state and `u.levels()` levels of history; nothing is stored.
+    fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure>;
+    /// φ̂^{n+1} = P̂ + σQ̂ of the update `u` into the next state, with the inputs of its
+    /// evaluation's inverse transforms (a copy of φ̂^{n+1} and −|k|²φ̂^{n+1}) written in the same
+    /// pass; returns A(φ̂^{n+1}).
+    fn write_update(&mut self, u: &Update, sigma: f64) -> Result<f64, DeviceFailure>;
+    /// Set the k = 0 coefficient of the written φ̂^{n+1} (and of its copy) to `value`: with the
+    /// unnormalised forward transforms X̂₀ = Σφ over the stored points.
+    fn set_mean_mode(&mut self, value: f64) -> Result<(), DeviceFailure>;
+    /// Evaluate the written next state at time `t`: φ, its measures, N̂ and the residual at
+    /// multiplier `sigma`, given its area `area`. Returns max|φ^{n+1} − φ^n|, or that the state
+    /// diverged (not finite, or |φ| too large).
+    fn finish_next(
+        &mut self,
+        area: f64,
+        t: f64,
+        sigma: f64,
+    ) -> Result<Result<f64, Diverged>, DeviceFailure>;
+    /// Make the next state current; with `keep_history`, the old current state becomes the
+    /// history (φ̂ⁿ⁻¹, N̂ⁿ⁻¹).
+    fn accept(&mut self, keep_history: bool) -> Result<(), DeviceFailure>;
+    /// The current φ̂ and, when kept, the history (φ̂ⁿ⁻¹, N̂ⁿ⁻¹), as they are held (a device
+    /// copies them to the host).
+    fn spectra(&self) -> (SavedArray<'_>, Option<[SavedArray<'_>; 2]>);
+    /// The saved spectrum `name` in this device's layout.
+    ///
+    /// # Errors
+    /// If it is missing, real or of another shape.
+    fn read_spectrum<'s>(
+        &self,
+        saved: &'s Saved<'_>,
+        name: &str,
+    ) -> Result<CowArray<'s, Complex64, Ix3>, String>;
+    /// Hold φ̂ = `hat` and the history `history`, and evaluate the current state at time `t`
+    /// with multiplier `sigma`.
+    ///
+    /// # Errors
+    /// A sentence if the device fails or the state is not finite.
+    fn restore(
+        &mut self,
+        hat: CowArray<'_, Complex64, Ix3>,
+        history: Option<[CowArray<'_, Complex64, Ix3>; 2]>,
+        t: f64,
+        sigma: f64,
+    ) -> Result<(), String>;
+    /// Short name for logs and tables.
+    fn name(&self) -> &'static str;
+}
+
+/// The spectral conserved flow on the device `P` (module documentation).
+pub struct Stepper<P> {
+    passes: P,
+    eps: f64,
+    stabilizer: Stabilizer,
+    scheme: Scheme,
+    /// Controller settings with dt_min and dt_max resolved.
+    adaptive: Option<AdaptiveSettings>,
+    /// The step before the current one (the SBDF2 step ratio).
+    dt_prev: f64,
+    /// max|φ^{n+1} − φ^n| of the last attempt.
+    max_change: f64,
+    sigma: f64,
+    area: AreaConstraint,
+    /// V of the prepared initial field: the volume held, or V_init of the ramp.
+    volume0: f64,
+    /// The scene's time-dependent volume target, if any.
+    volume_ramp: Option<VolumeRamp>,
+    /// Whether C0 is ramped in time (F may then rise legitimately).
+    c0_ramped: bool,
+    dt_next: Option<f64>,
+    /// Reject steps that raise F_eff (see [`Stepper::check_constraints`]).
+    energy_guard: bool,
+}
+
+impl<P: Passes> Stepper<P> {
+    /// The step of `scene` on `passes`, which hold the evaluated initial state at t = 0, no
+    /// area constraint yet; `c0_ramped` when the scene ramps C0 in time.
+    pub fn with_passes(passes: P, scene: &Scene, c0_ramped: bool) -> Self {
+        Stepper {
+            volume0: passes.measures().volume,
+            passes,
+            eps: scene.eps,
+            stabilizer: scene.stabilizer(),
+            scheme: scene.scheme,
+            adaptive: control::adaptive_settings(scene),
+            dt_prev: scene.dt,
+            max_change: 0.0,
+            sigma: 0.0,
+            area: AreaConstraint::none(),
+            volume_ramp: scene.volume,
+            c0_ramped,
+            dt_next: None,
+            energy_guard: true,
+        }
+    }
+
+    /// The device's passes.
+    pub fn passes(&self) -> &P {
+        &self.passes
+    }
+
+    /// The device's passes, writable (tests drive single passes).
+    #[cfg(test)]
+    pub(crate) fn passes_mut(&mut self) -> &mut P {
+        &mut self.passes
+    }
+
+    /// The update of a step of `dt` from the current state: the scheme's coefficients after the
+    /// steps the history holds.
+    pub fn update(&self, dt: f64) -> Update {
+        let history: &[f64] = if self.passes.has_history() {
+            &[self.dt_prev]
+        } else {
+            &[]
+        };
+        let c = (update::row(self.scheme).coefficients)(dt, history);
+        Update::new(c, dt, self.eps, &self.stabilizer)
+    }
+
+    /// σ used in this step's update, or `None` if the projection has no real root (only the
+    /// projection needs the area quadratic's pass).
+    fn choose_sigma(&self, u: &Update) -> Result<Option<f64>, DeviceFailure> {
+        Ok(match self.area.method {
+            AreaMethod::None => Some(0.0),
+            AreaMethod::Lagrangian => Some(self.sigma),
+            AreaMethod::Projection => {
+                let [app, apq, aqq] = self.passes.area_quadratic(u)?;
+                nearest_root(aqq, apq, app - self.area.target, self.sigma)
+            }
+        })
+    }
+
+    /// The volume the state must have at time `t`: V0(t) of the ramp, else V of the prepared
+    /// field.
+    fn volume_target(&self, t: f64) -> f64 {
+        match &self.volume_ramp {
+            Some(ramp) => ramp.target(self.volume0, t),
+            None => self.volume0,
+        }
+    }
+
+    /// Under a volume ramp, set the k = 0 coefficient of the written update so that
+    /// V(φ^{n+1}) = V0(`t`): with V = (N + Σφ) dv/2 over the N stored points (dv the cell
+    /// volume times the mirror factor) and X̂₀ = Σφ, X̂₀ = 2 V0/dv − N. This adds one constant
+    /// to φ^{n+1}; the area (weight |k|² = 0 there) and every other mode are untouched, so the
+    /// area projection's σ stands. Without a ramp the conserved update keeps X̂₀ itself.
+    fn set_volume(&mut self, t: f64) -> Result<(), DeviceFailure> {
+        if self.volume_ramp.is_none() {
+            return Ok(());
+        }
+        let grid = self.passes.grid();
+        let dv = grid.cell_volume() * grid.mirror_factor();
+        let mean_mode = 2.0 * self.volume_target(t) / dv - grid.len() as f64;
+        self.passes.set_mean_mode(mean_mode)
+    }
+
+    /// Try one step of size `dt` from time `t`: on success the next state holds the result (its
+    /// residual at the new σ) and the σ of the state after it is returned; a rejection says
+    /// why; `Err` if the device failed.
+    fn attempt(&mut self, t: f64, dt: f64) -> Result<Result<f64, Rejection>, DeviceFailure> {
+        let u = self.update(dt);
+        let Some(sigma) = self.choose_sigma(&u)? else {
+            return Ok(Err(Rejection::NoRealRoot));
+        };
+        let area = self.passes.write_update(&u, sigma)?;
+        self.set_volume(t + dt)?;
+        let sigma_after =
+            control::sigma_after(&self.area, self.sigma, self.passes.measures().area, sigma);
+        self.max_change = match self.passes.finish_next(area, t + dt, sigma_after)? {
+            Ok(change) => change,
+            Err(d) => return Ok(Err(Rejection::Diverged(d))),
+        };
+        Ok(self
+            .check_constraints(sigma, t, t + dt)
+            .map(|()| sigma_after))
+    }
+
+    /// Volume (and area under projection) held; F_eff (at the σ of the update) must not rise
+    /// where the scheme guarantees that it falls: adaptive steps, and fixed SBDF1 steps (the
+    /// stabilised first-order step is dissipative; SBDF2 is not guaranteed to be, and a ramped
+    /// C0 may raise F legitimately). Off when the energy guard is off (stability studies), and
+    /// for a step that starts (time `t`) while a volume ramp runs: deflating does work on the
+    /// vesicle, so F may rise; once V0 is constant the guard holds again. The volume is checked
+    /// against its target at the step's end, `t_new`.
+    fn check_constraints(&self, sigma: f64, t: f64, t_new: f64) -> Result<(), Rejection> {
+        let ramping = self.volume_ramp.is_some_and(|r| t < r.ramp_time);
+        let guard = self.energy_guard
+            && control::dissipative(self.adaptive.as_ref(), self.scheme)
+            && !ramping
+            && !self.c0_ramped;
+        control::check_step(
+            &self.passes.measures(),
+            &self.passes.next_measures(),
+            sigma,
+            self.volume_target(t_new),
+            &self.area,
+            guard,
+        )
+    }
+
+    /// Make the next state current with multiplier `sigma`, keeping the old one as history
+    /// when the scheme reads it.
+    fn accept(&mut self, sigma: f64, dt: f64) -> Result<(), DeviceFailure> {
+        self.passes
+            .accept(update::row(self.scheme).levels > 1)?;
+        self.dt_prev = dt;
+        self.sigma = sigma;
+        Ok(())
+    }
+}
+
+impl<P: Passes> Engine for Stepper<P>
+where
+    Stepper<P>: Send,
+{
+    fn phi(&self) -> &Array3<f64> {
+        self.passes.phi()
+    }
+
+    fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    fn measures(&self) -> Measures {
+        self.passes.measures()
+    }
+
+    fn residual(&self) -> f64 {
+        self.passes.residual()
+    }
+
+    fn set_area(&mut self, area: AreaConstraint) {
+        if area.method == AreaMethod::None {
+            self.sigma = 0.0;
+        }
+        self.area = area;
+    }
+
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+        let adaptive = self.adaptive.clone();
+        let device = |f: DeviceFailure| Diverged(f.0);
+        let (sigma_after, dt, rejected) = control::with_retries(adaptive.as_ref(), dt, |dt| {
+            self.attempt(t, dt).map_err(device)
+        })?;
+        let f_old = self.passes.measures().energy;
+        self.accept(sigma_after, dt).map_err(device)?;
+        let rate = self.max_change / dt;
+        if let Some(a) = &self.adaptive {
+            self.dt_next = Some(control::propose(a, dt, f_old, self.passes.measures().energy));
+        }
+        Ok(StepReport { dt, rate, rejected })
+    }
+
+    fn next_dt(&self, dt: f64) -> f64 {
+        self.dt_next.unwrap_or(dt)
+    }
+
+    fn guard_energy(&mut self, on: bool) {
+        self.energy_guard = on;
+    }
+
+    fn name(&self) -> &'static str {
+        self.passes.name()
+    }
+
+    fn save(&self) -> Saved<'_> {
+        let (hat, history) = self.passes.spectra();
+        let mut saved = Saved::default()
+            .scalar("sigma", self.sigma)
+            .scalar("volume0", self.volume0)
+            .scalar("dt_prev", self.dt_prev)
+            .scalar("dt_next", self.dt_next.unwrap_or(f64::NAN))
+            .array("phi_hat", hat);
+        if let Some([hat, nonlinear]) = history {
+            saved = saved
+                .array("prev_phi_hat", hat)
+                .array("prev_nonlinear", nonlinear);
+        }
+        saved
+    }
+
+    fn restore(&mut self, saved: &mut Saved<'_>, t: f64) -> Result<(), String> {
+        let hat = self.passes.read_spectrum(saved, "phi_hat")?;
+        self.sigma = saved.get("sigma")?;
+        self.volume0 = saved.get("volume0")?;
+        self.dt_prev = saved.get("dt_prev")?;
+        let dt_next = saved.get("dt_next")?;
+        self.dt_next = (!dt_next.is_nan()).then_some(dt_next);
+        let history = match self.passes.read_spectrum(saved, "prev_phi_hat") {
+            Ok(h) if update::row(self.scheme).levels > 1 => {
+                Some([h, self.passes.read_spectrum(saved, "prev_nonlinear")?])
+            }
+            _ => None,
+        };
+        self.passes.restore(hat, history, t, self.sigma)
+    }
+}
