@@ -1,5 +1,6 @@
 //! Error types of the library. The CLI maps them to exit codes: invalid input → 2, a run that
-//! blew up or broke a constraint → 3.
+//! blew up or broke a constraint → 3, a device that failed during a run (a GPU out of memory) →
+//! 4.
 
 use std::path::PathBuf;
 
@@ -9,15 +10,28 @@ pub enum Error {
     /// Invalid input: `field` is the dotted key of a scene or diagram file, or a flag.
     #[error("invalid input: `{field}`: {reason}")]
     Config { field: String, reason: String },
-    /// The run diverged or broke a constraint at step `step`, time `t`.
+    /// The run diverged or broke a constraint at step `step`, time `t`: `cause` says which.
     #[error("run stopped at step {step}, t = {t:.6e}: {reason}")]
-    Blowup { step: usize, t: f64, reason: String },
+    Blowup {
+        step: usize,
+        t: f64,
+        reason: String,
+        cause: crate::engines::Cause,
+    },
+    /// The device failed at step `step`, time `t` (a GPU out of memory, a kernel that failed):
+    /// nothing about the scheme.
+    #[error("run stopped at step {step}, t = {t:.6e}: the device failed: {reason}")]
+    Device { step: usize, t: f64, reason: String },
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// A study could not compute what it reports (a point without a sharp-interface
+    /// reference).
+    #[error("{0}")]
+    Study(String),
     /// An output writer failed.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
@@ -38,7 +52,18 @@ impl Error {
     /// errors unchanged.
     pub fn within(self, what: &str) -> Self {
         match self {
-            Error::Blowup { step, t, reason } => Error::Blowup {
+            Error::Blowup {
+                step,
+                t,
+                reason,
+                cause,
+            } => Error::Blowup {
+                step,
+                t,
+                reason: format!("{what}: {reason}"),
+                cause,
+            },
+            Error::Device { step, t, reason } => Error::Device {
                 step,
                 t,
                 reason: format!("{what}: {reason}"),

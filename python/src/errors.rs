@@ -1,6 +1,7 @@
 //! The library's errors as Python exceptions: invalid input as [`InvalidInput`] (a
-//! `ValueError` carrying the field), a failed step as [`BlowUp`] (step, t, Δt and the failed
-//! check), reading and writing files as `OSError`.
+//! `ValueError` carrying the field), a failed step as [`BlowUp`] (step, t, Δt, the failed
+//! check and its cause), a failed device as [`DeviceError`], reading and writing files as
+//! `OSError`.
 
 use pyo3::create_exception;
 use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
@@ -23,7 +24,16 @@ create_exception!(
     PyRuntimeError,
     "A step failed (the field diverged, the energy rose, a constraint broke). The simulation \
      still holds the last good state. Attributes: `step` (the step that failed), `t` (the time \
-     it would have reached), `dt` (its Δt) and `check` (the check that failed, in words)."
+     it would have reached), `dt` (its Δt), `check` (the check that failed, in words) and \
+     `cause` (`\"blew up\"`, `\"volume\"`, `\"area\"` or `\"energy rise\"`)."
+);
+
+create_exception!(
+    vesicle,
+    DeviceError,
+    PyRuntimeError,
+    "The device failed during a run (a GPU out of memory, a kernel that failed): nothing about \
+     the scheme. The simulation still holds the last good state. Attributes: `step` and `t`."
 );
 
 /// `e` as the Python exception of its kind, the simulation's time before the failed step
@@ -38,7 +48,12 @@ pub fn to_py(py: Python<'_>, e: Error, t_before: Option<f64>) -> PyErr {
             let _ = value.setattr("reason", reason);
             err
         }
-        Error::Blowup { step, t, reason } => {
+        Error::Blowup {
+            step,
+            t,
+            reason,
+            cause,
+        } => {
             let check = reason
                 .split_once("failed: ")
                 .map_or(reason.as_str(), |(_, c)| c)
@@ -50,11 +65,31 @@ pub fn to_py(py: Python<'_>, e: Error, t_before: Option<f64>) -> PyErr {
             let _ = value.setattr("t", t);
             let _ = value.setattr("dt", dt);
             let _ = value.setattr("check", check);
+            let _ = value.setattr("cause", cause_name(cause));
             err
         }
+        Error::Device { step, t, .. } => {
+            let err = DeviceError::new_err(message);
+            let value = err.value(py);
+            let _ = value.setattr("step", step);
+            let _ = value.setattr("t", t);
+            err
+        }
+        Error::Study(_) => PyRuntimeError::new_err(message),
         Error::Io { path, source } => os_error(&source, &path, &message),
         Error::Output(OutputError::Io { path, source }) => os_error(&source, &path, &message),
         Error::Output(other) => PyOSError::new_err(other.to_string()),
+    }
+}
+
+/// The name of a failed step's cause, as `BlowUp.cause` gives it.
+fn cause_name(cause: vesicle::engines::Cause) -> &'static str {
+    use vesicle::engines::Cause;
+    match cause {
+        Cause::BlewUp => "blew up",
+        Cause::Volume => "volume",
+        Cause::Area => "area",
+        Cause::EnergyRise => "energy rise",
     }
 }
 

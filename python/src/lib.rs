@@ -23,6 +23,7 @@ fn _vesicle(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulation::Simulation>()?;
     m.add("InvalidInput", py.get_type::<errors::InvalidInput>())?;
     m.add("BlowUp", py.get_type::<errors::BlowUp>())?;
+    m.add("DeviceError", py.get_type::<errors::DeviceError>())?;
     m.add_function(wrap_pyfunction!(axisym::axisym_solve, m)?)?;
     m.add_function(wrap_pyfunction!(axisym::axisym_follow, m)?)?;
     m.add_function(wrap_pyfunction!(commands::cli, m)?)?;

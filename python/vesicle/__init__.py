@@ -20,10 +20,11 @@ Names:
   ``surface()``, writers (``.npy``, ``.vti``, ``.ply``, PNG, charts);
 * :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (c0 = 0);
 * :exc:`InvalidInput` (a ``ValueError`` with ``field``), :exc:`BlowUp` (``step``, ``t``,
-  ``dt``, ``check``); file errors are ``OSError``.
+  ``dt``, ``check``, ``cause``), :exc:`DeviceError` (a GPU that failed during a run: ``step``,
+  ``t``); file errors are ``OSError``.
 """
 
-from ._vesicle import BlowUp, InvalidInput, Scene, Simulation, __version__
+from ._vesicle import BlowUp, DeviceError, InvalidInput, Scene, Simulation, __version__
 from . import axisym, commands
 from .commands import cli, diagram, diagram_merge, read_tables, study
 
@@ -32,6 +33,7 @@ __all__ = [
     "Simulation",
     "InvalidInput",
     "BlowUp",
+    "DeviceError",
     "axisym",
     "commands",
     "cli",

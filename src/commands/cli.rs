@@ -311,12 +311,14 @@ where
     }
 }
 
-/// Exit code of an error: 2 invalid input, 3 blow-up, 1 otherwise.
+/// Exit code of an error: 2 invalid input, 3 blow-up or broken constraint, 4 device failure, 1
+/// otherwise.
 pub fn exit_code(e: &Error) -> i32 {
     match e {
         Error::Config { .. } => 2,
         Error::Blowup { .. } => 3,
-        Error::Io { .. } | Error::Output(_) => 1,
+        Error::Device { .. } => 4,
+        Error::Io { .. } | Error::Output(_) | Error::Study(_) => 1,
     }
 }
 

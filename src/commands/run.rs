@@ -355,6 +355,7 @@ fn finish(
     let last = *recorder.last().expect("the recorder keeps the last state");
     let text = match &result {
         Ok(stopped) => stopped.as_str().to_string(),
+        Err(e @ Error::Device { .. }) => format!("device failed: {e}"),
         Err(e) => format!("blew up: {e}"),
     };
     let summary = End {

@@ -11,6 +11,7 @@
 //! vanishes exactly at the stationary states of the conserved and relaxational flows alike and,
 //! unlike max|φ^{n+1} − φ^n|/Δt, it does not shrink as Δt grows.
 
+pub mod failure;
 pub mod fd;
 pub mod gpu;
 pub mod numerics;
@@ -59,9 +60,7 @@ pub struct StepReport {
     pub rejected: usize,
 }
 
-/// Why a step could not be completed (the driver adds the step and time).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Diverged(pub String);
+pub use failure::{Cause, Diverged, Rejection, StepError};
 
 /// A scene key an engine cannot honour ([`supports`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -101,9 +100,9 @@ pub trait Engine {
     /// Advance from time `t` by at most `dt`.
     ///
     /// # Errors
-    /// [`Diverged`] if the state became non-finite or broke a constraint; the engine then
-    /// still holds the last good state.
-    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged>;
+    /// [`StepError`] if the state diverged, broke a constraint or the device failed; the
+    /// engine then still holds the last good state.
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError>;
     /// The step the engine proposes next (adaptive engines), or `dt` unchanged.
     fn next_dt(&self, dt: f64) -> f64 {
         dt

@@ -375,11 +375,7 @@ fn eps_part(spec: &EpsSpec, dir: &Path) -> Result<Vec<Row>> {
             let e_ref = match branch {
                 None => 1.0,
                 Some(b) => crate::analysis::axisym::solve(b, level.reduced_volume, &opts)
-                    .map_err(|err| Error::Blowup {
-                        step: r.steps,
-                        t: 0.0,
-                        reason: format!("{label} at eps/R0 = {x}: no axisymmetric reference at the φ = 0 v = {}: {err}", level.reduced_volume),
-                    })?
+                    .map_err(|err| Error::Study(format!("{label} at eps/R0 = {x}: no axisymmetric reference at the φ = 0 v = {}: {err}", level.reduced_volume)))?
                     .e,
             };
             rows.push(Row {

@@ -31,7 +31,7 @@ use super::harness::{self, Report, Study};
 use super::{file, fit};
 use crate::driver::simulation::{Flow, Now, Probe, Simulation, StopRules};
 use crate::engines::fd;
-use crate::engines::AreaConstraint;
+use crate::engines::{AreaConstraint, Cause};
 use crate::error::{Error, Result};
 use crate::output::chart::{Axis, Corner, Figure, Mark, Series, Shape};
 use crate::problem::config::{
@@ -483,14 +483,21 @@ fn fixed_run(
         before = *after;
         Ok(Flow::Continue)
     });
-    let failure = sim
-        .run(&StopRules::of(s), &mut [&mut watch])
-        .err()
-        .map(|e| e.to_string());
-    let class = classify(&samples, failure.as_deref(), criteria);
+    let failure = failure_cause(sim.run(&StopRules::of(s), &mut [&mut watch]))?;
+    let class = classify(&samples, failure, criteria);
     let max_phi = samples.iter().fold(0.0f64, |m, x| m.max(x.max_phi));
     let area = samples.iter().fold(0.0f64, |m, x| m.max(x.area_error));
     Ok((class, sim.clock.step, max_phi, area))
+}
+
+/// What ended a run: `None` if it ran to its end, the cause of a failed step, or the error of
+/// anything else (a failed device, a file), which ends the study.
+fn failure_cause<T>(ran: Result<T>) -> Result<Option<Cause>> {
+    match ran {
+        Ok(_) => Ok(None),
+        Err(Error::Blowup { cause, .. }) => Ok(Some(cause)),
+        Err(other) => Err(other),
+    }
 }
 
 /// An adaptive run over `[0, t_end]`: its steps, rejections and where they were tried.
@@ -512,9 +519,8 @@ fn adaptive_run(s: &Scene, problem: &Problem, h: f64, energy_alpha: f64) -> Resu
         area = area.max((now.record.area - a0).abs() / a0);
         Ok(Flow::Continue)
     });
-    let failure = sim.run(&StopRules::of(s), &mut [&mut probe]).err();
-    let class = match failure {
-        Some(e) => classify(&[], Some(&e.to_string()), &Criteria::default()),
+    let class = match failure_cause(sim.run(&StopRules::of(s), &mut [&mut probe]))? {
+        Some(cause) => classify(&[], Some(cause), &Criteria::default()),
         None => Class::Stable,
     };
     let rejected = sim.clock.rejected;

@@ -24,7 +24,7 @@ pub use stop::{StopRules, Stopped};
 use crate::driver::awake::KeepAwake;
 use crate::driver::record::Record;
 use crate::driver::schedule::Timer;
-use crate::engines::{Diverged, Engine, StepReport};
+use crate::engines::{Engine, StepReport};
 use crate::error::{Error, Result};
 use crate::problem::config::Schedule;
 use std::time::Instant;
@@ -316,17 +316,22 @@ impl Simulation {
         let c = &mut self.clock;
         let proposal = self.engine.next_dt(c.dt);
         let dt = land.map_or(proposal, |te| proposal.min(te - c.t));
-        let report = self
-            .engine
-            .step(c.t, dt)
-            .map_err(|Diverged(reason)| Error::Blowup {
-                step: c.step + 1,
-                t: c.t + dt,
-                reason: format!(
-                    "step of Δt = {dt:.4e} from t = {:.6e} failed: {reason}",
-                    c.t
-                ),
-            })?;
+        let report = self.engine.step(c.t, dt).map_err(|failure| {
+            let (step, t) = (c.step + 1, c.t + dt);
+            let reason = format!(
+                "step of Δt = {dt:.4e} from t = {:.6e} failed: {failure}",
+                c.t
+            );
+            match failure.cause() {
+                Some(cause) => Error::Blowup {
+                    step,
+                    t,
+                    reason,
+                    cause,
+                },
+                None => Error::Device { step, t, reason },
+            }
+        })?;
         c.t += report.dt;
         c.step += 1;
         c.rejected += report.rejected;
@@ -347,5 +352,83 @@ pub struct Probe<F>(pub F);
 impl<F: FnMut(&Now) -> Result<Flow>> Observer for Probe<F> {
     fn step(&mut self, now: &Now) -> Result<Flow> {
         (self.0)(now)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engines::{AreaConstraint, Cause, Rejection, Saved, StepError};
+    use crate::problem::model::Measures;
+    use ndarray::Array3;
+
+    /// An engine whose first step fails with `failure`.
+    struct Failing {
+        phi: Array3<f64>,
+        failure: StepError,
+    }
+
+    impl Engine for Failing {
+        fn phi(&self) -> &Array3<f64> {
+            &self.phi
+        }
+        fn sigma(&self) -> f64 {
+            0.0
+        }
+        fn measures(&self) -> Measures {
+            Measures {
+                energy: 1.0,
+                area: 1.0,
+                volume: 1.0,
+            }
+        }
+        fn residual(&self) -> f64 {
+            1.0
+        }
+        fn set_area(&mut self, _area: AreaConstraint) {}
+        fn step(&mut self, _t: f64, _dt: f64) -> std::result::Result<StepReport, StepError> {
+            Err(self.failure.clone())
+        }
+        fn name(&self) -> &'static str {
+            "failing"
+        }
+        fn save(&self) -> Saved<'_> {
+            Saved::default()
+        }
+        fn restore(&mut self, _saved: &mut Saved<'_>, _t: f64) -> std::result::Result<(), String> {
+            Ok(())
+        }
+    }
+
+    /// A failed step reaches the caller by type: a rejection as a blow-up with its check's
+    /// cause, a device failure as `Error::Device`, at step 1.
+    #[test]
+    fn a_failed_step_keeps_its_type() {
+        let cases = [
+            (
+                StepError::rejected(Rejection::VolumeDrift(1e-6)),
+                Some(Cause::Volume),
+            ),
+            (
+                StepError::rejected(Rejection::NoRealRoot),
+                Some(Cause::Area),
+            ),
+            (StepError::Device("GPU: out of memory".into()), None),
+        ];
+        for (failure, cause) in cases {
+            let engine = Failing {
+                phi: Array3::zeros((1, 4, 4)),
+                failure,
+            };
+            let mut sim = Simulation::new(Box::new(engine), 0.5, 2, 1.0);
+            let err = sim.run(&StopRules::steps(3), &mut []).expect_err("fails");
+            match (&err, cause) {
+                (Error::Blowup { step, cause: c, .. }, Some(want)) => {
+                    assert_eq!((*step, *c), (1, want));
+                }
+                (Error::Device { step, .. }, None) => assert_eq!(*step, 1),
+                _ => panic!("{err:?} for {cause:?}"),
+            }
+        }
     }
 }

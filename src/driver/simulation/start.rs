@@ -182,16 +182,26 @@ fn prepare(scene: &Scene, problem: &Problem) -> Result<Preparation> {
     engine.set_area(AreaConstraint::none());
     let mut prep = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
     if let Err(e) = prep.run(&StopRules::steps(scene.prepare_steps), &mut []) {
-        let reason = match e {
-            Error::Blowup { step, reason, .. } => {
-                format!("during preparation step {step}: {reason}")
-            }
-            other => other.to_string(),
-        };
-        let failure = Error::Blowup {
-            step: 0,
-            t: 0.0,
-            reason,
+        let during =
+            |step: usize, reason: &str| format!("during preparation step {step}: {reason}");
+        let failure = match e {
+            Error::Blowup {
+                step,
+                reason,
+                cause,
+                ..
+            } => Error::Blowup {
+                step: 0,
+                t: 0.0,
+                reason: during(step, &reason),
+                cause,
+            },
+            Error::Device { step, reason, .. } => Error::Device {
+                step: 0,
+                t: 0.0,
+                reason: during(step, &reason),
+            },
+            other => other,
         };
         return Ok(Err((prep.into_engine(), failure)));
     }

@@ -25,7 +25,9 @@ use crate::engines::numerics::{
     nearest_root, sum_in_fixed_tree, CONSTRAINT_TOL, ENERGY_RISE_TOL, PAR_CHUNK,
 };
 use crate::engines::stencil;
-use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
+use crate::engines::{
+    AreaConstraint, Diverged, Engine, Rejection, Saved, SavedArray, StepError, StepReport,
+};
 use crate::problem::config::AreaMethod;
 use crate::problem::grid::Grid;
 use crate::problem::model::{
@@ -165,7 +167,7 @@ impl FdEngine {
     /// With the exact projection: `phi` holds P = φⁿ + Δt ∇²_h μ_h(φⁿ, σⁿ) (φⁿ in `mu`); add
     /// δQ, Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ, for the δ nearest 0 that restores A_h = A0, so that
     /// σ^{n+1} = σⁿ + δ. Returns max|φ^{n+1} − φⁿ|/Δt, or `None` without projection.
-    fn project(&mut self, dt: f64) -> Result<Option<f64>, Diverged> {
+    fn project(&mut self, dt: f64) -> Result<Option<f64>, StepError> {
         let Some(q) = self.projection.as_mut() else {
             return Ok(None);
         };
@@ -176,9 +178,10 @@ impl FdEngine {
         let form = |u, v| stencil::area_form(&self.grid, self.eps, u, v);
         let (app, apq, aqq) = (form(&self.phi, &self.phi), form(&self.phi, q), form(q, q));
         let delta = nearest_root(aqq, apq, app - self.area.target, 0.0).ok_or_else(|| {
-            Diverged(
-                "the area projection has no real root (Δt too large for the constraint)".into(),
-            )
+            StepError::Rejected {
+                check: Rejection::NoRealRoot,
+                context: " (Δt too large for the constraint)".into(),
+            }
         })?;
         let old = self.mu.as_slice().expect("standard layout");
         let q = q.as_slice().expect("standard layout");
@@ -210,31 +213,35 @@ impl FdEngine {
     /// After a step of `dt` from a state with measures `before` to one with measures `m` (σ now
     /// that of the step): V held, A held under the projection, and F_eff at the step's σ not
     /// risen (unless a ramped C0 or a stability study).
-    fn check(&self, before: Measures, m: Measures, dt: f64) -> Result<(), Diverged> {
+    fn check(&self, before: Measures, m: Measures, dt: f64) -> Result<(), StepError> {
         let dv = (m.volume - self.volume0).abs() / self.volume0.abs().max(1e-300);
         if dv > CONSTRAINT_TOL {
-            return Err(Diverged(format!(
-                "volume drifted by {dv:.2e} (relative) at Δt = {dt:.4e}"
-            )));
+            return Err(StepError::Rejected {
+                check: Rejection::VolumeDrift(dv),
+                context: format!(" at Δt = {dt:.4e}"),
+            });
         }
         if self.area.method == AreaMethod::Projection {
             let da = (m.area - self.area.target).abs() / self.area.target;
             if da > CONSTRAINT_TOL {
-                return Err(Diverged(format!(
-                    "area off its target by {da:.2e} (relative)"
-                )));
+                return Err(StepError::rejected(Rejection::AreaDrift(da)));
             }
         }
         if self.energy_guard && !self.c0.is_ramped() && dt > 0.0 {
             let s = self.sigma;
             let (f0, f1) = (before.energy + s * before.area, m.energy + s * m.area);
             if f1 > f0 + ENERGY_RISE_TOL * f0.abs() {
-                return Err(Diverged(format!(
-                    "F_eff rose from {f0:.12e} to {f1:.12e} (relative {:.2e}): explicit Euler \
-                     is not dissipative at Δt = {dt:.4e} (bound {:.4e} at this σ)",
-                    (f1 - f0) / f0.abs(),
-                    self.bound()
-                )));
+                return Err(StepError::Rejected {
+                    check: Rejection::EnergyRise {
+                        before: f0,
+                        after: f1,
+                    },
+                    context: format!(
+                        ": explicit Euler is not dissipative at Δt = {dt:.4e} (bound {:.4e} at \
+                         this σ)",
+                        self.bound()
+                    ),
+                });
             }
         }
         Ok(())
@@ -315,7 +322,7 @@ impl FdEngine {
     /// below μ, the one pass keeps the accuracy of the two-pass mean-then-deviation. The state
     /// is replaced only when the step passes the checks; a rejected step leaves it as it was
     /// (its μ recomputed: [`Self::restore_mu`]).
-    fn step_fused(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+    fn step_fused(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
         let sigma = self.next_sigma();
         let r = self.c0.ramp(t + dt);
         let (uniform, field) = self.c0.parts(r);
@@ -340,6 +347,7 @@ impl FdEngine {
         );
         let measures = self.measures_of(&sums);
         let checked = blow_up(sums.max_phi, measures.energy)
+            .map_err(StepError::from)
             .and_then(|()| self.check(self.measures, measures, dt));
         if let Err(e) = checked {
             self.restore_mu();
@@ -385,7 +393,7 @@ impl FdEngine {
     /// The multi-pass step (the one for the exact projection): Laplacian of μⁿ, the update,
     /// the projection, then the refreshes of the measures and of μ^{n+1}; a failed step is
     /// undone by recomputing the state before it.
-    fn step_multipass(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+    fn step_multipass(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
         stencil::laplacian(&self.grid, &self.mu, &mut self.work);
         // Keep φ^n in `mu` so a blow-up can restore it; μ is recomputed after the step.
         std::mem::swap(&mut self.mu, &mut self.phi);
@@ -420,6 +428,7 @@ impl FdEngine {
         let before = self.measures;
         if let Err(e) = self
             .refresh(t + dt)
+            .map_err(StepError::from)
             .and_then(|()| self.check(before, self.measures, dt))
         {
             self.undo_step(sigma_before)?;
@@ -480,7 +489,7 @@ impl Engine for FdEngine {
     /// Q = −Δt (3/√2) ε ∇²_h∇²_h φⁿ, σ^{n+1} = σⁿ + δ the root of A_h = A0 nearest σⁿ (the same
     /// exact projection as the spectral engine, on the FD area). Fused without the projection,
     /// multi-pass with it.
-    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
         self.max_bound_ratio = self.max_bound_ratio.max(dt / self.bound());
         if self.projection.is_some() {
             self.step_multipass(t, dt)

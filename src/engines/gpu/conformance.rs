@@ -16,10 +16,12 @@ use num_complex::Complex64;
 
 /// A scene on a 32 × 24 × 28 periodic box with a uniform c0 and the given `scheme`.
 fn scene(scheme: &str, adaptive: bool) -> config::Scene {
-    config::from_value(serde_json::json!({"dim": 3, "n": [32, 24, 28], "h": 1.0, "eps": 1.0,
+    config::from_value(
+        serde_json::json!({"dim": 3, "n": [32, 24, 28], "h": 1.0, "eps": 1.0,
         "method": "spectral", "scheme": scheme, "dt": 0.5, "adaptive": adaptive,
         "max_steps": 30, "c0": 0.02, "device": "gpu",
-        "initial": {"shape": "ellipsoid", "axes": [10.0, 7.0, 8.0]}}))
+        "initial": {"shape": "ellipsoid", "axes": [10.0, 7.0, 8.0]}}),
+    )
     .expect("scene")
 }
 
@@ -135,7 +137,9 @@ fn each_pass_matches_the_cpu() {
         close("residual of the step", g.residual(), c.residual());
         close_arrays("φ after the step", g.phi(), c.phi(), f64::abs);
         for (i, (a, b)) in spectra(g).iter().zip(&spectra(c)).enumerate() {
-            close_arrays(&format!("spectrum {i} after step {step}"), a, b, |z| z.norm());
+            close_arrays(&format!("spectrum {i} after step {step}"), a, b, |z| {
+                z.norm()
+            });
         }
     }
 }
@@ -170,6 +174,11 @@ fn runs_match_the_cpu() {
             .fold(0.0, |m: f64, v| m.max(*v));
         assert!(dphi <= 1e-10, "{scheme}: max|Δφ| = {dphi:e}");
         let ds = (cpu.sigma() - gpu.sigma()).abs() / cpu.sigma().abs();
-        assert!(ds <= 1e-9, "{scheme}: σ {} against {}", gpu.sigma(), cpu.sigma());
+        assert!(
+            ds <= 1e-9,
+            "{scheme}: σ {} against {}",
+            gpu.sigma(),
+            cpu.sigma()
+        );
     }
 }

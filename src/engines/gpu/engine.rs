@@ -129,9 +129,9 @@ impl GpuPasses {
     ) -> Result<Result<f64, Diverged>, DeviceFailure> {
         let ap = self.area_prefactor();
         self.dev.hermitian(&mut self.cur.hat)?;
-        let area = self
-            .dev
-            .inverse_inputs(&self.cur.hat, &mut self.cur.nonlinear, &mut self.spare, ap)?;
+        let area =
+            self.dev
+                .inverse_inputs(&self.cur.hat, &mut self.cur.nonlinear, &mut self.spare, ap)?;
         let ec0 = self.uniform_c0(t);
         finish(
             &self.dev,
@@ -326,9 +326,7 @@ impl Passes for GpuPasses {
         sigma: f64,
     ) -> Result<(), String> {
         let upload = |a: &CowArray<'_, Complex64, Ix3>| {
-            self.dev
-                .upload_spectrum(&a.to_owned())
-                .map_err(|f| f.0)
+            self.dev.upload_spectrum(&a.to_owned()).map_err(|f| f.0)
         };
         self.cur.hat = upload(&hat)?;
         self.prev = match history {

@@ -457,7 +457,6 @@ impl Device {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

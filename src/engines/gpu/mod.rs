@@ -7,12 +7,12 @@
 //! may ask of it is decided without touching the hardware ([`supports`]); the hardware is probed
 //! where the engine is built, and by `vesicle check` ([`usable`]).
 
+#[cfg(all(feature = "gpu", test))]
+mod conformance;
 #[cfg(feature = "gpu")]
 mod engine;
 #[cfg(feature = "gpu")]
 mod kernels;
-#[cfg(all(feature = "gpu", test))]
-mod conformance;
 
 #[cfg(feature = "gpu")]
 pub use engine::{GpuEngine, GpuPasses};

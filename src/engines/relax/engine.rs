@@ -4,7 +4,7 @@
 use super::lbfgs::{Pair, ARMIJO, MAX_BACKTRACKS, MAX_MEMORY};
 use super::RelaxEngine;
 use crate::engines::spectral::saved;
-use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
+use crate::engines::{AreaConstraint, Engine, Saved, SavedArray, StepError, StepReport};
 use crate::problem::model::Measures;
 use ndarray::Array3;
 
@@ -32,7 +32,7 @@ impl Engine for RelaxEngine {
     }
 
     /// One L-BFGS iteration (its line search may take several evaluations).
-    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
         let mut d = self.recursion(self.pairs.len());
         self.write_direction(&mut d);
         if d.slope >= 0.0 {

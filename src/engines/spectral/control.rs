@@ -3,7 +3,7 @@
 //! next step (docs/src/theory/spectral.md, "The adaptive step").
 
 use crate::engines::numerics::{CONSTRAINT_TOL, ENERGY_RISE_TOL};
-use crate::engines::{AreaConstraint, Diverged};
+use crate::engines::{AreaConstraint, Rejection, StepError};
 use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme};
 use crate::problem::model::Measures;
 
@@ -26,38 +26,6 @@ pub(crate) fn propose(a: &AdaptiveSettings, dt: f64, f_old: f64, f_new: f64) -> 
     target
         .clamp(dt_min, (a.growth * dt).max(dt_min))
         .min(dt_max)
-}
-
-/// Why an attempted step was rejected (no allocation: adaptive runs reject routinely).
-#[derive(Debug)]
-pub(crate) enum Rejection {
-    /// A(φ^{n+1}(σ)) = A0 has no real root.
-    NoRealRoot,
-    /// The new state is not finite or |φ| is too large.
-    Diverged(Diverged),
-    /// V drifted by this relative amount.
-    VolumeDrift(f64),
-    /// A is off its target by this relative amount (projection).
-    AreaDrift(f64),
-    /// F_eff rose (adaptive steps).
-    EnergyRise { before: f64, after: f64 },
-}
-
-impl std::fmt::Display for Rejection {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Rejection::NoRealRoot => write!(f, "the area projection has no real root"),
-            Rejection::Diverged(d) => write!(f, "{}", d.0),
-            Rejection::VolumeDrift(d) => write!(f, "volume drifted by {d:.2e} (relative)"),
-            Rejection::AreaDrift(d) => write!(f, "area off its target by {d:.2e} (relative)"),
-            Rejection::EnergyRise { before, after } => write!(
-                f,
-                "F_eff rose from {before:.12e} to {after:.12e} (relative {:.2e}): the step is not \
-                 dissipative at this Δt; lower dt or use adaptive steps",
-                (after - before) / before.abs()
-            ),
-        }
-    }
 }
 
 /// σ of the state after a step that used `step_sigma`: the same, except under the Lagrangian
@@ -124,24 +92,36 @@ pub(crate) fn dissipative(adaptive: Option<&AdaptiveSettings>, scheme: Scheme) -
 pub(crate) fn with_retries<R>(
     adaptive: Option<&AdaptiveSettings>,
     dt: f64,
-    mut attempt: impl FnMut(f64) -> Result<Result<R, Rejection>, Diverged>,
-) -> Result<(R, f64, usize), Diverged> {
+    mut attempt: impl FnMut(f64) -> Result<Result<R, Rejection>, StepError>,
+) -> Result<(R, f64, usize), StepError> {
     let mut dt = dt;
     let mut rejected = 0;
     loop {
-        let reason = match attempt(dt)? {
+        let check = match attempt(dt)? {
             Ok(r) => return Ok((r, dt, rejected)),
-            Err(reason) => reason,
+            Err(check) => check,
         };
         let Some(a) = adaptive else {
-            return Err(Diverged(reason.to_string()));
+            let context = match check {
+                Rejection::EnergyRise { .. } => {
+                    ": the step is not dissipative at this Δt; lower dt or use adaptive steps"
+                }
+                _ => "",
+            };
+            return Err(StepError::Rejected {
+                check,
+                context: context.to_string(),
+            });
         };
         let dt_min = a.dt_min.unwrap_or(dt);
         rejected += 1;
         if dt <= dt_min {
-            return Err(Diverged(format!(
-                "step rejected at the smallest step dt_min = {dt_min:.3e}: {reason}"
-            )));
+            return Err(StepError::Rejected {
+                check,
+                context: format!(
+                    " (the step was rejected at the smallest step dt_min = {dt_min:.3e})"
+                ),
+            });
         }
         dt = (dt * a.shrink).max(dt_min);
     }

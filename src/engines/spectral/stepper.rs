@@ -10,10 +10,12 @@
 //! 2σ A_PQ + σ² A_QQ is a quadratic computed by Parseval with no extra transform; the exact
 //! projection takes the root nearest the last σ and rejects a step with no real root.
 
-use super::control::{self, Rejection};
+use super::control;
 use super::update::{self, Update};
 use crate::engines::numerics::nearest_root;
-use crate::engines::{AreaConstraint, Diverged, Engine, Saved, SavedArray, StepReport};
+use crate::engines::{
+    AreaConstraint, Diverged, Engine, Rejection, Saved, SavedArray, StepError, StepReport,
+};
 use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer, VolumeRamp};
 use crate::problem::grid::Grid;
 use crate::problem::model::Measures;
@@ -246,8 +248,7 @@ impl<P: Passes> Stepper<P> {
     /// Make the next state current with multiplier `sigma`, keeping the old one as history
     /// when the scheme reads it.
     fn accept(&mut self, sigma: f64, dt: f64) -> Result<(), DeviceFailure> {
-        self.passes
-            .accept(update::row(self.scheme).levels > 1)?;
+        self.passes.accept(update::row(self.scheme).levels > 1)?;
         self.dt_prev = dt;
         self.sigma = sigma;
         Ok(())
@@ -281,9 +282,9 @@ where
         self.area = area;
     }
 
-    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, Diverged> {
+    fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
         let adaptive = self.adaptive.clone();
-        let device = |f: DeviceFailure| Diverged(f.0);
+        let device = |f: DeviceFailure| StepError::Device(f.0);
         let (sigma_after, dt, rejected) = control::with_retries(adaptive.as_ref(), dt, |dt| {
             self.attempt(t, dt).map_err(device)
         })?;
@@ -291,7 +292,12 @@ where
         self.accept(sigma_after, dt).map_err(device)?;
         let rate = self.max_change / dt;
         if let Some(a) = &self.adaptive {
-            self.dt_next = Some(control::propose(a, dt, f_old, self.passes.measures().energy));
+            self.dt_next = Some(control::propose(
+                a,
+                dt,
+                f_old,
+                self.passes.measures().energy,
+            ));
         }
         Ok(StepReport { dt, rate, rejected })
     }
