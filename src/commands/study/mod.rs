@@ -16,6 +16,7 @@ pub mod harness;
 pub mod precision;
 pub mod stability;
 pub mod stationary;
+pub mod table;
 
 use crate::driver::simulation::Prepared;
 use crate::error::{Error, Result};
