@@ -324,18 +324,54 @@ fn precision_quick_study_runs() {
     charts_exist(&out, &["precision_transient"]);
 }
 
-/// `study stationary runs/studies/stationary.json --quick` on the 3D prolate: L-BFGS is the
-/// fastest spectral route to the stationary energy at 1e-6, and the Pareto chart is written.
+/// `study stationary runs/studies/stationary.json --quick` on the 3D prolate (what can be
+/// asserted whatever the machine's speed; wall times are the study's output, not checked):
+/// L-BFGS meets stop_residual 1e-6 at a state within 1e-6 of F* in energy and in fewer energy
+/// evaluations than every conserved route that meets it (measured 157 against 655 for SBDF2 at
+/// Δt = 10 and 1 695 adaptive; SBDF1 does not meet it in the quick variant's 1 500 steps); at
+/// the error level 1e-6 some spectral route is listed and no FD route (its spatial error,
+/// 3.7e-2 at h = ε/2, is its floor). The traces and the Pareto chart are written.
 #[test]
 fn stationary_quick_study_runs() {
     let (_tmp, out, stdout) = quick_study("stationary");
     assert!(stdout.contains("spectral/FD"));
+    assert_eq!(
+        header(&out.join("stationary.csv")),
+        "route,stop_residual,steps,evaluations,t,wall_seconds,residual,energy,relative_energy_error"
+    );
+    let rows = csv_fields(&out.join("stationary.csv"));
+    let at_1e6: Vec<(&str, usize, f64)> = rows
+        .iter()
+        .filter(|r| r[1].parse::<f64>().unwrap() == 1e-6)
+        .map(|r| (r[0].as_str(), r[3].parse().unwrap(), r[8].parse().unwrap()))
+        .collect();
+    let (_, lbfgs, error) = *at_1e6
+        .iter()
+        .find(|r| r.0.contains("L-BFGS"))
+        .expect("L-BFGS meets stop_residual 1e-6");
+    assert!(error.abs() < 1e-6, "L-BFGS energy error {error:e}");
+    let conserved: Vec<_> = at_1e6
+        .iter()
+        .filter(|r| r.0.contains("conserved"))
+        .collect();
+    assert!(!conserved.is_empty(), "a conserved route meets 1e-6");
+    for r in conserved {
+        assert!(lbfgs < r.1, "L-BFGS {lbfgs} evaluations against {r:?}");
+    }
+    assert_eq!(
+        header(&out.join("levels.csv")),
+        "part,level,fastest_spectral,spectral_wall_seconds,fastest_fd,fd_wall_seconds,ratio_spectral_over_fd"
+    );
     let levels = csv_fields(&out.join("levels.csv"));
-    let at_1e6 = levels
+    let level = levels
         .iter()
         .find(|r| r[0] == "stationary" && r[1].parse::<f64>().unwrap() == 1e-6)
         .expect("a row for level 1e-6");
-    assert!(at_1e6[2].contains("L-BFGS"), "{at_1e6:?}");
+    assert!(
+        !level[2].is_empty(),
+        "a spectral route reaches 1e-6: {level:?}"
+    );
+    assert!(level[4].is_empty(), "no FD route reaches 1e-6: {level:?}");
     assert_eq!(
         header(&out.join("traces.csv")),
         "family,config,t,wall_seconds,error,residual"

@@ -1,18 +1,19 @@
 //! What every study shares: read the study file (`--quick` applied), refuse an existing output
 //! folder without `--force` before anything is computed, time the study, and write what it
 //! produced — the printed table (also `NAME.txt`, closed by the study's wall time), its CSV
-//! files (typed rows through `csv` and serde) and its charts (PNG and SVG).
+//! files (typed rows through [`table`]) and its charts (PNG and SVG).
 //!
 //! A study is a [`Study`]: a name, a spec read from its file, and a `measure` that turns the
-//! spec into a [`Report`]. [`run`] does the rest.
+//! spec into a [`Report`]. [`run`] does the rest; [`run_with`] does the same for a measurement
+//! whose spec does not come from a study file (`vesicle study stationary` on a scene file).
 
 use super::file;
+use super::table::{self, Row};
 use crate::commands::run as run_cmd;
 use crate::error::{Error, Result};
 use crate::output::chart::Figure;
 use crate::problem::config::Scene;
 use serde::de::DeserializeOwned;
-use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -37,19 +38,19 @@ pub trait Study {
 pub struct Report {
     /// The printed table (the study's wall time is appended).
     pub text: String,
-    /// `(file name, CSV bytes)`, from [`csv_of`].
+    /// `(file name, CSV bytes)`, from [`table::csv`].
     pub tables: Vec<(String, Vec<u8>)>,
     /// `(file stem, figure)`: each written as `stem.png` and `stem.svg`.
     pub charts: Vec<(String, Figure)>,
 }
 
 impl Report {
-    /// Add the CSV file `name` holding `rows` (a header from the row type's field names).
+    /// Add the CSV file `name` holding `rows` ([`table::csv`]).
     ///
     /// # Errors
-    /// `Error::Config` if a row cannot be serialised (a bug).
-    pub fn table<T: Serialize>(&mut self, name: &str, rows: &[T]) -> Result<()> {
-        self.tables.push((name.to_string(), csv_of(rows)?));
+    /// `Error::Config` if a row cannot be written (a bug).
+    pub fn table<R: Row>(&mut self, name: &str, rows: &[R]) -> Result<()> {
+        self.tables.push((name.to_string(), table::csv(rows)?));
         Ok(())
     }
 
@@ -59,23 +60,8 @@ impl Report {
     }
 }
 
-/// `rows` as CSV: a header of the field names, one record per row; a field quoted only where
-/// it holds a comma or a quote; numbers in the shortest form that reads back exactly.
-///
-/// # Errors
-/// `Error::Config` if a row cannot be serialised.
-pub fn csv_of<T: Serialize>(rows: &[T]) -> Result<Vec<u8>> {
-    let bug = |e: csv::Error| Error::config("(csv)", e.to_string());
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).map_err(bug)?;
-    }
-    w.into_inner()
-        .map_err(|e| Error::config("(csv)", e.to_string()))
-}
-
 /// An output folder, checked before a study starts and created when it has a result.
-pub struct Session {
+struct Session {
     out: PathBuf,
     force: bool,
     started: Instant,
@@ -86,7 +72,7 @@ impl Session {
     ///
     /// # Errors
     /// `Error::Config` (field `--out`) for an existing folder without `force`.
-    pub fn open(out: &Path, force: bool) -> Result<Self> {
+    fn open(out: &Path, force: bool) -> Result<Self> {
         run_cmd::check_out_dir(out, force)?;
         Ok(Session {
             out: out.to_path_buf(),
@@ -100,7 +86,7 @@ impl Session {
     ///
     /// # Errors
     /// I/O and drawing errors.
-    pub fn finish(self, name: &str, report: Report) -> Result<()> {
+    fn finish(self, name: &str, report: Report) -> Result<()> {
         run_cmd::make_out_dir(&self.out, self.force)?;
         let mut text = report.text;
         if !text.ends_with('\n') {
@@ -132,8 +118,23 @@ impl Session {
 pub fn run<S: Study>(path: &Path, quick: bool, out: &Path, force: bool) -> Result<S::Output> {
     let spec: S::Spec = file::load(path, S::NAME, quick)?;
     let dir = path.parent().unwrap_or(Path::new("."));
+    run_with::<S>(out, force, || S::measure(&spec, dir))
+}
+
+/// Run `measure` as the study `S` into `out`: refuse an existing `out` without `force` first,
+/// then measure, then write the report (the table with the wall time, `NAME.txt`, the CSV files
+/// and the charts).
+///
+/// # Errors
+/// `Error::Config` for an existing `out` without `force`; the errors of `measure`; I/O and
+/// drawing errors.
+pub fn run_with<S: Study>(
+    out: &Path,
+    force: bool,
+    measure: impl FnOnce() -> Result<(S::Output, Report)>,
+) -> Result<S::Output> {
     let session = Session::open(out, force)?;
-    let (output, report) = S::measure(&spec, dir)?;
+    let (output, report) = measure()?;
     session.finish(S::NAME, report)?;
     Ok(output)
 }
@@ -154,41 +155,4 @@ pub fn variant(base: &Scene, field: &str, edit: impl FnOnce(&mut Scene)) -> Resu
     s.validate().map_err(within)?;
     crate::problem::memory::check(&s).map_err(within)?;
     Ok(s)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[derive(Serialize)]
-    struct Row {
-        series: String,
-        x: f64,
-        steps: usize,
-    }
-
-    /// The header is the field names; a comma inside a field is quoted; NaN reads `NaN`; a
-    /// float reads back to the same bits.
-    #[test]
-    fn rows_become_csv() {
-        let rows = [
-            Row {
-                series: "FD, h = 1".into(),
-                x: 0.1 + 0.2,
-                steps: 3,
-            },
-            Row {
-                series: "spectral".into(),
-                x: f64::NAN,
-                steps: 0,
-            },
-        ];
-        let text = String::from_utf8(csv_of(&rows).unwrap()).unwrap();
-        let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines[0], "series,x,steps");
-        assert_eq!(lines[1], "\"FD, h = 1\",0.30000000000000004,3");
-        assert_eq!(lines[2], "spectral,NaN,0");
-        let back: f64 = lines[1].split(',').nth(2).unwrap().parse().unwrap();
-        assert_eq!(back, 0.1 + 0.2);
-    }
 }

@@ -1,9 +1,13 @@
 //! `vesicle study …`: measurements that compare methods in one run and print ratios.
 //!
 //! * [`convergence`], [`stability`], [`precision`]: studies run from a study file
-//!   (`runs/studies/*.json`, read by [`file`]), with a `--quick` variant; orders from the
+//!   (`runs/studies/*.json`, read by [`mod@file`]), with a `--quick` variant; orders from the
 //!   least-squares fits of [`fit`], stability classes from [`classify`];
-//! * [`stationary`]: what each `stop_residual` buys per engine, on a scene file;
+//! * every study through [`harness`] (the output folder, the report), its tables through
+//!   [`table`] (one description of a row's columns for the CSV file and the printed table);
+//!   [`levels`]: the speed-against-accuracy rows and Pareto front of `precision` and
+//!   `stationary`;
+//! * [`stationary`]: what each `stop_residual` buys per engine, on a scene file or a study file;
 //! * [`budding`]: quasi-static budding in c̄0 through stationary states beside the sharp pear
 //!   branch.
 
@@ -13,9 +17,11 @@ pub mod convergence;
 pub mod file;
 pub mod fit;
 pub mod harness;
+pub mod levels;
 pub mod precision;
 pub mod stability;
 pub mod stationary;
+pub mod table;
 
 use crate::driver::simulation::Prepared;
 use crate::error::{Error, Result};

@@ -10,17 +10,18 @@
 //! reaching it and the ratio of their wall times. Writes `precision.csv` (every point),
 //! `levels.csv`, `precision.txt` and the chart `precision_transient`.
 
+use super::file;
 use super::harness::{self, Report, Study};
-use super::{file, stationary::pareto};
+use super::levels::{pareto, Level};
+use super::table::{self, Column, Format, Row};
 use crate::driver::simulation::{Simulation, StopRules};
 use crate::engines::fd;
 use crate::error::Result;
 use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use crate::problem::config::{AdaptiveSpec, AreaMethod, Method, Scene, Scheme};
 use crate::problem::setup::Problem;
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 use serde_json::Value;
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// The study file's keys.
@@ -55,24 +56,43 @@ pub struct TransientSpec {
 }
 
 /// One configuration's point; a row of `precision.csv`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Config {
     /// `transient`.
     pub part: &'static str,
     /// `FD` or `spectral`.
     pub family: &'static str,
     /// Name.
-    #[serde(rename = "config")]
     pub name: String,
     /// Simulated time.
     pub t: f64,
     /// Wall seconds of stepping.
-    #[serde(rename = "wall_seconds")]
     pub wall: f64,
     /// max|φ − φ_ref| at `t`.
     pub error: f64,
     /// RMS(μ − μ̄) (not measured: NaN).
     pub residual: f64,
+}
+
+impl Row for Config {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::csv("part", |r| r.part.into()),
+            Column::csv("family", |r| r.family.into()),
+            Column::both("config", "config", Format::Plain, |r| {
+                r.name.as_str().into()
+            }),
+            Column::csv("t", |r| r.t.into()),
+            Column::both("wall_seconds", "wall", Format::Fixed(3), |r: &Self| {
+                r.wall.into()
+            })
+            .unit("s"),
+            Column::both("error", "max|phi - phi_ref|", Format::Sci(3), |r| {
+                r.error.into()
+            }),
+            Column::csv("residual", |r| r.residual.into()),
+        ]
+    }
 }
 
 /// The study.
@@ -88,12 +108,13 @@ impl Study for Precision {
         let mut problem = crate::problem::setup::build(&base)?;
         problem.phi = super::prepared_field(&base, &problem)?;
         let configs = transient(&spec.transient, &base, &problem)?;
+        let levels = levels(&configs, &spec.transient.levels);
         let mut report = Report {
-            text: table(&configs, &spec.transient.levels),
+            text: text(&configs, &levels),
             ..Report::default()
         };
         report.table("precision.csv", &configs)?;
-        report.table("levels.csv", &level_rows(&configs, &spec.transient.levels))?;
+        report.table("levels.csv", &levels)?;
         report.chart("precision_transient", chart(&configs));
         Ok((configs, report))
     }
@@ -114,6 +135,9 @@ fn at(base: &Scene, t: f64, edit: impl FnOnce(&mut Scene)) -> Result<Scene> {
     })
 }
 
+/// Every configuration of the transient part: max|φ − φ_ref| at `t` and the wall time of
+/// SBDF1 and SBDF2 at each Δt and FD at each fraction of its bound, φ_ref from SBDF2 at
+/// `reference_dt`.
 fn transient(spec: &TransientSpec, base: &Scene, problem: &Problem) -> Result<Vec<Config>> {
     let until = StopRules::until(spec.t);
     let end = |s: &Scene| -> Result<(ndarray::Array3<f64>, f64)> {
@@ -163,7 +187,8 @@ fn transient(spec: &TransientSpec, base: &Scene, problem: &Problem) -> Result<Ve
     Ok(configs)
 }
 
-/// The fastest configuration of `family` reaching `level`: (wall, name).
+/// The configuration of `family` with an error below `level` in the least wall time: (wall,
+/// name).
 fn fastest<'a>(configs: &'a [Config], family: &str, level: f64) -> Option<(f64, &'a str)> {
     configs
         .iter()
@@ -172,84 +197,25 @@ fn fastest<'a>(configs: &'a [Config], family: &str, level: f64) -> Option<(f64, 
         .min_by(|a, b| a.0.total_cmp(&b.0))
 }
 
-/// A row of `levels.csv`.
-#[derive(Serialize)]
-struct LevelRow<'a> {
-    part: &'static str,
-    level: f64,
-    fastest_spectral: &'a str,
-    spectral_wall_seconds: f64,
-    fastest_fd: &'a str,
-    fd_wall_seconds: f64,
-    ratio_spectral_over_fd: f64,
-}
-
-fn level_rows<'a>(configs: &'a [Config], levels: &[f64]) -> Vec<LevelRow<'a>> {
+/// The fastest spectral and FD configuration to each error level.
+fn levels<'a>(configs: &'a [Config], levels: &[f64]) -> Vec<Level<'a>> {
     levels
         .iter()
-        .map(|&level| {
-            let sp = fastest(configs, "spectral", level);
-            let fd = fastest(configs, "FD", level);
-            LevelRow {
-                part: "transient",
-                level,
-                fastest_spectral: sp.map_or("", |x| x.1),
-                spectral_wall_seconds: sp.map_or(f64::NAN, |x| x.0),
-                fastest_fd: fd.map_or("", |x| x.1),
-                fd_wall_seconds: fd.map_or(f64::NAN, |x| x.0),
-                ratio_spectral_over_fd: match (sp, fd) {
-                    (Some(a), Some(b)) => a.0 / b.0,
-                    _ => f64::NAN,
-                },
-            }
+        .map(|&level| Level {
+            part: "transient",
+            level,
+            spectral: fastest(configs, "spectral", level),
+            fd: fastest(configs, "FD", level),
         })
         .collect()
 }
 
-fn table(configs: &[Config], levels: &[f64]) -> String {
+/// The printed report: every configuration, then the levels.
+fn text(configs: &[Config], levels: &[Level]) -> String {
     let mut s = String::from("== transient: max|phi - phi_ref| at t ==\n");
-    for c in configs {
-        let _ = writeln!(
-            s,
-            "  {:<46} error {:>10.3e} at wall {:>9.3} s",
-            c.name, c.error, c.wall
-        );
-    }
-    let _ = writeln!(
-        s,
-        "  {:>8} {:>10} {:<40} {:>10} {:<44} {:>12}",
-        "level", "spectral s", "fastest spectral", "FD s", "fastest FD", "spectral/FD"
-    );
-    for r in level_rows(configs, levels) {
-        let wall = |w: f64| {
-            if w.is_finite() {
-                format!("{w:.3}")
-            } else {
-                "-".into()
-            }
-        };
-        let name = |n: &str| {
-            if n.is_empty() {
-                "not reached".to_string()
-            } else {
-                n.to_string()
-            }
-        };
-        let _ = writeln!(
-            s,
-            "  {:>8.0e} {:>10} {:<40} {:>10} {:<44} {:>12}",
-            r.level,
-            wall(r.spectral_wall_seconds),
-            name(r.fastest_spectral),
-            wall(r.fd_wall_seconds),
-            name(r.fastest_fd),
-            if r.ratio_spectral_over_fd.is_finite() {
-                format!("{:.3e}", r.ratio_spectral_over_fd)
-            } else {
-                "-".into()
-            }
-        );
-    }
+    s.push_str(&table::text(configs));
+    s.push_str("the fastest configuration (least wall time) to each error level:\n");
+    s.push_str(&table::text(levels));
     s
 }
 

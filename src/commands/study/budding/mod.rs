@@ -16,7 +16,7 @@
 //!    along z, as `vesicle measure`), the skewness of the volume along z and the connected
 //!    pieces.
 //!
-//! The reference ([`reference`]) at each c̄0 is the prolate and the pear branch of
+//! The reference ([`mod@reference`]) at each c̄0 is the prolate and the pear branch of
 //! [`crate::analysis::axisym`] read at the step's own φ = 0 reduced volume. The dynamics has no
 //! hydrodynamics and L-BFGS has no time at all: the path is a sequence of stationary states, not
 //! a transient.
@@ -26,6 +26,7 @@
 //! (the same in units of R0) and `budding_skewness`.
 
 pub mod reference;
+pub mod report;
 pub mod seed;
 
 use super::harness::{Report, Study};
@@ -33,7 +34,6 @@ use crate::analysis::axisym::{self, Branch, Options};
 use crate::commands::measure::{self, ShapeMeasure};
 use crate::driver::simulation::{Simulation, StopRules};
 use crate::error::{Error, Result};
-use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use crate::problem::config::{self, C0Spec, Scene};
 use crate::problem::grid::Grid;
 use crate::problem::model::C0;
@@ -41,10 +41,9 @@ use crate::problem::revolution::Meridian;
 use crate::problem::setup::{self, FACE_PHI_MAX};
 use crate::problem::shapes::{self, Prepared, Revolution, AXISYM_SPACING};
 use ndarray::Array3;
-use reference::{PearPath, Reading};
-use serde::{Deserialize, Serialize};
+use reference::Reading;
+use serde::Deserialize;
 use serde_json::{json, Value};
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
@@ -84,7 +83,7 @@ pub struct Spec {
 }
 
 /// One step of the continuation; a row of `budding.csv`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Row {
     /// c̄0 = c0 R0 (R0 = `r0` ε).
     pub c0: f64,
@@ -209,7 +208,7 @@ impl Study for Budding {
             row.neck_prolate_ref = waist;
             fill_reference(row, &path.read(row.v, e_prolate));
         }
-        let report = report(spec, &rows, &paths)?;
+        let report = report::report(spec, &rows, &paths)?;
         Ok((rows, report))
     }
 }
@@ -383,6 +382,7 @@ fn row_of(c0: f64, c: f64, m: &ShapeMeasure, eps: f64) -> Row {
     }
 }
 
+/// Fill the reference columns of `row` from the reading `r` at its v.
 fn fill_reference(row: &mut Row, r: &Reading) {
     row.e_prolate_ref = r.e_prolate;
     row.v_bifurcation_ref = r.v_bifurcation;
@@ -390,133 +390,6 @@ fn fill_reference(row: &mut Row, r: &Reading) {
     row.v_limit_ref = r.v_limit;
     (row.neck_pear_ref, row.e_pear_ref) = r.stable;
     (row.neck_unstable_ref, row.e_unstable_ref) = r.unstable;
-}
-
-/// The table, `budding.csv` and the charts.
-fn report(spec: &Spec, rows: &[Row], paths: &[PearPath]) -> Result<Report> {
-    let mut text = String::new();
-    let _ = writeln!(
-        text,
-        "budding continuation: v = {} (start), R0 = {} eps, seed {}; L-BFGS through stationary \
-         states (no time: the path is not a transient)",
-        spec.v, spec.r0, spec.seed
-    );
-    let _ = writeln!(
-        text,
-        "{:>5} {:>6} {:>6} {:>8} {:>7} {:>7} {:>8} {:>8} {:>7} {:>6} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>6}  state",
-        "c0R0", "eps*c0", "iters", "stopped", "v", "e", "neck/eps", "neck/R0", "skew", "pieces",
-        "e_prol", "waist", "e_pear", "neck_ref", "neck_uns", "v_bif", "v_fold"
-    );
-    for r in rows {
-        let _ = writeln!(
-            text,
-            "{:>5.2} {:>6.3} {:>6} {:>8} {:>7.4} {:>7.4} {:>8.3} {:>8.4} {:>7.4} {:>6} {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>8.4} {:>7.4} {:>6.4}  {}",
-            r.c0, r.eps_c0, r.iterations, short(&r.stopped), r.v, r.e, r.neck, r.neck_r0,
-            r.skewness, r.pieces, r.e_prolate_ref, r.neck_prolate_ref, r.e_pear_ref, r.neck_pear_ref,
-            r.neck_unstable_ref, r.v_bifurcation_ref, r.v_fold_ref, r.state
-        );
-    }
-    let _ = writeln!(
-        text,
-        "reference: the axisymmetric prolate (e_prol, its waist) and pear branch at each row's \
-         phi = 0 v; neck_ref the stable pear's (after the fold), neck_uns the unstable one's (before it), in R0; NaN \
-         where the stretch does not reach v"
-    );
-    for p in paths {
-        let _ = writeln!(
-            text,
-            "  c0R0 = {}: pear bifurcation v = {:.5}, {} path states{}",
-            p.c0,
-            p.v_bifurcation,
-            p.states.len(),
-            if p.reached_limit {
-                " (ends at the neck threshold)"
-            } else {
-                ""
-            }
-        );
-    }
-    let mut report = Report {
-        text,
-        ..Report::default()
-    };
-    report.table("budding.csv", rows)?;
-    let r0 = rows.first().map_or(spec.r0, |r| r.r0_surface);
-    report.chart(
-        "budding_neck_eps",
-        neck_chart(rows, r0, "neck radius / eps"),
-    );
-    report.chart("budding_neck_r0", neck_chart(rows, 1.0, "neck radius / R0"));
-    report.chart("budding_skewness", skewness_chart(rows));
-    Ok(report)
-}
-
-fn short(s: &str) -> &str {
-    match s {
-        "stationary" => "stat",
-        "max_steps" => "max",
-        other => other,
-    }
-}
-
-/// Neck against c̄0: the phase field's (in ε, or in R0 when `scale` = 1) beside the reference
-/// pear's stable and unstable necks (in R0, times `scale`).
-/// The phase field's points are joined in path order (up and down a hysteresis loop).
-fn neck_chart(rows: &[Row], scale: f64, label: &str) -> Figure {
-    let per_r0 = scale == 1.0;
-    let pts = |f: &dyn Fn(&Row) -> f64| -> Vec<(f64, f64)> {
-        rows.iter()
-            .map(|r| (r.c0, f(r)))
-            .filter(|p| p.1.is_finite())
-            .collect()
-    };
-    let mut fig = Figure::new(
-        "Quasi-static budding: neck radius against c0 R0 at fixed v",
-        Axis::linear("c0 R0"),
-        Axis::linear(label),
-    );
-    fig.legend = Corner::UpperRight;
-    fig.push(Series::new(
-        "phase field (L-BFGS)",
-        pts(&|r| if per_r0 { r.neck_r0 } else { r.neck }),
-        colour(0),
-        Mark::LinePoints(Shape::Circle),
-    ));
-    fig.push(Series::new(
-        "reference: prolate's waist",
-        pts(&|r| r.neck_prolate_ref * scale),
-        colour(3),
-        Mark::Dashed,
-    ));
-    fig.push(Series::new(
-        "reference: stable pear",
-        pts(&|r| r.neck_pear_ref * scale),
-        colour(1),
-        Mark::LinePoints(Shape::Square),
-    ));
-    fig.push(Series::new(
-        "reference: unstable pear",
-        pts(&|r| r.neck_unstable_ref * scale),
-        colour(2),
-        Mark::DashedPoints(Shape::Triangle),
-    ));
-    fig
-}
-
-/// Skewness of the volume along z against c̄0.
-fn skewness_chart(rows: &[Row]) -> Figure {
-    let mut fig = Figure::new(
-        "Quasi-static budding: up-down asymmetry",
-        Axis::linear("c0 R0"),
-        Axis::linear("skewness of the volume along z"),
-    );
-    fig.push(Series::new(
-        "phase field (L-BFGS)",
-        rows.iter().map(|r| (r.c0, r.skewness)).collect(),
-        colour(0),
-        Mark::LinePoints(Shape::Circle),
-    ));
-    fig
 }
 
 #[cfg(test)]

@@ -7,15 +7,65 @@
 //! Writes `stability_c0.csv` (every run), the frontier table (largest stable Δt per scheme and
 //! εc0) and the chart `stability_c0` (PNG and SVG).
 
-use super::{
-    at_spacing, class_colour, dt_sweep, edge, prepared, C0Run, C0Sweep, Spec, FRONTIER, METHODS,
-};
+use super::measure::{at_spacing, dt_sweep, prepared, METHODS};
+use super::report::{class_colour, Edge, FRONTIER};
+use super::spec::{C0Sweep, Spec};
 use crate::commands::study::classify::Class;
+use crate::commands::study::harness::Report;
+use crate::commands::study::table::{self, Column, Format, Row};
 use crate::error::{Error, Result};
 use crate::output::chart::{Axis, Corner, Figure, Mark, Series, Shape};
 use crate::problem::config::{C0Spec, Scene, Scheme};
 use crate::problem::model::C0;
-use std::fmt::Write as _;
+
+/// One classified run of the c0 sweep; a row of `stability_c0.csv`.
+#[derive(Clone, Debug)]
+pub struct C0Run {
+    /// `sbdf1` or `sbdf2` (default stabiliser).
+    pub scheme: &'static str,
+    /// εc0.
+    pub eps_c0: f64,
+    /// Δt.
+    pub dt: f64,
+    /// The class.
+    pub class: Class,
+    /// Accepted steps.
+    pub steps: usize,
+    /// Largest max|φ| seen.
+    pub max_abs_phi: f64,
+    /// Largest |A − A0|/A0 seen.
+    pub max_area_error: f64,
+}
+
+impl Row for C0Run {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::csv("scheme", |r| r.scheme.into()),
+            Column::csv("eps_c0", |r| r.eps_c0.into()),
+            Column::csv("dt", |r| r.dt.into()),
+            Column::csv("class", |r| r.class.as_str().into()),
+            Column::csv("steps", |r| r.steps.into()),
+            Column::csv("max_abs_phi", |r| r.max_abs_phi.into()),
+            Column::csv("max_area_error", |r| r.max_area_error.into()),
+        ]
+    }
+}
+
+/// Add the c0 axis of `runs` to `report`: the frontier table, `stability_c0.csv` and the chart
+/// `stability_c0`.
+///
+/// # Errors
+/// `Error::Config` if a CSV row cannot be written (a bug).
+pub(super) fn report(report: &mut Report, runs: &[C0Run], c0: &C0Sweep) -> Result<()> {
+    let edges = c0_frontier(runs, c0);
+    report
+        .text
+        .push_str("\nspontaneous curvature at h = eps, default S, c0 uniform:\n");
+    report.text.push_str(&table::text(&edges));
+    report.table("stability_c0.csv", runs)?;
+    report.chart("stability_c0", c0_chart(runs, &edges, c0));
+    Ok(())
+}
 
 /// Name of `scheme` in the file and the CSV.
 fn scheme_name(scheme: Scheme) -> &'static str {
@@ -69,11 +119,35 @@ pub(super) fn c0_sweep(spec: &Spec, c0: &C0Sweep, base: &Scene) -> Result<Vec<C0
     Ok(runs)
 }
 
-/// Per scheme and εc0: `(scheme, εc0, largest stable Δt, first failure and its class)`.
-pub(super) type C0Frontier = Vec<(&'static str, f64, Option<f64>, Option<(f64, Class)>)>;
+/// The edge of one scheme at one εc0 (printed only).
+struct C0Edge {
+    scheme: &'static str,
+    eps_c0: f64,
+    edge: Edge,
+}
 
-/// The frontier of the c0 runs, in the order of the file.
-pub(super) fn c0_frontier(runs: &[C0Run], c0: &C0Sweep) -> C0Frontier {
+impl Row for C0Edge {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::text("scheme", Format::Plain, |r| r.scheme.into()),
+            Column::text("eps*c0", Format::Fixed(3), |r| r.eps_c0.into()),
+            Column::text("largest stable dt", Format::Sci(3), |r: &Self| {
+                r.edge.largest_dt().into()
+            })
+            .or("none"),
+            Column::text("first failure dt", Format::Sci(3), |r: &Self| {
+                r.edge.failure_dt().into()
+            })
+            .or("none"),
+            Column::text("its class", Format::Plain, |r| {
+                r.edge.failure_class().into()
+            }),
+        ]
+    }
+}
+
+/// The edge of each scheme at each εc0 of the c0 runs, in the order of the file.
+fn c0_frontier(runs: &[C0Run], c0: &C0Sweep) -> Vec<C0Edge> {
     let mut f = Vec::new();
     for &scheme in &c0.schemes {
         let name = scheme_name(scheme);
@@ -82,35 +156,19 @@ pub(super) fn c0_frontier(runs: &[C0Run], c0: &C0Sweep) -> C0Frontier {
                 .iter()
                 .filter(|r| r.scheme == name && r.eps_c0 == eps_c0)
                 .map(|r| (r.dt, r.class));
-            let (largest, first) = edge(rs);
-            f.push((name, eps_c0, largest, first));
+            f.push(C0Edge {
+                scheme: name,
+                eps_c0,
+                edge: Edge::of(rs),
+            });
         }
     }
     f
 }
 
-/// The printed table of the frontier.
-pub(super) fn c0_table(f: &C0Frontier) -> String {
-    let mut s = format!(
-        "\nspontaneous curvature at h = eps, default S, c0 uniform:\n  {:<7} {:>7} {:>14} {:>28}\n",
-        "scheme", "eps*c0", "largest stable", "first failure"
-    );
-    for x in f {
-        let _ = writeln!(
-            s,
-            "  {:<7} {:>7.3} {:>14} {:>28}",
-            x.0,
-            x.1,
-            x.2.map_or("none".into(), |d| format!("{d:.3e}")),
-            x.3.map_or("none".into(), |(d, c)| format!("{d:.3e} ({})", c.as_str())),
-        );
-    }
-    s
-}
-
 /// The chart: Δt (log) against εc0, a marker per scheme coloured by class, the measured
 /// frontier of each scheme.
-pub(super) fn c0_chart(runs: &[C0Run], f: &C0Frontier, c0: &C0Sweep) -> Figure {
+fn c0_chart(runs: &[C0Run], f: &[C0Edge], c0: &C0Sweep) -> Figure {
     let mut fig = Figure::new(
         "Stability against c0 at h = eps, default S (markers by scheme, colour by class)",
         Axis::log("dt [time units]"),
@@ -145,8 +203,8 @@ pub(super) fn c0_chart(runs: &[C0Run], f: &C0Frontier, c0: &C0Sweep) -> Figure {
         ));
         let frontier: Vec<(f64, f64)> = f
             .iter()
-            .filter(|x| x.0 == name)
-            .filter_map(|x| x.2.map(|d| (d, x.1 + dy)))
+            .filter(|x| x.scheme == name)
+            .filter_map(|x| x.edge.largest_stable.map(|d| (d, x.eps_c0 + dy)))
             .collect();
         fig.push(Series::new(
             format!("measured frontier, {}", name.to_uppercase()),
