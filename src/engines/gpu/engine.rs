@@ -4,8 +4,9 @@
 //! the host only when they are asked for (outputs, checkpoints).
 
 use super::kernels::{Device, Field, Spectrum};
+use crate::engines::spectral::stepper::{Evaluation, SavedSpectra};
 use crate::engines::spectral::update::Update;
-use crate::engines::spectral::{DeviceFailure, Passes, Stepper};
+use crate::engines::spectral::{DeviceFailure, DeviceState, Passes, States, Stepper};
 use crate::engines::{Diverged, Saved, SavedArray};
 use crate::problem::config::Scene;
 use crate::problem::grid::Grid;
@@ -15,12 +16,32 @@ use num_complex::Complex64;
 use std::cell::OnceCell;
 
 /// A state on the device.
-struct State {
+pub struct State {
     hat: Spectrum,
     nonlinear: Spectrum,
     phi: Field,
     measures: Measures,
     residual: f64,
+}
+
+impl DeviceState for State {
+    type Spectrum = Spectrum;
+
+    fn measures(&self) -> Measures {
+        self.measures
+    }
+
+    fn residual(&self) -> f64 {
+        self.residual
+    }
+
+    fn spectra(&self) -> [&Spectrum; 2] {
+        [&self.hat, &self.nonlinear]
+    }
+
+    fn spectra_mut(&mut self) -> [&mut Spectrum; 2] {
+        [&mut self.hat, &mut self.nonlinear]
+    }
 }
 
 impl State {
@@ -59,17 +80,14 @@ impl GpuEngine {
     }
 }
 
-/// The spectral step's passes on a GPU: the current and next states, the history and the
-/// scratch, on the device.
+/// The spectral step's passes on a GPU: the states and the scratch, on the device.
 pub struct GpuPasses {
     dev: Device,
     grid: Grid,
     eps: f64,
     /// Uniform εC0 (ramped in time).
     c0: C0,
-    cur: State,
-    next: State,
-    prev: Option<(Spectrum, Spectrum)>,
+    states: States<State>,
     /// Scratch: the inverse transforms' second input (−|k|²φ̂), then FT[f].
     spare: Spectrum,
     /// Real scratch: ∇²φ, then f; and f'Φ.
@@ -91,16 +109,14 @@ impl GpuPasses {
             .map_err(device)?;
         dev.forward(&cur.phi, &mut cur.hat).map_err(device)?;
         let mut passes = GpuPasses {
-            next: State::on(&dev).map_err(device)?,
+            states: States::new(cur, State::on(&dev).map_err(device)?),
             spare: dev.spectrum().map_err(device)?,
             work: dev.field().map_err(device)?,
             work2: dev.field().map_err(device)?,
-            cur,
             eps: scene.eps,
             c0,
             grid,
             dev,
-            prev: None,
             host: HostCopies::default(),
         };
         passes.evaluate_current(0.0, 0.0).map_err(device)??;
@@ -112,31 +128,19 @@ impl GpuPasses {
         AREA_PREFACTOR * self.eps
     }
 
-    /// φ̂ⁿ⁻¹, N̂ⁿ⁻¹ when the update `u` reads them.
-    fn history(&self, u: &Update) -> Option<(&Spectrum, &Spectrum)> {
-        self.prev
-            .as_ref()
-            .filter(|_| u.levels() > 1)
-            .map(|(h, n)| (h, n))
-    }
-
     /// Evaluate the current state from its φ̂ at time `t` with multiplier `sigma` (the CPU
     /// `Evaluator::evaluate`).
-    fn evaluate_current(
-        &mut self,
-        t: f64,
-        sigma: f64,
-    ) -> Result<Result<f64, Diverged>, DeviceFailure> {
-        let ap = self.area_prefactor();
-        self.dev.hermitian(&mut self.cur.hat)?;
-        let area =
-            self.dev
-                .inverse_inputs(&self.cur.hat, &mut self.cur.nonlinear, &mut self.spare, ap)?;
-        let ec0 = self.uniform_c0(t);
+    fn evaluate_current(&mut self, t: f64, sigma: f64) -> Evaluation {
+        let (ap, ec0) = (self.area_prefactor(), self.uniform_c0(t));
+        let cur = &mut self.states.cur;
+        self.dev.hermitian(&mut cur.hat)?;
+        let area = self
+            .dev
+            .inverse_inputs(&cur.hat, &mut cur.nonlinear, &mut self.spare, ap)?;
         finish(
             &self.dev,
             (self.eps, ec0, self.grid.cell_volume()),
-            &mut self.cur,
+            cur,
             (&mut self.spare, &mut self.work, &mut self.work2),
             area,
             None,
@@ -162,7 +166,7 @@ fn finish(
     area: f64,
     old: Option<&Field>,
     sigma: f64,
-) -> Result<Result<f64, Diverged>, DeviceFailure> {
+) -> Evaluation {
     let e2 = eps * eps;
     dev.inverse(&mut state.nonlinear, &mut state.phi)?;
     dev.inverse(spare, work)?;
@@ -189,101 +193,69 @@ fn finish(
 }
 
 impl Passes for GpuPasses {
+    type State = State;
+
     fn grid(&self) -> &Grid {
         &self.grid
+    }
+
+    fn states(&self) -> &States<State> {
+        &self.states
     }
 
     fn phi(&self) -> &Array3<f64> {
         self.host.phi.get_or_init(|| {
             let v = self
                 .dev
-                .download_field(&self.cur.phi)
+                .download_field(&self.states.cur.phi)
                 .expect("GPU: reading φ");
             Array3::from_shape_vec(self.grid.shape, v).expect("field shape")
         })
     }
 
-    fn measures(&self) -> Measures {
-        self.cur.measures
-    }
-
-    fn next_measures(&self) -> Measures {
-        self.next.measures
-    }
-
-    fn residual(&self) -> f64 {
-        self.cur.residual
-    }
-
-    fn has_history(&self) -> bool {
-        self.prev.is_some()
-    }
-
     fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure> {
-        let cur = (&self.cur.hat, &self.cur.nonlinear);
-        self.dev
-            .area_quadratic(cur, self.history(u), u, self.area_prefactor())
+        let States { cur, prev, .. } = &self.states;
+        let history = prev.as_ref().filter(|_| u.levels() > 1);
+        let inputs = ([&cur.hat, &cur.nonlinear], history.map(|[h, n]| [h, n]));
+        self.dev.area_quadratic(inputs, u, self.area_prefactor())
     }
 
     fn write_update(&mut self, u: &Update, sigma: f64) -> Result<f64, DeviceFailure> {
         let ap = self.area_prefactor();
-        let prev = self
-            .prev
-            .as_ref()
-            .filter(|_| u.levels() > 1)
-            .map(|(h, n)| (h, n));
-        self.dev.write_update(
-            (&self.cur.hat, &self.cur.nonlinear),
-            prev,
-            u,
-            ap,
-            sigma,
-            &mut self.next.hat,
-            &mut self.next.nonlinear,
-            &mut self.spare,
-        )
+        let States { cur, next, prev } = &mut self.states;
+        let history = prev.as_ref().filter(|_| u.levels() > 1);
+        let inputs = ([&cur.hat, &cur.nonlinear], history.map(|[h, n]| [h, n]));
+        let out = [&mut next.hat, &mut next.nonlinear, &mut self.spare];
+        self.dev.write_update(inputs, u, ap, sigma, out)
     }
 
     fn set_mean_mode(&mut self, value: f64) -> Result<(), DeviceFailure> {
+        let next = &mut self.states.next;
         self.dev
-            .set_mean_mode(&mut self.next.hat, &mut self.next.nonlinear, value)
+            .set_mean_mode(&mut next.hat, &mut next.nonlinear, value)
     }
 
-    fn finish_next(
-        &mut self,
-        area: f64,
-        t: f64,
-        sigma: f64,
-    ) -> Result<Result<f64, Diverged>, DeviceFailure> {
+    fn finish_next(&mut self, area: f64, t: f64, sigma: f64) -> Evaluation {
         let ec0 = self.uniform_c0(t);
+        let States { cur, next, .. } = &mut self.states;
         finish(
             &self.dev,
             (self.eps, ec0, self.grid.cell_volume()),
-            &mut self.next,
+            next,
             (&mut self.spare, &mut self.work, &mut self.work2),
             area,
-            Some(&self.cur.phi),
+            Some(&cur.phi),
             sigma,
         )
     }
 
     fn accept(&mut self, keep_history: bool) -> Result<(), DeviceFailure> {
-        std::mem::swap(&mut self.cur, &mut self.next);
-        if keep_history {
-            match &mut self.prev {
-                Some((h, n)) => {
-                    std::mem::swap(h, &mut self.next.hat);
-                    std::mem::swap(n, &mut self.next.nonlinear);
-                }
-                None => {
-                    let mut h = self.dev.spectrum()?;
-                    let mut n = self.dev.spectrum()?;
-                    self.dev.copy_spectrum(&self.next.hat, &mut h)?;
-                    self.dev.copy_spectrum(&self.next.nonlinear, &mut n)?;
-                    self.prev = Some((h, n));
-                }
-            }
-        }
+        let dev = &self.dev;
+        self.states.accept(keep_history, |s| {
+            let mut copy = dev.spectrum()?;
+            dev.copy_spectrum(s, &mut copy)?;
+            Ok(copy)
+        })?;
         self.host = HostCopies::default();
         Ok(())
     }
@@ -297,8 +269,8 @@ impl Passes for GpuPasses {
         fn complex(a: &Array3<Complex64>) -> CowArray<'_, Complex64, Ix3> {
             a.view().into()
         }
-        let hat = self.host.hat.get_or_init(|| download(&self.cur.hat));
-        let history = self.prev.as_ref().map(|(h, n)| {
+        let hat = self.host.hat.get_or_init(|| download(&self.states.cur.hat));
+        let history = self.states.prev.as_ref().map(|[h, n]| {
             let [hat, nonlinear] = self.host.prev.get_or_init(|| [download(h), download(n)]);
             [
                 SavedArray::Complex(complex(hat)),
@@ -318,19 +290,14 @@ impl Passes for GpuPasses {
             .map(CowArray::from)
     }
 
-    fn restore(
-        &mut self,
-        hat: CowArray<'_, Complex64, Ix3>,
-        history: Option<[CowArray<'_, Complex64, Ix3>; 2]>,
-        t: f64,
-        sigma: f64,
-    ) -> Result<(), String> {
+    fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String> {
+        let SavedSpectra { hat, history } = saved;
         let upload = |a: &CowArray<'_, Complex64, Ix3>| {
             self.dev.upload_spectrum(&a.to_owned()).map_err(|f| f.0)
         };
-        self.cur.hat = upload(&hat)?;
-        self.prev = match history {
-            Some([h, n]) => Some((upload(&h)?, upload(&n)?)),
+        self.states.cur.hat = upload(&hat)?;
+        self.states.prev = match history {
+            Some([h, n]) => Some([upload(&h)?, upload(&n)?]),
             None => None,
         };
         self.host = HostCopies::default();

@@ -28,6 +28,9 @@ pub type Spectrum = CudaSlice<double2>;
 /// A real field on the device.
 pub type Field = CudaSlice<f64>;
 
+/// What an update reads: (φ̂ⁿ, N̂ⁿ) and, when it reads two levels, (φ̂ⁿ⁻¹, N̂ⁿ⁻¹).
+pub type UpdateInputs<'a> = ([&'a Spectrum; 2], Option<[&'a Spectrum; 2]>);
+
 /// Device results: a failure is fatal to the run (no smaller step mends it).
 type Result<T> = std::result::Result<T, DeviceFailure>;
 
@@ -217,14 +220,13 @@ impl Device {
     fn push_update<'a>(
         &'a self,
         b: &mut cudarc::driver::LaunchArgs<'a>,
-        cur: (&'a Spectrum, &'a Spectrum),
-        prev: Option<(&'a Spectrum, &'a Spectrum)>,
+        (cur, prev): UpdateInputs<'a>,
         u: &'a Update,
         ap: &'a f64,
     ) {
-        let (h0, n0) = prev.unwrap_or(cur);
-        b.arg(cur.0);
-        b.arg(cur.1);
+        let [h0, n0] = prev.unwrap_or(cur);
+        b.arg(cur[0]);
+        b.arg(cur[1]);
         b.arg(h0);
         b.arg(n0);
         b.arg(if prev.is_some() { &2i32 } else { &1i32 });
@@ -407,13 +409,12 @@ impl Device {
     /// (A_PP, A_PQ, A_QQ) of the step (`prev`: φ̂ⁿ⁻¹, N̂ⁿ⁻¹ when the formula reads them).
     pub fn area_quadratic(
         &self,
-        cur: (&Spectrum, &Spectrum),
-        prev: Option<(&Spectrum, &Spectrum)>,
+        inputs: UpdateInputs<'_>,
         u: &Update,
         ap: f64,
     ) -> Result<[f64; 3]> {
         let mut b = self.stream.launch_builder(&self.area_quadratic);
-        self.push_update(&mut b, cur, prev, u, &ap);
+        self.push_update(&mut b, inputs, u, &ap);
         b.arg(&self.partials);
         // SAFETY: as in `hermitian`.
         unsafe { b.launch(Self::config()) }.map_err(failed("area_quadratic"))?;
@@ -421,20 +422,16 @@ impl Device {
     }
 
     /// φ̂ⁿ⁺¹ = P̂ + σQ̂ into `out`, with the inverse transforms' inputs; returns its area.
-    #[allow(clippy::too_many_arguments)]
     pub fn write_update(
         &self,
-        cur: (&Spectrum, &Spectrum),
-        prev: Option<(&Spectrum, &Spectrum)>,
+        inputs: UpdateInputs<'_>,
         u: &Update,
         ap: f64,
         sigma: f64,
-        out: &mut Spectrum,
-        copy: &mut Spectrum,
-        lap: &mut Spectrum,
+        [out, copy, lap]: [&mut Spectrum; 3],
     ) -> Result<f64> {
         let mut b = self.stream.launch_builder(&self.write_update);
-        self.push_update(&mut b, cur, prev, u, &ap);
+        self.push_update(&mut b, inputs, u, &ap);
         b.arg(&sigma);
         b.arg(out);
         b.arg(copy);

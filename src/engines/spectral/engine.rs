@@ -7,7 +7,9 @@ use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm
 use super::kernels::{sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::saved::spectrum;
-use super::stepper::{DeviceFailure, Passes, Stepper};
+use super::stepper::{
+    DeviceFailure, DeviceState, Evaluation, Passes, SavedSpectra, States, Stepper,
+};
 use super::update::{Update, MAX_LEVELS};
 use crate::engines::numerics::sum_in_fixed_tree;
 use crate::engines::{Diverged, Saved, SavedArray};
@@ -98,16 +100,13 @@ struct Inputs<'a> {
 }
 
 impl<'a> Inputs<'a> {
-    /// The inputs of a step from `cur` (and `prev` when the update reads `levels` = 2).
-    fn new(
-        cur: &'a State,
-        prev: Option<&'a (Array3<Complex64>, Array3<Complex64>)>,
-        levels: usize,
-    ) -> Self {
+    /// The inputs of an update from `cur` reading `levels` levels of history (`prev` when
+    /// two).
+    fn new(cur: &'a State, prev: Option<&'a [Array3<Complex64>; 2]>, levels: usize) -> Self {
         let flat = |a: &'a Array3<Complex64>| reals(a.as_slice().expect("standard layout"));
         Inputs {
             cur: (flat(&cur.hat), flat(&cur.nonlinear)),
-            prev: prev.filter(|_| levels > 1).map(|(h, n)| (flat(h), flat(n))),
+            prev: prev.filter(|_| levels > 1).map(|[h, n]| (flat(h), flat(n))),
         }
     }
 
@@ -169,31 +168,46 @@ impl SpectralEngine {
         );
         let cur = ev.state_of(&phi, 0.0)?;
         let passes = CpuPasses {
-            next: ev.blank(),
-            cur,
+            states: States::new(cur, ev.blank()),
             ev,
-            prev: None,
         };
         Ok(Stepper::with_passes(passes, scene, c0_ramped))
     }
 }
 
-/// The spectral step's passes on the CPU: the current and next states, the history and the
-/// evaluator (transforms, tables, scratch).
+/// The spectral step's passes on the CPU: the states and the evaluator (transforms, tables,
+/// scratch).
 pub struct CpuPasses {
     ev: Evaluator,
-    cur: State,
-    next: State,
-    /// φ̂ⁿ⁻¹ and N̂ⁿ⁻¹ (two-level schemes).
-    prev: Option<(Array3<Complex64>, Array3<Complex64>)>,
+    states: States<State>,
+}
+
+impl DeviceState for State {
+    type Spectrum = Array3<Complex64>;
+
+    fn measures(&self) -> Measures {
+        self.measures
+    }
+
+    fn residual(&self) -> f64 {
+        self.residual
+    }
+
+    fn spectra(&self) -> [&Array3<Complex64>; 2] {
+        [&self.hat, &self.nonlinear]
+    }
+
+    fn spectra_mut(&mut self) -> [&mut Array3<Complex64>; 2] {
+        [&mut self.hat, &mut self.nonlinear]
+    }
 }
 
 impl CpuPasses {
     /// [`Passes::area_quadratic`] reading `L` levels of history.
     fn area_quadratic_with<const L: usize>(&self, u: &Update) -> [f64; 3] {
-        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), L);
+        let inputs = Inputs::new(&self.states.cur, self.states.prev.as_ref(), L);
         let sym = &self.ev.symbols;
-        let (task, total) = (sym.task_reals(), 2 * self.cur.hat.len());
+        let (task, total) = (sym.task_reals(), 2 * self.states.cur.hat.len());
         let partials = (0..total.div_ceil(task)).into_par_iter().map(|t| {
             let mut acc = [0.0; 3];
             let mut terms = [[0.0; PIECE]; 3];
@@ -216,11 +230,12 @@ impl CpuPasses {
     /// copy into `next.nonlinear` and −|k|²φ̂^{n+1} into the evaluator's spare (see
     /// [`Evaluator::finish`]).
     fn write_update_with<const L: usize>(&mut self, u: &Update, sigma: f64) -> f64 {
-        let inputs = Inputs::new(&self.cur, self.prev.as_ref(), L);
+        let States { cur, next, prev } = &mut self.states;
+        let inputs = Inputs::new(cur, prev.as_ref(), L);
         let sym = &self.ev.symbols;
         let task = sym.task_reals();
-        let hat = reals_mut(self.next.hat.as_slice_mut().expect("standard layout"));
-        let copy = reals_mut(self.next.nonlinear.as_slice_mut().expect("standard layout"));
+        let hat = reals_mut(next.hat.as_slice_mut().expect("standard layout"));
+        let copy = reals_mut(next.nonlinear.as_slice_mut().expect("standard layout"));
         let lap = reals_mut(self.ev.spare.as_slice_mut().expect("standard layout"));
         hat.par_chunks_mut(task)
             .zip(copy.par_chunks_mut(task))
@@ -246,28 +261,18 @@ impl CpuPasses {
 }
 
 impl Passes for CpuPasses {
+    type State = State;
+
     fn grid(&self) -> &Grid {
         &self.ev.grid
     }
 
+    fn states(&self) -> &States<State> {
+        &self.states
+    }
+
     fn phi(&self) -> &Array3<f64> {
-        &self.cur.phi
-    }
-
-    fn measures(&self) -> Measures {
-        self.cur.measures
-    }
-
-    fn next_measures(&self) -> Measures {
-        self.next.measures
-    }
-
-    fn residual(&self) -> f64 {
-        self.cur.residual
-    }
-
-    fn has_history(&self) -> bool {
-        self.prev.is_some()
+        &self.states.cur.phi
     }
 
     fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure> {
@@ -285,41 +290,31 @@ impl Passes for CpuPasses {
     }
 
     fn set_mean_mode(&mut self, value: f64) -> Result<(), DeviceFailure> {
-        self.next.hat[[0, 0, 0]].re = value;
-        self.next.nonlinear[[0, 0, 0]].re = value;
+        let next = &mut self.states.next;
+        next.hat[[0, 0, 0]].re = value;
+        next.nonlinear[[0, 0, 0]].re = value;
         Ok(())
     }
 
-    fn finish_next(
-        &mut self,
-        area: f64,
-        t: f64,
-        sigma: f64,
-    ) -> Result<Result<f64, Diverged>, DeviceFailure> {
-        let old = Some(&self.cur.phi);
-        Ok(self.ev.finish(&mut self.next, area, t, old, Some(sigma)))
+    fn finish_next(&mut self, area: f64, t: f64, sigma: f64) -> Evaluation {
+        let States { cur, next, .. } = &mut self.states;
+        Ok(self.ev.finish(next, area, t, Some(&cur.phi), Some(sigma)))
     }
 
     fn accept(&mut self, keep_history: bool) -> Result<(), DeviceFailure> {
-        std::mem::swap(&mut self.cur, &mut self.next);
-        if keep_history {
-            match &mut self.prev {
-                Some((h, n)) => {
-                    std::mem::swap(h, &mut self.next.hat);
-                    std::mem::swap(n, &mut self.next.nonlinear);
-                }
-                None => self.prev = Some((self.next.hat.clone(), self.next.nonlinear.clone())),
-            }
-        }
-        Ok(())
+        self.states.accept(keep_history, |s| Ok(s.clone()))
     }
 
     fn spectra(&self) -> (SavedArray<'_>, Option<[SavedArray<'_>; 2]>) {
         fn complex(a: &Array3<Complex64>) -> SavedArray<'_> {
             SavedArray::Complex(a.view().into())
         }
-        let history = self.prev.as_ref().map(|(h, n)| [complex(h), complex(n)]);
-        (complex(&self.cur.hat), history)
+        let history = self
+            .states
+            .prev
+            .as_ref()
+            .map(|[h, n]| [complex(h), complex(n)]);
+        (complex(&self.states.cur.hat), history)
     }
 
     fn read_spectrum<'s>(
@@ -330,17 +325,12 @@ impl Passes for CpuPasses {
         spectrum(saved, name, &self.ev.transform)
     }
 
-    fn restore(
-        &mut self,
-        hat: CowArray<'_, Complex64, Ix3>,
-        history: Option<[CowArray<'_, Complex64, Ix3>; 2]>,
-        t: f64,
-        sigma: f64,
-    ) -> Result<(), String> {
-        self.cur.hat.assign(&hat);
-        self.prev = history.map(|[h, n]| (h.into_owned(), n.into_owned()));
+    fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String> {
+        let SavedSpectra { hat, history } = saved;
+        self.states.cur.hat.assign(&hat);
+        self.states.prev = history.map(|[h, n]| [h.into_owned(), n.into_owned()]);
         self.ev
-            .evaluate(&mut self.cur, t, None, Some(sigma))
+            .evaluate(&mut self.states.cur, t, None, Some(sigma))
             .map_err(|d| d.0)?;
         Ok(())
     }

@@ -13,4 +13,4 @@ pub mod transform;
 pub mod update;
 
 pub use engine::{stability_bound, CpuPasses, SpectralEngine};
-pub use stepper::{DeviceFailure, Passes, Stepper};
+pub use stepper::{DeviceFailure, DeviceState, Passes, States, Stepper};

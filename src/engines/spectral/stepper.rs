@@ -27,23 +27,92 @@ use num_complex::Complex64;
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeviceFailure(pub String);
 
-/// The passes of the spectral step on one device. The device holds the current state (φ̂, N̂,
-/// φ and their measures), the state a step writes (the next), and the history the scheme
-/// reads (φ̂ⁿ⁻¹, N̂ⁿ⁻¹). Each pass states the formula it implements.
+/// What evaluating a state gives: max|φ^{n+1} − φ^n| (0 without a previous state), or that
+/// the state diverged; `Err` if the device failed.
+pub type Evaluation = Result<Result<f64, Diverged>, DeviceFailure>;
+
+/// A state on a device: φ̂, the explicit term N̂, φ, and its measures.
+pub trait DeviceState {
+    /// A spectrum on the device.
+    type Spectrum;
+    /// F_sc, A, V (full-box values).
+    fn measures(&self) -> Measures;
+    /// The stationarity residual at the σ it was evaluated with.
+    fn residual(&self) -> f64;
+    /// φ̂ and N̂.
+    fn spectra(&self) -> [&Self::Spectrum; 2];
+    /// φ̂ and N̂, writable.
+    fn spectra_mut(&mut self) -> [&mut Self::Spectrum; 2];
+}
+
+/// The states a device holds for the step: the current one, the one a step writes (the next),
+/// and the history the scheme reads (φ̂ⁿ⁻¹, N̂ⁿ⁻¹).
+pub struct States<S: DeviceState> {
+    /// The current state.
+    pub cur: S,
+    /// The state the last attempt wrote.
+    pub next: S,
+    /// φ̂ⁿ⁻¹ and N̂ⁿ⁻¹, after the first accepted step of a two-level scheme.
+    pub prev: Option<[S::Spectrum; 2]>,
+}
+
+impl<S: DeviceState> States<S> {
+    /// The current and next states, no history.
+    pub fn new(cur: S, next: S) -> Self {
+        States {
+            cur,
+            next,
+            prev: None,
+        }
+    }
+
+    /// Make the next state current; with `keep_history`, the old current state's φ̂ and N̂
+    /// become the history: swapped in, or the first time copied by `copy`.
+    ///
+    /// # Errors
+    /// If `copy` fails.
+    pub fn accept(
+        &mut self,
+        keep_history: bool,
+        copy: impl Fn(&S::Spectrum) -> Result<S::Spectrum, DeviceFailure>,
+    ) -> Result<(), DeviceFailure> {
+        std::mem::swap(&mut self.cur, &mut self.next);
+        if keep_history {
+            match &mut self.prev {
+                Some([h, n]) => {
+                    let [old_h, old_n] = self.next.spectra_mut();
+                    std::mem::swap(h, old_h);
+                    std::mem::swap(n, old_n);
+                }
+                None => {
+                    let [h, n] = self.next.spectra();
+                    self.prev = Some([copy(h)?, copy(n)?]);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The spectra a checkpoint holds, read in a device's layout ([`Passes::read_spectrum`]).
+pub struct SavedSpectra<'s> {
+    /// φ̂ of the current state.
+    pub hat: CowArray<'s, Complex64, Ix3>,
+    /// φ̂ⁿ⁻¹ and N̂ⁿ⁻¹, when the scheme reads them and the checkpoint holds them.
+    pub history: Option<[CowArray<'s, Complex64, Ix3>; 2]>,
+}
+
+/// The passes of the spectral step on one device. The device holds its [`States`]; each pass
+/// states the formula it implements.
 pub trait Passes {
+    /// The device's state.
+    type State: DeviceState;
     /// The grid the device computes on.
     fn grid(&self) -> &Grid;
+    /// The device's states.
+    fn states(&self) -> &States<Self::State>;
     /// φ of the current state on the grid.
     fn phi(&self) -> &Array3<f64>;
-    /// F_sc, A, V of the current state (full-box values).
-    fn measures(&self) -> Measures;
-    /// F_sc, A, V of the state the last attempt wrote.
-    fn next_measures(&self) -> Measures;
-    /// The current state's stationarity residual at its σ.
-    fn residual(&self) -> f64;
-    /// Whether the history holds φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (after the first accepted step of a two-level
-    /// scheme).
-    fn has_history(&self) -> bool;
     /// (A_PP, A_PQ, A_QQ) = Σ_k a (|P̂|², Re P̂Q̂*, |Q̂|²), a = (3/(2√2)) ε |k|² w, of the update
     /// `u` from the current state and `u.levels()` levels of history; nothing is stored.
     fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure>;
@@ -57,14 +126,9 @@ pub trait Passes {
     /// Evaluate the written next state at time `t`: φ, its measures, N̂ and the residual at
     /// multiplier `sigma`, given its area `area`. Returns max|φ^{n+1} − φ^n|, or that the state
     /// diverged (not finite, or |φ| too large).
-    fn finish_next(
-        &mut self,
-        area: f64,
-        t: f64,
-        sigma: f64,
-    ) -> Result<Result<f64, Diverged>, DeviceFailure>;
-    /// Make the next state current; with `keep_history`, the old current state becomes the
-    /// history (φ̂ⁿ⁻¹, N̂ⁿ⁻¹).
+    fn finish_next(&mut self, area: f64, t: f64, sigma: f64) -> Evaluation;
+    /// Make the next state current ([`States::accept`]); with `keep_history`, the old current
+    /// state becomes the history (φ̂ⁿ⁻¹, N̂ⁿ⁻¹).
     fn accept(&mut self, keep_history: bool) -> Result<(), DeviceFailure>;
     /// The current φ̂ and, when kept, the history (φ̂ⁿ⁻¹, N̂ⁿ⁻¹), as they are held (a device
     /// copies them to the host).
@@ -78,18 +142,12 @@ pub trait Passes {
         saved: &'s Saved<'_>,
         name: &str,
     ) -> Result<CowArray<'s, Complex64, Ix3>, String>;
-    /// Hold φ̂ = `hat` and the history `history`, and evaluate the current state at time `t`
-    /// with multiplier `sigma`.
+    /// Hold the `saved` spectra, and evaluate the current state at time `t` with multiplier
+    /// `sigma`.
     ///
     /// # Errors
     /// A sentence if the device fails or the state is not finite.
-    fn restore(
-        &mut self,
-        hat: CowArray<'_, Complex64, Ix3>,
-        history: Option<[CowArray<'_, Complex64, Ix3>; 2]>,
-        t: f64,
-        sigma: f64,
-    ) -> Result<(), String>;
+    fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String>;
     /// Short name for logs and tables.
     fn name(&self) -> &'static str;
 }
@@ -124,7 +182,7 @@ impl<P: Passes> Stepper<P> {
     /// area constraint yet; `c0_ramped` when the scene ramps C0 in time.
     pub fn with_passes(passes: P, scene: &Scene, c0_ramped: bool) -> Self {
         Stepper {
-            volume0: passes.measures().volume,
+            volume0: passes.states().cur.measures().volume,
             passes,
             eps: scene.eps,
             stabilizer: scene.stabilizer(),
@@ -152,10 +210,15 @@ impl<P: Passes> Stepper<P> {
         &mut self.passes
     }
 
+    /// F_sc, A, V of the current state.
+    fn current(&self) -> Measures {
+        self.passes.states().cur.measures()
+    }
+
     /// The update of a step of `dt` from the current state: the scheme's coefficients after the
     /// steps the history holds.
     pub fn update(&self, dt: f64) -> Update {
-        let history: &[f64] = if self.passes.has_history() {
+        let history: &[f64] = if self.passes.states().prev.is_some() {
             &[self.dt_prev]
         } else {
             &[]
@@ -211,8 +274,7 @@ impl<P: Passes> Stepper<P> {
         };
         let area = self.passes.write_update(&u, sigma)?;
         self.set_volume(t + dt)?;
-        let sigma_after =
-            control::sigma_after(&self.area, self.sigma, self.passes.measures().area, sigma);
+        let sigma_after = control::sigma_after(&self.area, self.sigma, self.current().area, sigma);
         self.max_change = match self.passes.finish_next(area, t + dt, sigma_after)? {
             Ok(change) => change,
             Err(d) => return Ok(Err(Rejection::Diverged(d))),
@@ -235,9 +297,10 @@ impl<P: Passes> Stepper<P> {
             && control::dissipative(self.adaptive.as_ref(), self.scheme)
             && !ramping
             && !self.c0_ramped;
+        let states = self.passes.states();
         control::check_step(
-            &self.passes.measures(),
-            &self.passes.next_measures(),
+            &states.cur.measures(),
+            &states.next.measures(),
             sigma,
             self.volume_target(t_new),
             &self.area,
@@ -268,11 +331,11 @@ where
     }
 
     fn measures(&self) -> Measures {
-        self.passes.measures()
+        self.current()
     }
 
     fn residual(&self) -> f64 {
-        self.passes.residual()
+        self.passes.states().cur.residual()
     }
 
     fn set_area(&mut self, area: AreaConstraint) {
@@ -288,16 +351,11 @@ where
         let (sigma_after, dt, rejected) = control::with_retries(adaptive.as_ref(), dt, |dt| {
             self.attempt(t, dt).map_err(device)
         })?;
-        let f_old = self.passes.measures().energy;
+        let f_old = self.current().energy;
         self.accept(sigma_after, dt).map_err(device)?;
         let rate = self.max_change / dt;
         if let Some(a) = &self.adaptive {
-            self.dt_next = Some(control::propose(
-                a,
-                dt,
-                f_old,
-                self.passes.measures().energy,
-            ));
+            self.dt_next = Some(control::propose(a, dt, f_old, self.current().energy));
         }
         Ok(StepReport { dt, rate, rejected })
     }
@@ -343,6 +401,7 @@ where
             }
             _ => None,
         };
-        self.passes.restore(hat, history, t, self.sigma)
+        self.passes
+            .restore(SavedSpectra { hat, history }, t, self.sigma)
     }
 }
