@@ -9,6 +9,7 @@
 
 pub mod animation;
 pub mod chart;
+pub mod folder;
 pub mod image;
 pub mod lock;
 pub mod npy;

@@ -105,7 +105,7 @@ pub fn run(args: &DiagramArgs) -> Result<()> {
         return super::phase::run(args, list, &grid(args));
     }
     if args.out.exists() && !args.force {
-        crate::commands::run::make_out_dir(&args.out, false)?;
+        crate::output::folder::make_out_dir(&args.out, false)?;
     }
     let start = Instant::now();
     let opts = Options::with_nodes(args.nodes);
@@ -127,7 +127,7 @@ pub fn run(args: &DiagramArgs) -> Result<()> {
         stomatocyte_end: end_of(Branch::Stomatocyte),
         oblate_contact: end_of(Branch::Oblate),
     };
-    crate::commands::run::make_out_dir(&args.out, args.force)?;
+    crate::output::folder::make_out_dir(&args.out, args.force)?;
     // make_out_dir prepares a `snapshots` folder for runs; this command has none.
     let _ = std::fs::remove_dir(args.out.join("snapshots"));
     write_outputs(&args.out, &curves, &t, decimals(args.dv))?;

@@ -210,12 +210,12 @@ fn check_c0(list: &[f64]) -> Result<()> {
 pub fn run(args: &DiagramArgs, list: &[f64], vs: &[f64]) -> Result<()> {
     check_c0(list)?;
     if args.out.exists() && !args.force {
-        crate::commands::run::make_out_dir(&args.out, false)?;
+        crate::output::folder::make_out_dir(&args.out, false)?;
     }
     let start = Instant::now();
     let opts = Options::with_nodes(args.nodes);
     let slices: Vec<Slice> = list.iter().map(|&c| slice(c, vs, &opts)).collect();
-    crate::commands::run::make_out_dir(&args.out, args.force)?;
+    crate::output::folder::make_out_dir(&args.out, args.force)?;
     let _ = std::fs::remove_dir(args.out.join("snapshots"));
     for s in &slices {
         write_branches(&args.out, s)?;

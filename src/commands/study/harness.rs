@@ -7,9 +7,9 @@
 //! spec into a [`Report`]. [`run`] does the rest.
 
 use super::file;
-use crate::commands::run as run_cmd;
 use crate::error::{Error, Result};
 use crate::output::chart::Figure;
+use crate::output::folder;
 use crate::problem::config::Scene;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -87,7 +87,7 @@ impl Session {
     /// # Errors
     /// `Error::Config` (field `--out`) for an existing folder without `force`.
     pub fn open(out: &Path, force: bool) -> Result<Self> {
-        run_cmd::check_out_dir(out, force)?;
+        folder::check_out_dir(out, force)?;
         Ok(Session {
             out: out.to_path_buf(),
             force,
@@ -101,7 +101,7 @@ impl Session {
     /// # Errors
     /// I/O and drawing errors.
     pub fn finish(self, name: &str, report: Report) -> Result<()> {
-        run_cmd::make_out_dir(&self.out, self.force)?;
+        folder::make_out_dir(&self.out, self.force)?;
         let mut text = report.text;
         if !text.ends_with('\n') {
             text.push('\n');
