@@ -84,10 +84,10 @@ fn crossing(p: P3, vp: f64, q: P3, vq: f64) -> P3 {
     ]
 }
 
-/// The closed, outward-oriented mesh of [`crate::output::surface::extract`] (the same
+/// The closed, outward-oriented mesh of [`super::surface::extract`] (the same
 /// six-tetrahedra split), measured.
 fn measure_3d(phi: &Array3<f64>, h: f64) -> LevelSet {
-    let mesh = crate::output::surface::extract(phi, h);
+    let mesh = super::surface::extract(phi, h);
     LevelSet::new(mesh.area(), mesh.enclosed_volume(), 3)
 }
 

@@ -134,7 +134,7 @@ fn frame(
         );
         return Ok(output::image::slices_image(&state.path, &field, 2, &title)?);
     }
-    let mesh = output::surface::extract(&field, info.h);
+    let mesh = crate::analysis::surface::extract(&field, info.h);
     output::ply::write_ply(
         &frames_dir.join(format!("surface_{:08}.ply", state.step)),
         &mesh,

@@ -1,7 +1,7 @@
 //! Writers for simulation output: raw arrays (`.npy`), ParaView volumes (`.vti`), slice
 //! pictures of the phase field and time-series charts (`.png`), and the pictures of
-//! `vesicle render`: the φ = 0 surface as a mesh ([`surface`]), `.ply` files ([`ply`]),
-//! shaded views ([`shade`]) and animated GIFs ([`animation`]).
+//! `vesicle render`: `.ply` files ([`ply`]) and shaded views ([`shade`]) of the φ = 0 surface
+//! (the mesh of [`crate::analysis::surface`]) and animated GIFs ([`animation`]).
 //!
 //! Every writer receives a FULL-box field (already unfolded from any mirror reduction) in the
 //! internal layout of [`crate::problem::grid`]: a standard-layout `Array3<f64>` of shape `[n0, n1, n2]`,
@@ -15,7 +15,6 @@ pub mod lock;
 pub mod npy;
 pub mod ply;
 pub mod shade;
-pub mod surface;
 pub mod vti;
 
 use ndarray::Array3;
