@@ -1,7 +1,7 @@
 //! Error types of the library. The CLI maps them to exit codes: invalid input → 2, a run that
 //! blew up or broke a constraint → 3.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Everything that can go wrong in the library.
 #[derive(Debug, thiserror::Error)]
@@ -20,7 +20,7 @@ pub enum Error {
     },
     /// An output writer failed.
     #[error(transparent)]
-    Output(#[from] crate::output::OutputError),
+    Output(#[from] OutputError),
 }
 
 impl Error {
@@ -50,3 +50,45 @@ impl Error {
 
 /// Library result type.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// Errors of the file writers and readers ([`crate::output`], [`crate::npy`]); every message
+/// names the file concerned.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// Creating, reading or writing a file failed.
+    #[error("I/O error on {}: {source}", path.display())]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// An array had another shape than the one required.
+    #[error("{}: expected array shape {expected:?}, found {found:?}", path.display())]
+    Shape {
+        /// The file concerned.
+        path: PathBuf,
+        /// The required shape.
+        expected: Vec<usize>,
+        /// The shape actually found.
+        found: Vec<usize>,
+    },
+    /// Malformed content or unusable arguments (the message names the file).
+    #[error("{0}")]
+    Format(String),
+}
+
+impl OutputError {
+    /// An [`OutputError::Io`] for `path`.
+    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
+        OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    /// An [`OutputError::Format`] whose message starts with the file name.
+    pub(crate) fn format(path: &Path, message: impl std::fmt::Display) -> Self {
+        OutputError::Format(format!("{}: {message}", path.display()))
+    }
+}

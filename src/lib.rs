@@ -43,5 +43,6 @@ pub mod cpu;
 pub mod driver;
 pub mod engines;
 pub mod error;
+pub mod npy;
 pub mod output;
 pub mod problem;

@@ -125,7 +125,7 @@ fn frame(
     view: &View,
     name: &str,
 ) -> Result<RgbImage> {
-    let field = output::npy::read_npy(&state.path, &info.n)?;
+    let field = crate::npy::read_npy(&state.path, &info.n)?;
     if info.dim == 2 {
         let ls = crate::analysis::levelset::measure(&field, 2, info.h);
         let title = format!(

@@ -12,7 +12,6 @@
 
 use crate::analysis::levelset::reduced_volume;
 use crate::error::{Error, Result};
-use crate::output;
 use crate::problem::config::{axis_index, C0Ball, C0Band, C0Cap, C0Field, C0File, C0Spec};
 use crate::problem::grid::Grid;
 use ndarray::Array3;
@@ -162,7 +161,7 @@ fn from_file(f: &C0File, grid: &Grid, k: f64) -> Result<Array3<f64>> {
     let full = grid.full_shape();
     let n = &full[3 - grid.dim..];
     let c0 =
-        output::npy::read_npy(&f.file, n).map_err(|e| Error::config("c0.file", e.to_string()))?;
+        crate::npy::read_npy(&f.file, n).map_err(|e| Error::config("c0.file", e.to_string()))?;
     if let Some(bad) = c0.iter().find(|x| !x.is_finite()) {
         return Err(Error::config(
             "c0.file",
