@@ -1,6 +1,6 @@
 //! NumPy `.npy` files: float64, C order, shape `[nx, ny]` (2D) or `[n0, n1, n2]` (3D). The
 //! format is read here ([`read_npy`]: the scene's `initial.file` and `c0.file`, the fields
-//! the commands read back) and written by [`write`] (the output writer of a field calls it).
+//! the commands read back) and written by [`write()`] (the output writer of a field calls it).
 //! A leaf of the crate: it uses none of its layers.
 //!
 //! The format (NumPy's `numpy.lib.format`): the magic `\x93NUMPY`, the version's major and

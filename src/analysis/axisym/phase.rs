@@ -1,4 +1,4 @@
-//! The (v, c̄0) shape diagram of the spontaneous-curvature model: for each c̄0 ([`slice`]) the
+//! The (v, c̄0) shape diagram of the spontaneous-curvature model: for each c̄0 ([`slice()`]) the
 //! prolate, oblate and stomatocyte branches on the grid of `v`, the pear branch from its
 //! bifurcation off the prolate to the budding limit, the lowest-energy branch along `v` and
 //! where it changes (`vesicle axisym --c0 LIST` writes it as CSV and draws the phase diagram).
