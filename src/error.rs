@@ -2,7 +2,7 @@
 //! blew up or broke a constraint → 3, a device that failed during a run (a GPU out of memory) →
 //! 4.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Everything that can go wrong in the library.
 #[derive(Debug, thiserror::Error)]
@@ -16,7 +16,7 @@ pub enum Error {
         step: usize,
         t: f64,
         reason: String,
-        cause: crate::engines::Cause,
+        cause: Cause,
     },
     /// The device failed at step `step`, time `t` (a GPU out of memory, a kernel that failed):
     /// nothing about the scheme.
@@ -34,7 +34,7 @@ pub enum Error {
     Study(String),
     /// An output writer failed.
     #[error(transparent)]
-    Output(#[from] crate::output::OutputError),
+    Output(#[from] OutputError),
 }
 
 impl Error {
@@ -75,3 +75,58 @@ impl Error {
 
 /// Library result type.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// Errors of the file writers and readers ([`crate::output`], [`crate::npy`]); every message
+/// names the file concerned.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// Creating, reading or writing a file failed.
+    #[error("I/O error on {}: {source}", path.display())]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// An array had another shape than the one required.
+    #[error("{}: expected array shape {expected:?}, found {found:?}", path.display())]
+    Shape {
+        /// The file concerned.
+        path: PathBuf,
+        /// The required shape.
+        expected: Vec<usize>,
+        /// The shape actually found.
+        found: Vec<usize>,
+    },
+    /// Malformed content or unusable arguments (the message names the file).
+    #[error("{0}")]
+    Format(String),
+}
+
+impl OutputError {
+    /// An [`OutputError::Io`] for `path`.
+    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
+        OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    /// An [`OutputError::Format`] whose message starts with the file name.
+    pub(crate) fn format(path: &Path, message: impl std::fmt::Display) -> Self {
+        OutputError::Format(format!("{}: {message}", path.display()))
+    }
+}
+
+/// What ended a run on a failed step (not a device failure): the class a study charts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Cause {
+    /// The state diverged.
+    BlewUp,
+    /// The volume was not held.
+    Volume,
+    /// The area was not held (off its target, or its projection has no real root).
+    Area,
+    /// F_eff rose where the scheme guarantees a decrease.
+    EnergyRise,
+}

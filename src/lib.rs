@@ -7,25 +7,27 @@
 //! ∂φ/∂t = ∇²μ,   μ = 2[f'(φ)Φ − ε²∇²Φ] − (3/√2) ε σ ∇²φ
 //! ```
 //!
-//! The source tree follows the layers:
+//! The source tree follows the layers, from the bottom up (docs/src/architecture.md):
+//! * the leaves [`error`], [`cpu`] (the cores and vector instructions, detected once, and the
+//!   worker pool a command runs in) and [`npy`] (the `.npy` format);
+//! * [`analysis`]: the φ = 0 level set and surface mesh, curves and fits, and the
+//!   sharp-interface axisymmetric reference;
 //! * [`problem`]: the scene file, grid, initial shapes, model and memory estimate — what is
 //!   computed, before any engine runs;
 //! * [`engines`] behind [`engines::Engine`]: finite differences (the paper's explicit reference),
 //!   spectral (semi-implicit SBDF1/2 with the exact area projection) and relaxational
 //!   (preconditioned L-BFGS to stationary states); every engine reports the same Δt-free
 //!   stationarity residual RMS(μ − μ̄);
+//! * [`output`]: the writers (npy, vti, ply, png, charts, shaded views, gif), the output folder
+//!   and its lock;
 //! * [`driver`]: the one step loop (clock, stop rules, observers), the time series,
 //!   checkpoints and signals;
-//! * [`analysis`]: the φ = 0 level set, curves and fits, and the sharp-interface axisymmetric
-//!   reference;
-//! * [`output`]: the writers (npy, vti, ply, png, charts, shaded views, gif) and the folder lock;
-//! * [`cpu`]: the cores and vector instructions (detected once) and the worker pool a command
-//!   runs in;
 //! * [`commands`]: the command line, `run`/`resume`, `compare`, `render`, `measure`, the
-//!   phase-field shape diagram and the studies.
+//!   sharp-interface and phase-field shape diagrams and the studies.
 //!
-//! Walls: engines reach neither commands nor writers; analysis does not reach engines; only
-//! [`commands`] knows about the command line.
+//! Walls (`tests/layers.rs`, the table of docs/src/architecture.md): the leaves use at most
+//! [`error`]; each layer reaches only the leaves and the layers listed before it, except that
+//! engines and output do not reach each other; only [`commands`] knows about the command line.
 //!
 //! ```no_run
 //! use vesicle::driver::simulation::{Simulation, StopRules};
@@ -43,5 +45,6 @@ pub mod cpu;
 pub mod driver;
 pub mod engines;
 pub mod error;
+pub mod npy;
 pub mod output;
 pub mod problem;

@@ -328,7 +328,7 @@ fn read_all_ways(bytes: &[u8]) {
     file.write_all(bytes).unwrap();
     file.flush().unwrap();
     for expected in [&[4usize, 4][..], &[2, 3, 4], &[1, 1], &[3]] {
-        match vesicle::output::npy::read_npy(file.path(), expected) {
+        match vesicle::npy::read_npy(file.path(), expected) {
             Ok(a) => {
                 let want: usize = expected.iter().product();
                 assert_eq!(a.len(), want);
@@ -410,12 +410,12 @@ fn npy_valid_file_reads() {
     bytes.extend((0..16).flat_map(|i| (i as f64).to_le_bytes()));
     let mut file = tempfile::NamedTempFile::new().unwrap();
     file.write_all(&bytes).unwrap();
-    let a = vesicle::output::npy::read_npy(file.path(), &[4, 4]).unwrap();
+    let a = vesicle::npy::read_npy(file.path(), &[4, 4]).unwrap();
     assert_eq!(a[[0, 3, 2]], 14.0);
     let mut bytes = npy_header("<f8", false, &[4, 4], 2);
     bytes.extend((0..16).flat_map(|i| (i as f64).to_le_bytes()));
     std::fs::write(file.path(), &bytes).unwrap();
-    let a = vesicle::output::npy::read_npy(file.path(), &[4, 4]).unwrap();
+    let a = vesicle::npy::read_npy(file.path(), &[4, 4]).unwrap();
     assert_eq!(a[[0, 1, 1]], 5.0);
 }
 

@@ -4,9 +4,10 @@
 use ndarray::Array3;
 use std::path::{Path, PathBuf};
 use tempfile::TempDir;
+use vesicle::npy::read_npy;
 use vesicle::output::chart::write_timeseries_png;
 use vesicle::output::image::write_slices_png;
-use vesicle::output::npy::{read_npy, write_npy};
+use vesicle::output::npy::write_npy;
 use vesicle::output::vti::write_vti;
 use vesicle::output::OutputError;
 

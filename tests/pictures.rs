@@ -7,10 +7,10 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tempfile::TempDir;
+use vesicle::analysis::surface::{extract, Mesh};
 use vesicle::output::animation::write_gif;
 use vesicle::output::ply::{read_ply, write_ply};
 use vesicle::output::shade::{render, Bounds, View, BACKGROUND};
-use vesicle::output::surface::{extract, Mesh};
 use vesicle::output::RgbImage;
 
 /// The tanh profile of an ellipsoid with semi-axes `r` (physical units, spacing `h`) centred

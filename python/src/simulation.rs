@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
-use vesicle::analysis::levelset;
+use vesicle::analysis::{levelset, surface};
 use vesicle::commands::run;
 use vesicle::driver::checkpoint::Checkpoint;
 use vesicle::driver::observers::Recorder;
@@ -396,12 +396,8 @@ impl Simulation {
         }
         let h = state.scene.h;
         let full = state.grid.unfold(state.stepper.simulation.engine().phi());
-        let (mesh, ls) = py.detach(|| {
-            (
-                output::surface::extract(&full, h),
-                levelset::measure(&full, dim, h),
-            )
-        });
+        let (mesh, ls) =
+            py.detach(|| (surface::extract(&full, h), levelset::measure(&full, dim, h)));
         PyTuple::new(
             py,
             [
@@ -467,7 +463,7 @@ impl Simulation {
             ));
         }
         let full = state.grid.unfold(state.stepper.simulation.engine().phi());
-        let mesh = output::surface::extract(&full, state.scene.h);
+        let mesh = surface::extract(&full, state.scene.h);
         let c = state.stepper.simulation.clock;
         let comment = format!("vesicle phi = 0 surface, step {} t {:e}", c.step, c.t);
         check(

@@ -10,7 +10,6 @@
 //!
 //! For a closed surface inside the box (the full box, after unfolding a reduced one).
 
-use crate::problem::model::Measures;
 use ndarray::Array3;
 use serde::Serialize;
 
@@ -27,16 +26,23 @@ pub struct LevelSet {
 
 impl LevelSet {
     fn new(area: f64, volume: f64, dim: usize) -> Self {
-        let m = Measures {
-            energy: 0.0,
-            area,
-            volume,
-        };
         LevelSet {
             area,
             volume,
-            reduced_volume: m.reduced(dim, 1.0).volume,
+            reduced_volume: reduced_volume(area, volume, dim),
         }
+    }
+}
+
+/// The reduced volume of a closed surface of area `area` (perimeter in 2D) enclosing `volume`
+/// (area in 2D): 3D `v = V / ((4π/3) R0³)`, `R0 = √(A/4π)`; 2D `v = 4πV/L²`.
+pub fn reduced_volume(area: f64, volume: f64, dim: usize) -> f64 {
+    use std::f64::consts::PI;
+    if dim == 3 {
+        let r0 = (area / (4.0 * PI)).sqrt();
+        volume / (4.0 / 3.0 * PI * r0.powi(3))
+    } else {
+        4.0 * PI * volume / (area * area)
     }
 }
 
@@ -84,10 +90,10 @@ fn crossing(p: P3, vp: f64, q: P3, vq: f64) -> P3 {
     ]
 }
 
-/// The closed, outward-oriented mesh of [`crate::output::surface::extract`] (the same
+/// The closed, outward-oriented mesh of [`super::surface::extract`] (the same
 /// six-tetrahedra split), measured.
 fn measure_3d(phi: &Array3<f64>, h: f64) -> LevelSet {
-    let mesh = crate::output::surface::extract(phi, h);
+    let mesh = super::surface::extract(phi, h);
     LevelSet::new(mesh.area(), mesh.enclosed_volume(), 3)
 }
 

@@ -109,7 +109,7 @@ enum Command {
     #[command(
         after_help = "Examples:\n  vesicle axisym --out out/axisym --v-min 0.5 --v-max 0.99 --dv 0.01\n  vesicle axisym --out out/axisym_c0 --c0=-1,0,1 --dv 0.01"
     )]
-    Axisym(crate::analysis::axisym::diagram::DiagramArgs),
+    Axisym(crate::commands::axisym::AxisymArgs),
     /// Shape diagram from the phase-field model: every branch and reduced volume of FILE at
     /// several ε/R0, relaxed by L-BFGS on its reduced box, extrapolated to ε/R0 → 0 and
     /// compared with the axisymmetric reference (CSV, chart, thumbnails, transitions).
@@ -459,7 +459,7 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
             Ok(0)
         }
         Command::Axisym(args) => {
-            crate::analysis::axisym::diagram::run(&args)?;
+            crate::commands::axisym::run(&args)?;
             Ok(0)
         }
         Command::Diagram(args) => {

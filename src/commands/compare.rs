@@ -1,10 +1,10 @@
 //! `vesicle compare`: the finite-difference reference and the spectral engine from the same
 //! (prepared) initial field, side by side at common times.
 
-use crate::commands::run;
 use crate::driver::simulation::{check_stability, Simulation, StopRules};
 use crate::engines::fd;
 use crate::error::{Error, Result};
+use crate::output::folder;
 use crate::problem::config::{Method, Scene};
 use crate::problem::model::Measures;
 use crate::problem::setup;
@@ -173,9 +173,9 @@ pub fn to_table(rows: &[Row], dim: usize, eps: f64) -> String {
 /// # Errors
 /// As [`run_pair`], plus `Error::Io` when writing.
 pub fn compare(scene: &Scene, out: &Path, force: bool) -> Result<()> {
-    run::check_out_dir(out, force)?;
+    folder::check_out_dir(out, force)?;
     let rows = run_pair(scene)?;
-    run::make_out_dir(out, force)?;
+    folder::make_out_dir(out, force)?;
     let table = to_table(&rows, scene.dim, scene.eps);
     println!("{table}");
     for (name, text) in [

@@ -28,7 +28,7 @@ use crate::analysis::components;
 use crate::analysis::levelset::{self, LevelSet};
 use crate::commands::run_folder::{self, RunInfo};
 use crate::error::{Error, Result};
-use crate::output::{self, chart};
+use crate::output::chart;
 use ndarray::{Array3, ArrayView2, Axis};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -324,7 +324,7 @@ pub fn measure(dir: &Path, opts: &MeasureOptions) -> Result<Measured> {
     let states = run_folder::states(dir, &info, 1)?;
     let mut rows = Vec::with_capacity(states.len());
     for state in &states {
-        let phi = output::npy::read_npy(&state.path, &info.n)?;
+        let phi = crate::npy::read_npy(&state.path, &info.n)?;
         let t = time_of(state.step, &times, &info);
         rows.push(measure_field(&phi, axis, info.h, state.step, t));
     }

@@ -125,7 +125,7 @@ fn frame(
     view: &View,
     name: &str,
 ) -> Result<RgbImage> {
-    let field = output::npy::read_npy(&state.path, &info.n)?;
+    let field = crate::npy::read_npy(&state.path, &info.n)?;
     if info.dim == 2 {
         let ls = crate::analysis::levelset::measure(&field, 2, info.h);
         let title = format!(
@@ -134,7 +134,7 @@ fn frame(
         );
         return Ok(output::image::slices_image(&state.path, &field, 2, &title)?);
     }
-    let mesh = output::surface::extract(&field, info.h);
+    let mesh = crate::analysis::surface::extract(&field, info.h);
     output::ply::write_ply(
         &frames_dir.join(format!("surface_{:08}.ply", state.step)),
         &mesh,

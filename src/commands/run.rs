@@ -14,7 +14,8 @@ use crate::driver::simulation::{
 use crate::engines::{AreaConstraint, Engine};
 use crate::error::{Error, Result};
 use crate::output;
-use crate::output::lock::{self, RunLock};
+use crate::output::folder::{check_out_dir, make_out_dir};
+use crate::output::lock::RunLock;
 use crate::problem::config::{self, AreaMethod, Scene, Symmetry};
 use crate::problem::grid::Grid;
 use crate::problem::setup::{self, Problem};
@@ -74,75 +75,6 @@ pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
         s4: Some(st.s4),
     };
     s
-}
-
-/// Prepare the output folder: refuse an existing one unless `force`.
-///
-/// # Errors
-/// `Error::Config` on field `--out` if it exists without `force`; `Error::Io` on failure.
-pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
-    if out.exists() {
-        if !force {
-            return Err(Error::config(
-                "--out",
-                format!(
-                    "{} already exists; results are never overwritten silently (pass --force to replace it)",
-                    out.display()
-                ),
-            ));
-        }
-        std::fs::remove_dir_all(out).map_err(|source| Error::Io {
-            path: out.to_path_buf(),
-            source,
-        })?;
-    }
-    std::fs::create_dir_all(out.join("snapshots")).map_err(|source| Error::Io {
-        path: out.to_path_buf(),
-        source,
-    })
-}
-
-/// Check, before any computation, that the output folder can be made: refuse an existing one
-/// without `force` (as [`make_out_dir`]), an existing path that is not a folder, and a folder
-/// whose nearest existing ancestor is not a folder or cannot be written (probed by creating
-/// and removing an empty folder in it). Writes nothing that stays.
-///
-/// # Errors
-/// `Error::Config` on field `--out` with the reason.
-pub fn check_out_dir(out: &Path, force: bool) -> Result<()> {
-    let bad =
-        |why: String| Error::config("--out", format!("cannot write {}: {why}", out.display()));
-    if out.exists() {
-        lock::refuse_if_held(out)?;
-        if !force {
-            return make_out_dir(out, false);
-        }
-        if !out.is_dir() {
-            return Err(bad("it exists and is not a folder".into()));
-        }
-    }
-    // The nearest existing ancestor: where the folder (or its replacement) will be created.
-    let mut ancestor = out;
-    loop {
-        ancestor = match ancestor.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        if ancestor.exists() || ancestor == Path::new(".") || ancestor.parent().is_none() {
-            break;
-        }
-    }
-    let meta = std::fs::metadata(ancestor)
-        .map_err(|e| bad(format!("{} cannot be read: {e}", ancestor.display())))?;
-    if !meta.is_dir() {
-        return Err(bad(format!("{} is not a folder", ancestor.display())));
-    }
-    let probe = ancestor.join(format!(".vesicle-write-probe-{}", std::process::id()));
-    std::fs::create_dir(&probe)
-        .map_err(|e| bad(format!("{} is not writable: {e}", ancestor.display())))?;
-    // An empty folder of ours: removing it cannot fail short of a race; ignore that.
-    let _ = std::fs::remove_dir(&probe);
-    Ok(())
 }
 
 /// Run a validated scene and write its outputs to `opts.out`.

@@ -1,6 +1,8 @@
 //! Why a step failed, by type: the driver and the studies tell a blow-up from a broken
 //! constraint and from a failed device by variant, never by reading a message.
 
+pub use crate::error::Cause;
+
 /// The state diverged: not finite, |φ| beyond its limit, or F not finite.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Diverged(pub String);
@@ -46,19 +48,6 @@ impl std::fmt::Display for Rejection {
             ),
         }
     }
-}
-
-/// What ended a run on a failed step (not a device failure): the class a study charts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Cause {
-    /// The state diverged.
-    BlewUp,
-    /// The volume was not held.
-    Volume,
-    /// The area was not held (off its target, or its projection has no real root).
-    Area,
-    /// F_eff rose where the scheme guarantees a decrease.
-    EnergyRise,
 }
 
 /// Why a step could not be completed; the engine still holds the last good state.

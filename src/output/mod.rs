@@ -1,7 +1,7 @@
 //! Writers for simulation output: raw arrays (`.npy`), ParaView volumes (`.vti`), slice
 //! pictures of the phase field and time-series charts (`.png`), and the pictures of
-//! `vesicle render`: the φ = 0 surface as a mesh ([`surface`]), `.ply` files ([`ply`]),
-//! shaded views ([`shade`]) and animated GIFs ([`animation`]).
+//! `vesicle render`: `.ply` files ([`ply`]) and shaded views ([`shade`]) of the φ = 0 surface
+//! (the mesh of [`crate::analysis::surface`]) and animated GIFs ([`animation`]).
 //!
 //! Every writer receives a FULL-box field (already unfolded from any mirror reduction) in the
 //! internal layout of [`crate::problem::grid`]: a standard-layout `Array3<f64>` of shape `[n0, n1, n2]`,
@@ -9,60 +9,22 @@
 
 pub mod animation;
 pub mod chart;
+pub mod folder;
 pub mod image;
 pub mod lock;
 pub mod npy;
 pub mod ply;
 pub mod shade;
-pub mod surface;
 pub mod vti;
+
+/// The error of the writers (defined with the crate's errors: the `.npy` reader shares it).
+pub use crate::error::OutputError;
 
 use ndarray::Array3;
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
-
-/// Errors of the output writers and readers; every message names the file concerned.
-#[derive(Debug, thiserror::Error)]
-pub enum OutputError {
-    /// Creating, reading or writing a file failed.
-    #[error("I/O error on {}: {source}", path.display())]
-    Io {
-        /// The file concerned.
-        path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
-    },
-    /// An array had another shape than the one required.
-    #[error("{}: expected array shape {expected:?}, found {found:?}", path.display())]
-    Shape {
-        /// The file concerned.
-        path: PathBuf,
-        /// The required shape.
-        expected: Vec<usize>,
-        /// The shape actually found.
-        found: Vec<usize>,
-    },
-    /// Malformed content or unusable arguments (the message names the file).
-    #[error("{0}")]
-    Format(String),
-}
-
-impl OutputError {
-    /// An [`OutputError::Io`] for `path`.
-    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
-        OutputError::Io {
-            path: path.to_path_buf(),
-            source,
-        }
-    }
-
-    /// An [`OutputError::Format`] whose message starts with the file name.
-    pub(crate) fn format(path: &Path, message: impl std::fmt::Display) -> Self {
-        OutputError::Format(format!("{}: {message}", path.display()))
-    }
-}
 
 /// Font family name under which the embedded DejaVu Sans is registered with plotters.
 pub(crate) const FONT_FAMILY: &str = "dejavu-sans";

@@ -2,8 +2,8 @@
 //! faces as `list uchar uint vertex_indices` (three per face). ParaView, MeshLab and Blender
 //! open them. [`read_ply`] reads back exactly this layout (it is not a general PLY reader).
 
-use super::surface::Mesh;
 use super::{create_file, OutputError};
+use crate::analysis::surface::Mesh;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::Path;
 

@@ -15,8 +15,8 @@
 //! behind (the inner side, visible through a cut) in [`INNER`]. The box edges are drawn thin
 //! with the depth test, the three from the origin in red (x), green (y) and blue (z).
 
-use super::surface::Mesh;
 use super::{OutputError, RgbImage};
+use crate::analysis::surface::Mesh;
 use std::path::Path;
 
 /// Colour of the outer side of the surface.
@@ -43,7 +43,7 @@ pub struct Bounds {
 
 impl Bounds {
     /// The box spanned by the grid points of an `n` grid of spacing `h` in the coordinates of
-    /// [`super::surface::extract`]: `[0, (n − 1) h]` along each axis.
+    /// [`crate::analysis::surface::extract`]: `[0, (n − 1) h]` along each axis.
     pub fn of_grid(n: [usize; 3], h: f64) -> Self {
         Bounds {
             lo: [0.0; 3],

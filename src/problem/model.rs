@@ -10,8 +10,8 @@
 //! C0 = c0/√2 with c0 the membrane's spontaneous curvature; a sphere of radius R then has the
 //! reduced bending energy e = (1 − c0 R/2)².
 
+use crate::analysis::levelset::reduced_volume;
 use crate::error::{Error, Result};
-use crate::output;
 use crate::problem::config::{axis_index, C0Ball, C0Band, C0Cap, C0Field, C0File, C0Spec};
 use crate::problem::grid::Grid;
 use ndarray::Array3;
@@ -165,7 +165,7 @@ fn from_file(f: &C0File, grid: &Grid, k: f64) -> Result<Array3<f64>> {
     let full = grid.full_shape();
     let n = &full[3 - grid.dim..];
     let c0 =
-        output::npy::read_npy(&f.file, n).map_err(|e| Error::config("c0.file", e.to_string()))?;
+        crate::npy::read_npy(&f.file, n).map_err(|e| Error::config("c0.file", e.to_string()))?;
     if let Some(bad) = c0.iter().find(|x| !x.is_finite()) {
         return Err(Error::config(
             "c0.file",
@@ -223,16 +223,16 @@ impl Measures {
     /// Reduced quantities for a scene of dimension `dim` and width `eps`.
     pub fn reduced(&self, dim: usize, eps: f64) -> Reduced {
         use std::f64::consts::{PI, SQRT_2};
+        let volume = reduced_volume(self.area, self.volume, dim);
         if dim == 3 {
-            let r0 = (self.area / (4.0 * PI)).sqrt();
             Reduced {
-                volume: self.volume / (4.0 / 3.0 * PI * r0.powi(3)),
+                volume,
                 energy: 3.0 * self.energy / (32.0 * SQRT_2 * PI * eps.powi(3)),
             }
         } else {
             let r0 = self.area / (2.0 * PI);
             Reduced {
-                volume: 4.0 * PI * self.volume / (self.area * self.area),
+                volume,
                 energy: self.energy * r0 / (2.0 * SQRT_2 / 3.0 * eps.powi(3) * 2.0 * PI),
             }
         }

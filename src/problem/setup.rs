@@ -3,7 +3,6 @@
 //! declared mirror planes are symmetries of φ and c0.
 
 use crate::error::{Error, Result};
-use crate::output;
 use crate::problem::config::{axis_index, Initial, Scene, Symmetry};
 use crate::problem::grid::Grid;
 use crate::problem::model::{SpontaneousCurvature, C0};
@@ -88,7 +87,7 @@ fn initial_field(scene: &Scene, grid: &Grid) -> Result<Array3<f64>> {
             }))
         }
         Initial::File { file } => {
-            let phi = output::npy::read_npy(file, &scene.n)
+            let phi = crate::npy::read_npy(file, &scene.n)
                 .map_err(|e| Error::config("initial.file", e.to_string()))?;
             if let Some(bad) = phi.iter().find(|p| !p.is_finite()) {
                 return Err(Error::config(

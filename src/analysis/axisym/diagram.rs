@@ -1,41 +1,17 @@
-//! The `vesicle axisym` command: the three branches of the c0 = 0 shape diagram on a grid of
-//! reduced volumes, written as CSV (energies, contours), a PNG chart, and the transition
-//! volumes where the branches cross; with `--c0 LIST`, the (v, c̄0) diagram ([`super::phase`]).
+//! The c0 = 0 shape diagram: the prolate, oblate and stomatocyte branches on a grid of reduced
+//! volumes and the transition volumes where they cross or end (the command `vesicle axisym`
+//! writes and draws it; with `--c0`, the (v, c̄0) diagram of [`super::phase`]).
 
 use super::{branch_end, crossings, follow, Branch, Options, Solution};
-use crate::error::{Error, Result};
-use crate::output::{chart, create_file};
 use rayon::prelude::*;
-use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::time::Instant;
 
-/// Arguments of `vesicle axisym`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct DiagramArgs {
-    /// Output folder; never overwritten without --force.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Smallest reduced volume of the grid.
-    #[arg(long, default_value_t = 0.5)]
-    pub v_min: f64,
-    /// Largest reduced volume of the grid (at most 1).
-    #[arg(long, default_value_t = 0.99)]
-    pub v_max: f64,
-    /// Spacing of the grid in v.
-    #[arg(long, default_value_t = 0.01)]
-    pub dv: f64,
-    /// Quadrature nodes (Chebyshev–Lobatto; modes K = (nodes − 1)/3).
-    #[arg(long, default_value_t = 241)]
-    pub nodes: usize,
-    /// Replace an existing output folder.
-    #[arg(long)]
-    pub force: bool,
-    /// Reduced spontaneous curvatures c0·R0, comma separated (e.g. `--c0 0,0.5,1`): the
-    /// (v, c0) diagram with the pear branch (`branches_c0_*.csv`, `summary.csv`, `phase.png`)
-    /// instead of the c0 = 0 diagram.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    pub c0: Option<Vec<f64>>,
+/// The c0 = 0 diagram.
+#[derive(Clone, Debug)]
+pub struct Diagram {
+    /// The shapes of each branch of [`Branch::ALL`] on the grid, increasing `v`.
+    pub curves: Vec<Vec<Solution>>,
+    /// Where the branches cross and end.
+    pub transitions: Transitions,
 }
 
 /// Transition volumes of a diagram.
@@ -53,216 +29,30 @@ pub struct Transitions {
     pub oblate_contact: Option<f64>,
 }
 
-/// The grid `v_min, v_min + dv, …` up to `v_max` (inclusive within dv/1000), rounded to 1e-9.
-fn grid(args: &DiagramArgs) -> Vec<f64> {
-    let n = ((args.v_max - args.v_min) / args.dv + 1e-3).floor() as usize;
-    (0..=n)
-        .map(|i| ((args.v_min + i as f64 * args.dv) * 1e9).round() / 1e9)
-        .collect()
-}
-
-/// Check the arguments (`Error::Config` naming the argument).
-fn check(args: &DiagramArgs) -> Result<()> {
-    if !(args.v_min > 0.0 && args.v_min < 1.0) {
-        return Err(Error::config(
-            "--v-min",
-            format!("need 0 < v-min < 1, got {}", args.v_min),
-        ));
-    }
-    if !(args.v_max > args.v_min && args.v_max <= 1.0) {
-        return Err(Error::config(
-            "--v-max",
-            format!("need v-min < v-max ≤ 1, got {}", args.v_max),
-        ));
-    }
-    if !(args.dv > 0.0 && (args.v_max - args.v_min) / args.dv <= 10_000.0) {
-        return Err(Error::config(
-            "--dv",
-            format!(
-                "need dv > 0 and at most 10000 steps over [v-min, v-max], got {}",
-                args.dv
-            ),
-        ));
-    }
-    if !(17..=4097).contains(&args.nodes) {
-        return Err(Error::config(
-            "--nodes",
-            format!("need 17 ≤ nodes ≤ 4097, got {}", args.nodes),
-        ));
-    }
-    Ok(())
-}
-
-/// Compute the diagram and write `branches.csv`, `transitions.csv`, `contours/*.csv` and
-/// `diagram.png` to `args.out`; print the transition volumes.
-///
-/// # Errors
-/// `Error::Config` for invalid arguments or an existing folder without `--force` (nothing is
-/// written); `Error::Io`/`Error::Output` if writing fails.
-pub fn run(args: &DiagramArgs) -> Result<()> {
-    check(args)?;
-    if let Some(list) = &args.c0 {
-        return super::phase::run(args, list, &grid(args));
-    }
-    if args.out.exists() && !args.force {
-        crate::commands::run::make_out_dir(&args.out, false)?;
-    }
-    let start = Instant::now();
-    let opts = Options::with_nodes(args.nodes);
-    let vs = grid(args);
-    let followed: Vec<_> = Branch::ALL
-        .par_iter()
-        .map(|&b| follow(b, &vs, &opts))
-        .collect();
-    let end_of = |b: Branch| {
-        let i = Branch::ALL.iter().position(|x| *x == b).expect("listed");
-        let f = &followed[i];
-        f.end.or_else(|| branch_end(b, &opts))
-    };
-    let curves: Vec<Vec<Solution>> = followed.iter().map(|f| f.shapes.clone()).collect();
-    let t = Transitions {
-        prolate_oblate: crossings(&curves[0], &curves[1]),
-        oblate_stomatocyte: crossings(&curves[1], &curves[2]),
-        prolate_stomatocyte: crossings(&curves[0], &curves[2]),
-        stomatocyte_end: end_of(Branch::Stomatocyte),
-        oblate_contact: end_of(Branch::Oblate),
-    };
-    crate::commands::run::make_out_dir(&args.out, args.force)?;
-    // make_out_dir prepares a `snapshots` folder for runs; this command has none.
-    let _ = std::fs::remove_dir(args.out.join("snapshots"));
-    write_outputs(&args.out, &curves, &t, decimals(args.dv))?;
-    print_summary(&curves, &t, start.elapsed().as_secs_f64(), &args.out);
-    Ok(())
-}
-
-/// Decimals needed to print grid values of spacing `dv` (at least 2).
-fn decimals(dv: f64) -> usize {
-    ((-dv.log10() - 1e-9).ceil().max(2.0) as usize).min(9)
-}
-
-fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
-fn write_outputs(out: &Path, curves: &[Vec<Solution>], t: &Transitions, dec: usize) -> Result<()> {
-    let path = out.join("branches.csv");
-    let mut f = create_file(&path)?;
-    let err = io_err(&path);
-    writeln!(
-        f,
-        "branch,v,e,sigma,pressure,length,asymmetry,iterations,residual"
-    )
-    .map_err(&err)?;
-    for s in curves.iter().flatten() {
-        writeln!(
-            f,
-            "{},{:.10},{:.12},{:.10e},{:.10e},{:.10},{:.6e},{},{:.3e}",
-            s.branch.name(),
-            s.v,
-            s.e,
-            s.sigma,
-            s.pressure,
-            s.length(),
-            s.asymmetry(),
-            s.iterations,
-            s.residual
-        )
-        .map_err(&err)?;
-    }
-    f.flush().map_err(&err)?;
-
-    let path = out.join("transitions.csv");
-    let mut f = create_file(&path)?;
-    let err = io_err(&path);
-    writeln!(f, "transition,v").map_err(&err)?;
-    let rows = [
-        ("prolate/oblate", &t.prolate_oblate),
-        ("oblate/stomatocyte", &t.oblate_stomatocyte),
-        ("prolate/stomatocyte", &t.prolate_stomatocyte),
-    ];
-    for (name, vs) in rows {
-        for v in vs {
-            writeln!(f, "{name},{v:.6}").map_err(&err)?;
+impl Diagram {
+    /// Follow the branches of [`Branch::ALL`] over the grid `vs` (increasing) and find their
+    /// transitions.
+    pub fn compute(vs: &[f64], opts: &Options) -> Self {
+        let followed: Vec<_> = Branch::ALL
+            .par_iter()
+            .map(|&b| follow(b, vs, opts))
+            .collect();
+        let end_of = |b: Branch| {
+            let i = Branch::ALL.iter().position(|x| *x == b).expect("listed");
+            let f = &followed[i];
+            f.end.or_else(|| branch_end(b, opts))
+        };
+        let curves: Vec<Vec<Solution>> = followed.iter().map(|f| f.shapes.clone()).collect();
+        let transitions = Transitions {
+            prolate_oblate: crossings(&curves[0], &curves[1]),
+            oblate_stomatocyte: crossings(&curves[1], &curves[2]),
+            prolate_stomatocyte: crossings(&curves[0], &curves[2]),
+            stomatocyte_end: end_of(Branch::Stomatocyte),
+            oblate_contact: end_of(Branch::Oblate),
+        };
+        Diagram {
+            curves,
+            transitions,
         }
     }
-    if let Some(v) = t.stomatocyte_end {
-        writeln!(f, "stomatocyte end,{v:.6}").map_err(&err)?;
-    }
-    if let Some(v) = t.oblate_contact {
-        writeln!(f, "oblate self-contact,{v:.6}").map_err(&err)?;
-    }
-    f.flush().map_err(&err)?;
-
-    let dir = out.join("contours");
-    std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
-    for s in curves.iter().flatten() {
-        let path = dir.join(format!("{}_v{:.*}.csv", s.branch.name(), dec, s.v));
-        let mut f = create_file(&path)?;
-        let err = io_err(&path);
-        writeln!(f, "r,z").map_err(&err)?;
-        for (r, z) in s.r.iter().zip(&s.z) {
-            writeln!(f, "{r:.12e},{z:.12e}").map_err(&err)?;
-        }
-        f.flush().map_err(&err)?;
-    }
-
-    let series: Vec<(&str, Vec<(f64, f64)>)> = curves
-        .iter()
-        .zip(Branch::ALL)
-        .map(|(c, b)| (b.name(), c.iter().map(|s| (s.v, s.e)).collect()))
-        .collect();
-    chart::write_timeseries_png(
-        &out.join("diagram.png"),
-        &series,
-        "reduced volume v",
-        "reduced bending energy e",
-        false,
-    )?;
-    Ok(())
-}
-
-fn print_summary(curves: &[Vec<Solution>], t: &Transitions, wall: f64, out: &Path) {
-    for (c, b) in curves.iter().zip(Branch::ALL) {
-        match (c.first(), c.last()) {
-            (Some(lo), Some(hi)) => println!(
-                "{:<12} {:>3} shapes, v {:.4}..{:.4}, e {:.6}..{:.6}",
-                b.name(),
-                c.len(),
-                lo.v,
-                hi.v,
-                lo.e,
-                hi.e
-            ),
-            _ => println!("{:<12} no shapes in the range", b.name()),
-        }
-    }
-    let list = |vs: &[f64]| {
-        if vs.is_empty() {
-            "none in the range".to_string()
-        } else {
-            vs.iter()
-                .map(|v| format!("v = {v:.4}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        }
-    };
-    println!("prolate/oblate crossing:      {}", list(&t.prolate_oblate));
-    println!(
-        "oblate/stomatocyte crossing:  {}",
-        list(&t.oblate_stomatocyte)
-    );
-    println!(
-        "prolate/stomatocyte crossing: {}",
-        list(&t.prolate_stomatocyte)
-    );
-    if let Some(v) = t.stomatocyte_end {
-        println!("stomatocyte branch ends (limit point) at v = {v:.4}");
-    }
-    if let Some(v) = t.oblate_contact {
-        println!("oblate branch self-contact at v = {v:.4}");
-    }
-    println!("done in {wall:.2} s -> {}", out.display());
 }

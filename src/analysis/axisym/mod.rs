@@ -25,8 +25,9 @@
 //! at fixed `v` is found by Newton on the Lagrangian (`solver.rs`), and each branch is followed
 //! by continuation in `v` with a secant predictor and step halving ([`branches`]): prolate and
 //! oblate from the sphere, the stomatocyte from a sphere-in-sphere start at small `v`, the
-//! pear from its bifurcation off the prolate ([`pear`]). The command `vesicle axisym`
-//! ([`diagram`], and [`phase`] with `--c0`) writes the diagram.
+//! pear from its bifurcation off the prolate ([`pear`]). [`diagram`] computes the c0 = 0
+//! diagram and [`phase`] the (v, c̄0) diagram, which the command `vesicle axisym` (with `--c0`)
+//! writes.
 //!
 //! **Multipliers.** With `e*(v)` the branch energy at `R0 = 1`, the pressure difference and the
 //! tension of the shape equation `δE_b − P δV + σ δA = 0` (`E_b = (κ/2)∮(2H − c0)² dA =

@@ -211,7 +211,7 @@ pub fn run_case(
 /// A small shaded picture of the φ = 0 surface, seen from the side (the stomatocyte cut open
 /// across its axis so the invagination shows).
 fn write_thumbnail(full: &ndarray::Array3<f64>, h: f64, case: &Case, path: &Path) -> Result<()> {
-    let mesh = crate::output::surface::extract(full, h);
+    let mesh = crate::analysis::surface::extract(full, h);
     let s = full.shape();
     let view = View {
         width: 240,

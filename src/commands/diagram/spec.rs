@@ -129,7 +129,7 @@ impl Case {
 }
 
 /// `c̄0` as it appears in folder names (`-0.5` → `m0.50`).
-pub use crate::analysis::axisym::phase::c0_tag;
+pub use crate::commands::axisym::phase::c0_tag;
 
 /// The branch called `name`.
 pub fn branch_named(name: &str) -> Option<Branch> {

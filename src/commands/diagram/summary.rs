@@ -9,6 +9,7 @@ use super::merge::Slice;
 use super::report::Kind;
 use super::spec::branch_named;
 use crate::analysis::axisym::{phase, Branch, Options};
+use crate::commands::axisym::phase::phase_figure;
 use crate::error::{Error, Result};
 use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use std::fmt::Write as _;
@@ -227,7 +228,7 @@ fn table(slices: &[Slice]) -> String {
 }
 
 /// `phase.png`: the reference's lowest-energy branch on the (v, c̄0) grid with its pear lines
-/// ([`phase::phase_figure`]), the reference transitions of the listed c̄0 as dashed lines,
+/// ([`phase_figure`]), the reference transitions of the listed c̄0 as dashed lines,
 /// and the phase-field transitions as markers (extrapolated: black crosses; finest
 /// resolution: grey diamonds).
 fn phase_chart(slices: &[Slice]) -> Figure {
@@ -239,7 +240,7 @@ fn phase_chart(slices: &[Slice]) -> Figure {
         .iter()
         .map(|s| phase::slice(s.c0, &vs, &opts))
         .collect();
-    let mut fig = phase::phase_figure(&reference);
+    let mut fig = phase_figure(&reference);
     fig.title = "lowest-energy shape: axisymmetric reference, phase-field transitions".into();
     fig.legend = Corner::UpperRight;
     // The reference transitions between the same two branches, joined across c̄0.

@@ -9,9 +9,9 @@
 
 use super::file;
 use super::table::{self, Row};
-use crate::commands::run as run_cmd;
 use crate::error::{Error, Result};
 use crate::output::chart::Figure;
+use crate::output::folder;
 use crate::problem::config::Scene;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
@@ -72,8 +72,8 @@ impl Session {
     ///
     /// # Errors
     /// `Error::Config` (field `--out`) for an existing folder without `force`.
-    fn open(out: &Path, force: bool) -> Result<Self> {
-        run_cmd::check_out_dir(out, force)?;
+    pub fn open(out: &Path, force: bool) -> Result<Self> {
+        folder::check_out_dir(out, force)?;
         Ok(Session {
             out: out.to_path_buf(),
             force,
@@ -86,8 +86,8 @@ impl Session {
     ///
     /// # Errors
     /// I/O and drawing errors.
-    fn finish(self, name: &str, report: Report) -> Result<()> {
-        run_cmd::make_out_dir(&self.out, self.force)?;
+    pub fn finish(self, name: &str, report: Report) -> Result<()> {
+        folder::make_out_dir(&self.out, self.force)?;
         let mut text = report.text;
         if !text.ends_with('\n') {
             text.push('\n');

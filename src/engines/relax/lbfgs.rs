@@ -19,8 +19,9 @@ use std::collections::VecDeque;
 pub(super) const ARMIJO: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up.
 pub(super) const MAX_BACKTRACKS: usize = 40;
-/// Largest L-BFGS memory (the coefficient recursion keeps its sums in fixed arrays).
-pub const MAX_MEMORY: usize = 32;
+/// Largest L-BFGS memory (the coefficient recursion keeps its sums in fixed arrays): the
+/// scene's limit on `lbfgs_memory`.
+pub(super) use crate::problem::config::MAX_LBFGS_MEMORY as MAX_MEMORY;
 
 /// One stored L-BFGS pair (s, y), flattened like the spectrum as interleaved (re, im) reals, in
 /// single precision (see the module documentation).

@@ -56,8 +56,6 @@ mod sweeps;
 #[cfg(test)]
 mod tests;
 
-pub use lbfgs::MAX_MEMORY;
-
 use crate::engines::spectral::evaluator::{Evaluator, Metric, State};
 use crate::engines::AreaConstraint;
 use lbfgs::{Direction, InnerProducts, Pair};

@@ -1,4 +1,4 @@
-use super::lbfgs::flat;
+use super::lbfgs::{flat, MAX_MEMORY};
 use super::sweeps::dot_m;
 use super::*;
 use crate::engines::spectral::pieces::reals;

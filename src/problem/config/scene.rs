@@ -136,6 +136,10 @@ fn default_memory() -> usize {
     5
 }
 
+/// Largest `lbfgs_memory` (the relaxational engine's coefficient recursion keeps its sums in
+/// fixed arrays of this length).
+pub const MAX_LBFGS_MEMORY: usize = 32;
+
 /// Engine.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -2,7 +2,9 @@
 //! key and the reason.
 
 use super::c0::{C0Field, C0Spec};
-use super::scene::{axis_index, AreaMethod, Dynamics, Method, Scene, Scheme, Symmetry};
+use super::scene::{
+    axis_index, AreaMethod, Dynamics, Method, Scene, Scheme, Symmetry, MAX_LBFGS_MEMORY,
+};
 use super::shapes::{AxisymBranch, Initial, Shape};
 use crate::error::{Error, Result};
 
@@ -146,10 +148,10 @@ impl Scene {
         if self.lbfgs_memory == 0 {
             return Err(Error::config("lbfgs_memory", "must be at least 1"));
         }
-        if self.lbfgs_memory > crate::engines::relax::MAX_MEMORY {
+        if self.lbfgs_memory > MAX_LBFGS_MEMORY {
             return Err(Error::config(
                 "lbfgs_memory",
-                format!("must be at most {}", crate::engines::relax::MAX_MEMORY),
+                format!("must be at most {MAX_LBFGS_MEMORY}"),
             ));
         }
         if !(self.stabilizer().s2 >= 0.0 && self.stabilizer().s2.is_finite()) {

@@ -1,6 +1,6 @@
 //! The φ = 0 surface of a 3D field as a closed, consistently oriented triangle mesh.
 //!
-//! Marching tetrahedra on the split of [`crate::analysis::levelset`]: every grid cube is cut into six
+//! Marching tetrahedra on the split of [`super::levelset`]: every grid cube is cut into six
 //! tetrahedra around its main diagonal (the splits of neighbouring cubes match across faces),
 //! φ is interpolated linearly in each tetrahedron, and its zero set there is one triangle or a
 //! quadrilateral (two triangles). A mesh vertex sits where φ changes sign along an edge of the
@@ -125,7 +125,7 @@ impl Mesh {
 }
 
 /// Six tetrahedra of the unit cube around the diagonal 0–7 (corner index x + 2y + 4z), the
-/// split of [`crate::analysis::levelset`].
+/// split of [`super::levelset`].
 const TETS: [[usize; 4]; 6] = [
     [0, 1, 3, 7],
     [0, 1, 5, 7],
