@@ -30,7 +30,7 @@ fn csv_rows(path: &Path) -> Vec<Vec<String>> {
 }
 
 /// `compare` starts both engines from the same field (difference 0 at t = 0) and writes one
-/// row per common time.
+/// row per common time, and no (empty) `snapshots/` folder.
 #[test]
 fn compare_writes_the_table() {
     let tmp = tempfile::tempdir().unwrap();
@@ -54,6 +54,10 @@ fn compare_writes_the_table() {
         "final difference {dphi_end}"
     );
     assert!(String::from_utf8_lossy(&o.stdout).contains("wall-time ratio"));
+    assert!(
+        !out.join("snapshots").exists(),
+        "compare writes no snapshots"
+    );
 }
 
 /// `study stationary` on a small 2D ellipse: every route (L-BFGS, SBDF1, SBDF2) passes
@@ -116,7 +120,8 @@ fn header(path: &Path) -> String {
         .to_string()
 }
 
-/// Run `vesicle study KIND runs/studies/KIND.json --quick` into a temporary folder.
+/// Run `vesicle study KIND runs/studies/KIND.json --quick` into a temporary folder (which must
+/// have no `snapshots/`: a study writes none).
 fn quick_study(kind: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join(kind);
@@ -130,6 +135,10 @@ fn quick_study(kind: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        !out.join("snapshots").exists(),
+        "a study writes no snapshots"
+    );
     (tmp, out, String::from_utf8_lossy(&o.stdout).to_string())
 }
 

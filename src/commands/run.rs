@@ -76,7 +76,8 @@ pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
     s
 }
 
-/// Prepare the output folder: refuse an existing one unless `force`.
+/// Prepare the output folder: refuse an existing one unless `force` (then it is replaced by an
+/// empty one). Sub-folders are made by their writers (`snapshots/` by the first snapshot).
 ///
 /// # Errors
 /// `Error::Config` on field `--out` if it exists without `force`; `Error::Io` on failure.
@@ -96,7 +97,7 @@ pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
             source,
         })?;
     }
-    std::fs::create_dir_all(out.join("snapshots")).map_err(|source| Error::Io {
+    std::fs::create_dir_all(out).map_err(|source| Error::Io {
         path: out.to_path_buf(),
         source,
     })
