@@ -644,8 +644,8 @@ fn run_example_tiny(name: &str, overrides: &[&str]) -> Value {
         .keys()
         .map(String::as_str)
         .collect();
-    // "final": the CSV columns plus "steps" and "stopped" (DESIGN.md §6; "wall_seconds" is a
-    // column).
+    // "final": the last row of the time series, its CSV columns, plus "steps" and "stopped"
+    // (docs/src/reference/outputs.md, `summary.json`; "wall_seconds" is a column).
     let mut expected_final = header.clone();
     expected_final.extend(["steps", "stopped"]);
     expected_final.sort_unstable();

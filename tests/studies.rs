@@ -224,10 +224,11 @@ fn csv_fields(path: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// `study stability --quick`: FD is stable below its bound (DESIGN.md §2: 1.25e-3 in 2D at
-/// h = ε, so at Δt = 1e-3) and not stable at 3.16e-3 (2.5× above it); SBDF1 with its default
-/// stabiliser is stable up to Δt = 1 at both h (DESIGN.md §3: no failure to Δt = 2 with
-/// S = 4k² + 4ε²k⁴). The CSV holds every run with its class, and the charts exist.
+/// `study stability --quick`: FD is stable below its bound (1.25e-3 in 2D at h = ε,
+/// docs/src/theory/fd.md, "The stability bound"; so at Δt = 1e-3) and not stable at 3.16e-3
+/// (2.5× above it); SBDF1 with its default stabiliser S = 4k² + 4ε²k⁴ is stable up to Δt = 1 at
+/// both h (that S makes the frozen-coefficient SBDF1 step stable at every Δt:
+/// docs/src/theory/spectral.md, "SBDF1, SBDF2 and the stabiliser"). The CSV holds every run with its class, and the charts exist.
 #[test]
 fn stability_quick_study_classifies_the_runs() {
     let (_tmp, out, stdout) = quick_study("stability");
@@ -263,7 +264,7 @@ fn stability_quick_study_classifies_the_runs() {
 
 /// The c0 axis of the quick stability study (εc0 in {0, 0.8}, SBDF1 and SBDF2 with the
 /// default S, h = ε): every (scheme, εc0) has classified runs from Δt = 1e-5; at εc0 = 0 both
-/// schemes are stable at Δt = 1 (DESIGN.md §3); SBDF1's largest stable Δt falls with εc0, by
+/// schemes are stable at Δt = 1 (their default stabilisers, docs/src/theory/spectral.md); SBDF1's largest stable Δt falls with εc0, by
 /// more than 10× at εc0 = 0.8 (measured: 10 at 0, 3.2e-2 at 0.8), since the bulk
 /// linearisation f'(±1) = 2 ± 2εC0 and the c0 terms treated explicitly grow with c0 while the
 /// default S stays the same.
