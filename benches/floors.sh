@@ -7,7 +7,7 @@
 # shared machine a C median can move by half between two runs a minute apart, so a ratio is only
 # worth the C runs taken beside it.
 #
-# Then, in the same session, the two ratios of the route to stationary shapes (DESIGN.md §7):
+# Then, in the same session, the two ratios of the route to stationary shapes (docs/src/performance.md):
 # one L-BFGS iteration over one conserved SBDF1 step on the 48³ prolate (criterion `relax/`, 1
 # and 2 threads), and the wall time of adaptive SBDF1 over L-BFGS to the energy 1e-6 above F*
 # (`vesicle study stationary runs/prolate3d_full.json`, 1 thread), ROUNDS times each.

@@ -2,9 +2,10 @@
 //! transforms, the fused sweeps and the area projection; `spectral_unconstrained`: the area not
 //! held, σ = 0, as the C floor `fft_limit` times its step) and the FD explicit-Euler step, on
 //! full periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads; and one L-BFGS
-//! iteration of the relaxational engine against one conserved step on the 48³ prolate of
-//! DESIGN.md §7. Compare with `benches/fft.rs` (the transforms alone) and with the C floors of
-//! `../shared/bench` timed in the same session (README, "Performance").
+//! iteration of the relaxational engine against one conserved step on the 48³ prolate of the
+//! route to stationary shapes (docs/src/performance.md). Compare with `benches/fft.rs` (the
+//! transforms alone) and with the C floors timed in the same session (`benches/floors.sh`;
+//! docs/src/performance.md, "One step against a C floor").
 
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion};
@@ -125,8 +126,8 @@ fn bench_steps(c: &mut Criterion) {
     group.finish();
 }
 
-/// The 48³ full-box prolate of DESIGN.md §7 (`runs/prolate3d_full.json`) with `dynamics`, for
-/// `threads`.
+/// The 48³ full-box prolate of the route to stationary shapes (`runs/prolate3d_full.json`,
+/// docs/src/performance.md) with `dynamics`, for `threads`.
 fn prolate48(dynamics: &str, threads: usize) -> Box<dyn Engine + Send> {
     let mut scene = json!({
         "dim": 3, "n": [48, 48, 48], "h": 1.0, "eps": 1.0, "method": "spectral",

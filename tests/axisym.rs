@@ -1,4 +1,5 @@
-//! Validation of the axisymmetric reference solver (`vesicle::analysis::axisym`, DESIGN.md §5 rung 6):
+//! Validation of the axisymmetric reference solver (`vesicle::analysis::axisym`), the reference of
+//! rung 6 of the validation ladder (docs/src/validation/ladder.md):
 //! the sphere, exponential convergence in the number of modes, energies against a much finer
 //! run, the transition volumes and branch ends of Seifert, Berndl & Lipowsky (1991), closed
 //! contours that reproduce A and V, the multipliers, and the `vesicle axisym` command.

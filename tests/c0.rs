@@ -1,6 +1,7 @@
-//! Spontaneous-curvature fields (DESIGN.md §1, §4): the sphere's reduced energy follows
-//! (1 − c0R/2)², F_eff never rises with a patch fixed in time in either engine, and FD and
-//! spectral agree on a patch run as h².
+//! Spontaneous-curvature fields: the sphere's reduced energy follows (1 − c0R/2)² (the sharp
+//! limit of the model with C0 = c0/√2, docs/src/theory/model.md, "Reduced quantities"), F_eff
+//! never rises with a patch fixed in time in either engine, and FD and spectral agree on a patch
+//! run as h².
 
 mod common;
 use common::{fd_spectral_gap, relax, scene, simulation, with};

@@ -605,8 +605,14 @@ fn run_example_tiny(name: &str, overrides: &[&str]) -> Value {
         args.push(OsStr::new("--set"));
         args.push(OsStr::new(o));
     }
+    let started = std::time::Instant::now();
     let o = vesicle(&args);
+    let process_seconds = started.elapsed().as_secs_f64();
     assert_eq!(code(&o), 0, "{name}: {}", stderr(&o));
+    assert!(
+        !out.join("snapshots").exists(),
+        "{name}: no snapshots asked for, no snapshots/ folder"
+    );
 
     // timeseries.csv
     let csv = fs::read_to_string(out.join("timeseries.csv")).unwrap();
@@ -638,8 +644,8 @@ fn run_example_tiny(name: &str, overrides: &[&str]) -> Value {
         .keys()
         .map(String::as_str)
         .collect();
-    // "final": the CSV columns plus "steps" and "stopped" (DESIGN.md §6; "wall_seconds" is a
-    // column).
+    // "final": the last row of the time series, its CSV columns, plus "steps" and "stopped"
+    // (docs/src/reference/outputs.md, `summary.json`; "wall_seconds" is a column).
     let mut expected_final = header.clone();
     expected_final.extend(["steps", "stopped"]);
     expected_final.sort_unstable();
@@ -659,7 +665,21 @@ fn run_example_tiny(name: &str, overrides: &[&str]) -> Value {
         steps.to_string(),
         "{name}: last CSV row is the final state"
     );
-    assert!(summary["wall_seconds"].as_f64().unwrap() >= 0.0);
+    // The time loop's wall time: it took some time, less than the whole process took, and it
+    // is the last row's (the column never falls).
+    let wall = summary["wall_seconds"].as_f64().unwrap();
+    assert!(
+        wall > 0.0 && wall < process_seconds,
+        "{name}: wall_seconds {wall} against {process_seconds} s for the process"
+    );
+    let column = header.iter().position(|c| *c == "wall_seconds").unwrap();
+    let walls: Vec<f64> = rows.iter().map(|r| r[column].parse().unwrap()).collect();
+    assert!(walls.windows(2).all(|w| w[0] <= w[1]), "{name}: {walls:?}");
+    assert_eq!(
+        walls.last(),
+        Some(&wall),
+        "{name}: the last row's wall time"
+    );
     assert!(
         summary["stopped"].is_string() && !summary["stopped"].as_str().unwrap().is_empty(),
         "{name}"

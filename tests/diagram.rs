@@ -60,8 +60,9 @@ fn cases_without_wall(dir: &Path) -> String {
 /// One process, and nine `--case` runs merged, write the same diagram: every case runs on one
 /// thread whatever the sweep, so the numbers agree to the last digit. The CSV has the
 /// columns `branch,v,e` first; every relaxation is stationary; and at R0 = 10ε the raw
-/// energies are within 8% of the reference (the phase-field error at ε/R0 = 0.1 is a few
-/// percent, DESIGN.md §7), which a wrong branch or a broken measure would not be.
+/// energies are within 8% of the reference (the phase-field error of e grows with ε/R0: under
+/// 0.7% at ε/R0 = 0.025, docs/src/science/shape-diagram.md, a few percent at 0.1), which a wrong
+/// branch or a broken measure would not be.
 #[test]
 fn quick_diagram_single_process_and_merged_sweep_agree() {
     let tmp = TempDir::new().unwrap();

@@ -1,4 +1,6 @@
-//! Validation ladder rungs 1–2 for the finite-difference reference (DESIGN.md §2, §5).
+//! Rungs 1–2 of the validation ladder (docs/src/validation/ladder.md) for the finite-difference
+//! reference (docs/src/theory/fd.md): stationary interfaces, V conserved, F non-increasing, and the
+//! sphere's energy converging as h².
 
 mod common;
 use common::{engine, rel, scene};
@@ -144,7 +146,8 @@ fn force_sigma(e: &mut FdEngine, sigma: f64, _s: &vesicle::problem::config::Scen
 }
 
 /// A relaxed sphere's reduced energy approaches 1 as the interface is resolved (h = ε, ε/2,
-/// ε/4 at R = 6ε): at h = ε the FD discretisation reads about 0.95 (DESIGN.md §1), and its error
+/// ε/4 at R = 6ε): at h = ε the FD discretisation reads about 0.95 (it resolves the interface only when h is a
+/// fraction of ε: docs/src/validation/ladder.md, "Measured"), and its error
 /// against the converged spectral value falls as h² (observed order of the finest pair within
 /// ±0.15 of 2; measured 1.86 and 1.95).
 #[test]

@@ -1,7 +1,7 @@
-//! The time-step loop allocates nothing (DESIGN.md §3: plans and scratch are made once): after
-//! a warm-up, steps of the spectral engine (SBDF1 and SBDF2, fixed and adaptive Δt, with the
-//! projection and a c0 field), of the FD engine and of the L-BFGS relaxation make zero heap
-//! allocations. On one thread: with several, rayon's work-stealing deques now and then grow
+//! The time-step loop allocates nothing (an engine makes its FFT plans and scratch buffers once,
+//! when it is built: docs/src/performance.md, "Memory"): after a warm-up, steps of the spectral
+//! engine (SBDF1 and SBDF2, fixed and adaptive Δt, with the projection and a c0 field), of the
+//! FD engine and of the L-BFGS relaxation make zero heap allocations. On one thread: with several, rayon's work-stealing deques now and then grow
 //! on their own (seen: 2 allocations in 10 steps, once in 15 runs), which is not our code.
 //! One test in its own binary, so no other test allocates meanwhile.
 

@@ -346,6 +346,27 @@ fn png_3d_shows_three_labelled_mid_plane_slices() {
     assert!(hit, "no row crosses three red-inside/blue-outside slices");
 }
 
+/// A title too wide for the picture (a 2D frame's canvas is 640 pixels wide) is drawn smaller
+/// or shortened: the ink of the title band (44 rows) keeps clear of both edges.
+#[test]
+fn png_title_too_wide_stays_inside_the_frame() {
+    let dir = TempDir::new().unwrap();
+    let path = temp_file(&dir, "long.png");
+    let field = ellipsoid_field([1, 40, 40], [1.0, 12.0, 9.0]);
+    let title = "ellipse2d   step 1000000   L = 123.4567   v = 0.9876   ".repeat(3);
+    write_slices_png(&path, &field, 2, &title).unwrap();
+    let (w, _, px) = decode_rgb(&path);
+    let ink: Vec<usize> = (0..w)
+        .filter(|&x| (0..44).any(|y| px[y * w + x] != [255, 255, 255]))
+        .collect();
+    let (first, last) = (ink[0], ink[ink.len() - 1]);
+    assert!(
+        first >= 4 && last + 4 < w,
+        "title ink in {first}..={last} of {w}"
+    );
+    assert!(last - first > w * 3 / 4, "{first}..={last}");
+}
+
 #[test]
 fn charts_decode_and_tolerate_bad_points() {
     let dir = TempDir::new().unwrap();

@@ -206,6 +206,51 @@ fn rendered_frames_show_the_shape_and_tell_shapes_apart() {
     assert_ne!(a, c);
 }
 
+/// The columns `(first, last)` of the pixels in rows `rows` that differ from `background`.
+fn ink_columns(
+    image: &RgbImage,
+    rows: std::ops::Range<usize>,
+    background: [u8; 3],
+) -> (usize, usize) {
+    let cols: Vec<usize> = (0..image.width)
+        .filter(|&x| rows.clone().any(|y| image.pixel(x, y) != background))
+        .collect();
+    (
+        *cols.first().expect("some ink"),
+        *cols.last().expect("some ink"),
+    )
+}
+
+/// A title wider than the picture at its font size (the one of `deflation3d_180000.png`, cut
+/// at both edges when drawn as is, and one far longer) stays inside the frame: the ink of the
+/// title band keeps clear of both edges and still spans most of the width.
+#[test]
+fn long_titles_stay_inside_the_frame() {
+    let (n, h) = (24, 1.0);
+    let bounds = Bounds::of_grid([n; 3], h);
+    let mesh = extract(&sphere(n, h, 7.0), h);
+    let view = View::default();
+    let deflation = "deflation3d   step 180000   A = 5244.77329   V = 25132.09399   v = 0.7037";
+    let longer = deflation.repeat(3);
+    for title in [deflation, longer.as_str()] {
+        let image = render(&mesh, &bounds, &view, title).unwrap();
+        let (first, last) = ink_columns(&image, 0..36, BACKGROUND);
+        assert!(
+            first >= 4 && last + 4 < image.width,
+            "title ink in columns {first}..={last} of {}",
+            image.width
+        );
+        assert!(last - first > image.width * 3 / 4, "{first}..={last}");
+    }
+    // A short title is drawn as asked, centred.
+    let image = render(&mesh, &bounds, &view, "sphere").unwrap();
+    let (first, last) = ink_columns(&image, 0..36, BACKGROUND);
+    assert!(
+        (first + last).abs_diff(image.width) <= 4,
+        "{first}..={last}"
+    );
+}
+
 #[test]
 fn time_of_a_64_cubed_frame() {
     let (n, h) = (64, 1.0);

@@ -1,4 +1,5 @@
-//! Validation ladder for the Fourier semi-implicit engine (DESIGN.md §3, §5): constraints,
+//! Validation ladder (docs/src/validation/ladder.md) for the Fourier semi-implicit engine
+//! (docs/src/theory/spectral.md): constraints,
 //! energy decrease, FD agreement as h², temporal orders, the stationary sphere and the
 //! symmetry-reduced boxes.
 

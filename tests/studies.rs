@@ -30,7 +30,7 @@ fn csv_rows(path: &Path) -> Vec<Vec<String>> {
 }
 
 /// `compare` starts both engines from the same field (difference 0 at t = 0) and writes one
-/// row per common time.
+/// row per common time, and no (empty) `snapshots/` folder.
 #[test]
 fn compare_writes_the_table() {
     let tmp = tempfile::tempdir().unwrap();
@@ -54,6 +54,10 @@ fn compare_writes_the_table() {
         "final difference {dphi_end}"
     );
     assert!(String::from_utf8_lossy(&o.stdout).contains("wall-time ratio"));
+    assert!(
+        !out.join("snapshots").exists(),
+        "compare writes no snapshots"
+    );
 }
 
 /// `study stationary` on a small 2D ellipse: every route (L-BFGS, SBDF1, SBDF2) passes
@@ -116,7 +120,8 @@ fn header(path: &Path) -> String {
         .to_string()
 }
 
-/// Run `vesicle study KIND runs/studies/KIND.json --quick` into a temporary folder.
+/// Run `vesicle study KIND runs/studies/KIND.json --quick` into a temporary folder (which must
+/// have no `snapshots/`: a study writes none).
 fn quick_study(kind: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join(kind);
@@ -130,6 +135,10 @@ fn quick_study(kind: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        !out.join("snapshots").exists(),
+        "a study writes no snapshots"
+    );
     (tmp, out, String::from_utf8_lossy(&o.stdout).to_string())
 }
 
@@ -215,10 +224,11 @@ fn csv_fields(path: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// `study stability --quick`: FD is stable below its bound (DESIGN.md §2: 1.25e-3 in 2D at
-/// h = ε, so at Δt = 1e-3) and not stable at 3.16e-3 (2.5× above it); SBDF1 with its default
-/// stabiliser is stable up to Δt = 1 at both h (DESIGN.md §3: no failure to Δt = 2 with
-/// S = 4k² + 4ε²k⁴). The CSV holds every run with its class, and the charts exist.
+/// `study stability --quick`: FD is stable below its bound (1.25e-3 in 2D at h = ε,
+/// docs/src/theory/fd.md, "The stability bound"; so at Δt = 1e-3) and not stable at 3.16e-3
+/// (2.5× above it); SBDF1 with its default stabiliser S = 4k² + 4ε²k⁴ is stable up to Δt = 1 at
+/// both h (that S makes the frozen-coefficient SBDF1 step stable at every Δt:
+/// docs/src/theory/spectral.md, "SBDF1, SBDF2 and the stabiliser"). The CSV holds every run with its class, and the charts exist.
 #[test]
 fn stability_quick_study_classifies_the_runs() {
     let (_tmp, out, stdout) = quick_study("stability");
@@ -254,7 +264,7 @@ fn stability_quick_study_classifies_the_runs() {
 
 /// The c0 axis of the quick stability study (εc0 in {0, 0.8}, SBDF1 and SBDF2 with the
 /// default S, h = ε): every (scheme, εc0) has classified runs from Δt = 1e-5; at εc0 = 0 both
-/// schemes are stable at Δt = 1 (DESIGN.md §3); SBDF1's largest stable Δt falls with εc0, by
+/// schemes are stable at Δt = 1 (their default stabilisers, docs/src/theory/spectral.md); SBDF1's largest stable Δt falls with εc0, by
 /// more than 10× at εc0 = 0.8 (measured: 10 at 0, 3.2e-2 at 0.8), since the bulk
 /// linearisation f'(±1) = 2 ± 2εC0 and the c0 terms treated explicitly grow with c0 while the
 /// default S stays the same.

@@ -5,7 +5,7 @@
 use crate::driver::checkpoint::Checkpoint;
 use crate::driver::record::{Record, TimeSeries};
 use crate::driver::simulation::{Ending, Flow, Now, Observer, StopRules};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::output;
 use crate::problem::config::{Scene, Schedule};
 use crate::problem::grid::Grid;
@@ -207,8 +207,13 @@ impl<'a> Snapshots<'a> {
 }
 
 impl Snapshots<'_> {
-    /// φ of `now` into `phi_<step>` (full box).
+    /// φ of `now` into `phi_<step>` (full box); the folder is made with the first snapshot, so
+    /// a run without snapshots has none.
     fn write(&self, now: &Now) -> Result<()> {
+        std::fs::create_dir_all(&self.dir).map_err(|source| Error::Io {
+            path: self.dir.clone(),
+            source,
+        })?;
         let step = now.record.step;
         let full = self.grid.unfold(now.engine.phi());
         let (dim, s) = (self.scene.dim, self.scene);

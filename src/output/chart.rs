@@ -273,18 +273,24 @@ impl Figure {
         let data = self.drawable();
         let xr = axis_range(data.iter().flatten().flatten().map(|p| p.0), self.x.scale);
         let yr = axis_range(data.iter().flatten().flatten().map(|p| p.1), self.y.scale);
+        let spans = (xr.end - xr.start, yr.end - yr.start);
         match (self.x.scale, self.y.scale) {
-            (Scale::Linear, Scale::Linear) => self.draw(root, &data, xr, yr),
-            (Scale::Linear, Scale::Log) => self.draw(root, &data, xr, yr.log_scale()),
-            (Scale::Log, Scale::Linear) => self.draw(root, &data, xr.log_scale(), yr),
-            (Scale::Log, Scale::Log) => self.draw(root, &data, xr.log_scale(), yr.log_scale()),
+            (Scale::Linear, Scale::Linear) => self.draw(root, &data, spans, xr, yr),
+            (Scale::Linear, Scale::Log) => self.draw(root, &data, spans, xr, yr.log_scale()),
+            (Scale::Log, Scale::Linear) => self.draw(root, &data, spans, xr.log_scale(), yr),
+            (Scale::Log, Scale::Log) => {
+                self.draw(root, &data, spans, xr.log_scale(), yr.log_scale())
+            }
         }
     }
 
+    /// Draw on `root` the drawable runs `data` on the axes `xs`, `ys`, whose ranges are
+    /// `spans` = (x, y) long.
     fn draw<DB, X, Y>(
         &self,
         root: &DrawingArea<DB, plotters::coord::Shift>,
         data: &[Vec<Vec<(f64, f64)>>],
+        spans: (f64, f64),
         xs: X,
         ys: Y,
     ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
@@ -302,8 +308,8 @@ impl Figure {
             .x_label_area_size(55)
             .y_label_area_size(95)
             .build_cartesian_2d(xs, ys)?;
-        let xf = tick_label(self.x.scale);
-        let yf = tick_label(self.y.scale);
+        let xf = tick_label(self.x.scale, spans.0);
+        let yf = tick_label(self.y.scale, spans.1);
         chart
             .configure_mesh()
             .x_desc(self.x.label.as_str())
@@ -493,8 +499,10 @@ fn labels(scale: Scale) -> usize {
 }
 
 /// Tick labels: on a log axis `1e-5` at decades and nothing between (the minor ticks); on a
-/// linear axis the shortest of fixed and exponent notation.
-fn tick_label(scale: Scale) -> impl Fn(&f64) -> String {
+/// linear axis whose range is `span` long the shortest of fixed and exponent notation, and `0`
+/// for a tick within round-off of zero (the axis' ticks are sums of steps, so the one at zero
+/// can come out as ±1e-16 times the span).
+fn tick_label(scale: Scale, span: f64) -> impl Fn(&f64) -> String {
     move |v: &f64| match scale {
         Scale::Log => {
             let e = v.log10();
@@ -506,7 +514,9 @@ fn tick_label(scale: Scale) -> impl Fn(&f64) -> String {
         }
         Scale::Linear => {
             let a = v.abs();
-            if a == 0.0 || (1e-3..1e4).contains(&a) {
+            if a <= 1e-9 * span {
+                "0".to_string()
+            } else if (1e-3..1e4).contains(&a) {
                 let s = format!("{v:.4}");
                 s.trim_end_matches('0').trim_end_matches('.').to_string()
             } else {
@@ -588,10 +598,51 @@ mod tests {
     /// Decades are labelled `1eK`, the minor ticks between them not at all.
     #[test]
     fn log_ticks_label_decades_only() {
-        let f = tick_label(Scale::Log);
+        let f = tick_label(Scale::Log, 1.0);
         assert_eq!(f(&1e-5), "1e-5");
         assert_eq!(f(&100.0), "1e2");
         assert_eq!(f(&3e-5), "");
+    }
+
+    /// A linear tick at zero reads `0`, also when the axis' sums of steps leave it at ±1e-16
+    /// or ±1e-17 times the span (the −1.1e-16 of a ±1 axis); small ticks of a small axis keep
+    /// their value, and the rest is the shortest of fixed and exponent notation.
+    #[test]
+    fn linear_ticks_print_zero_as_zero() {
+        let f = tick_label(Scale::Linear, 1.6);
+        for zero in [0.0, -0.0, -1.1e-16, 1.4e-17, -0.6 + 0.2 * 3.0] {
+            assert_eq!(f(&zero), "0", "{zero:e}");
+        }
+        assert_eq!(f(&-0.2), "-0.2");
+        assert_eq!(f(&0.25), "0.25");
+        let f = tick_label(Scale::Linear, 4e-15);
+        assert_eq!(f(&-1e-15), "-1.0e-15");
+        assert_eq!(f(&-1.4e-30), "0");
+        let f = tick_label(Scale::Linear, 3e5);
+        assert_eq!(f(&1e5), "1.0e5");
+        assert_eq!(f(&2e-11), "0");
+    }
+
+    /// A chart whose y axis crosses zero has no tick label in exponent notation: the tick at
+    /// zero reads `0` (the SVG holds every label as text).
+    #[test]
+    fn a_chart_across_zero_labels_zero() {
+        let tmp = tempfile::TempDir::new().unwrap();
+        let mut fig = Figure::new("t", Axis::linear("x"), Axis::linear("y"));
+        fig.push(Series::new(
+            "s",
+            vec![(-1.0, -0.6), (0.0, 0.3), (1.0, 1.0)],
+            colour(0),
+            Mark::Line,
+        ));
+        let [_, svg] = fig.write(&tmp.path().join("c")).unwrap();
+        let text = std::fs::read_to_string(svg).unwrap();
+        let labels: Vec<&str> = text
+            .split("</text>")
+            .filter_map(|t| t.rsplit_once('>').map(|(_, l)| l.trim()))
+            .collect();
+        assert!(labels.contains(&"0"), "a tick labelled 0: {labels:?}");
+        assert!(labels.iter().all(|l| !l.contains("e-")), "{labels:?}");
     }
 
     /// A line is broken at a missing value (NaN) and, on a log axis, at a value ≤ 0: three

@@ -5,8 +5,8 @@ use super::lock;
 use crate::error::{Error, Result};
 use std::path::Path;
 
-/// Make the output folder (with its `snapshots` folder): refuse an existing one unless
-/// `force`, which replaces it.
+/// Make the output folder: refuse an existing one unless `force`, which replaces it by an empty
+/// one. Sub-folders are made by their writers (`snapshots/` by the first snapshot).
 ///
 /// # Errors
 /// `Error::Config` on field `--out` if it exists without `force`; `Error::Io` on failure.
@@ -26,7 +26,7 @@ pub fn make_out_dir(out: &Path, force: bool) -> Result<()> {
             source,
         })?;
     }
-    std::fs::create_dir_all(out.join("snapshots")).map_err(|source| Error::Io {
+    std::fs::create_dir_all(out).map_err(|source| Error::Io {
         path: out.to_path_buf(),
         source,
     })

@@ -6,7 +6,7 @@
 //! pixels); colours are bilinearly interpolated between grid points and the contour comes from
 //! marching squares with linear interpolation, drawn as anti-aliased segments.
 
-use super::{check_field, ensure_font, OutputError, RgbImage, FONT_FAMILY};
+use super::{check_field, ensure_font, fit_line, OutputError, RgbImage, FONT_FAMILY};
 use ndarray::{Array2, Array3, ArrayView2, Axis};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -318,7 +318,8 @@ fn distance_to_segment(p: (f64, f64), seg: &Segment) -> f64 {
     (p.0 - (x0 + t * dx)).hypot(p.1 - (y0 + t * dy))
 }
 
-/// Draw the title, the panel labels (text and centre column) and the caption.
+/// Draw the title, the panel labels (text and centre column) and the caption; the title and
+/// the caption are fitted to the width ([`fit_line`]).
 fn draw_texts<'a>(
     path: &Path,
     canvas: &mut Canvas,
@@ -334,7 +335,8 @@ fn draw_texts<'a>(
         TextStyle::from((FONT_FAMILY, size).into_font()).pos(Pos::new(HPos::Center, VPos::Center))
     };
     let at = |x: usize, y: usize| (x as i32, y as i32);
-    root.draw_text(title, &style(24), at(width / 2, TITLE_HEIGHT / 2))
+    let (title, size) = fit_line(path, title, 24, width)?;
+    root.draw_text(&title, &style(size), at(width / 2, TITLE_HEIGHT / 2))
         .map_err(text_err)?;
     for (label, centre) in labels {
         let y = TITLE_HEIGHT + LABEL_HEIGHT / 2;
@@ -342,7 +344,8 @@ fn draw_texts<'a>(
             .map_err(text_err)?;
     }
     let y = height - CAPTION_HEIGHT / 2;
-    root.draw_text(caption, &style(15), at(width / 2, y))
+    let (caption, size) = fit_line(path, caption, 15, width)?;
+    root.draw_text(&caption, &style(size), at(width / 2, y))
         .map_err(text_err)?;
     root.present().map_err(text_err)
 }

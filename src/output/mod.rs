@@ -130,19 +130,20 @@ impl RgbImage {
         write_rgb_png(path, self.width as u32, self.height as u32, &self.rgb)
     }
 
-    /// Draw `text` in the embedded font, `size` pixels high, in `colour`, centred on `(x, y)`;
-    /// `name` names the picture in error messages.
-    pub(crate) fn draw_text(
+    /// Draw the line `text` in the embedded font, `size` pixels high (smaller, or shortened,
+    /// where it would not fit the width: [`fit_line`]), in `colour`, centred on the picture's
+    /// middle column at row `y`; `name` names the picture in error messages.
+    pub(crate) fn draw_heading(
         &mut self,
         name: &Path,
         text: &str,
         size: u32,
         colour: [u8; 3],
-        (x, y): (usize, usize),
+        y: usize,
     ) -> Result<(), OutputError> {
         use plotters::prelude::*;
         use plotters::style::text_anchor::{HPos, Pos, VPos};
-        ensure_font(name)?;
+        let (text, size) = fit_line(name, text, size, self.width)?;
         let (w, h) = (self.width as u32, self.height as u32);
         let root = BitMapBackend::with_buffer(&mut self.rgb, (w, h)).into_drawing_area();
         let rgb = RGBColor(colour[0], colour[1], colour[2]);
@@ -150,8 +151,91 @@ impl RgbImage {
             .color(&rgb)
             .pos(Pos::new(HPos::Center, VPos::Center));
         let text_err = |e| OutputError::format(name, format!("cannot draw text: {e}"));
-        root.draw_text(text, &style, (x as i32, y as i32))
+        root.draw_text(&text, &style, ((self.width / 2) as i32, y as i32))
             .map_err(text_err)?;
         root.present().map_err(text_err)
+    }
+}
+
+/// Pixels kept free of text at each side of a line fitted to a picture's width.
+const TEXT_MARGIN: usize = 8;
+
+/// The line `text` fitted to a picture `width` pixels wide (less [`TEXT_MARGIN`] at each side)
+/// in the embedded font: at font size `size` where it fits, else at the largest size down to
+/// three quarters of `size` that fits, else at that size cut at its end with an ellipsis.
+/// Returns the text and the size to draw it at; `name` names the picture in error messages.
+///
+/// # Errors
+/// `OutputError::Format` if the font cannot be loaded or measure the text.
+pub(crate) fn fit_line(
+    name: &Path,
+    text: &str,
+    size: u32,
+    width: usize,
+) -> Result<(String, u32), OutputError> {
+    use plotters::style::IntoFont;
+    ensure_font(name)?;
+    let room = width.saturating_sub(2 * TEXT_MARGIN);
+    let fits = |t: &str, s: u32| {
+        (FONT_FAMILY, f64::from(s))
+            .into_font()
+            .box_size(t)
+            .map(|(w, _)| w as usize <= room)
+            .map_err(|e| OutputError::format(name, format!("cannot measure text: {e}")))
+    };
+    let smallest = (3 * size / 4).max(1);
+    for s in (smallest..=size).rev() {
+        if fits(text, s)? {
+            return Ok((text.to_string(), s));
+        }
+    }
+    let mut chars: Vec<char> = text.chars().collect();
+    while chars.pop().is_some() {
+        let shortened = format!("{}…", chars.iter().collect::<String>().trim_end());
+        if fits(&shortened, smallest)? {
+            return Ok((shortened, smallest));
+        }
+    }
+    Ok((String::new(), smallest))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A line that fits keeps its text and size; a longer one is drawn smaller; one too long
+    /// even at three quarters of the size is cut with an ellipsis; every result fits.
+    #[test]
+    fn lines_are_fitted_to_the_width() {
+        let name = Path::new("test");
+        let width = |t: &str, s: u32| {
+            use plotters::style::IntoFont;
+            (FONT_FAMILY, f64::from(s))
+                .into_font()
+                .box_size(t)
+                .unwrap()
+                .0 as usize
+        };
+        ensure_font(name).unwrap();
+        let short = "step 100";
+        assert_eq!(
+            fit_line(name, short, 20, 640).unwrap(),
+            (short.to_string(), 20)
+        );
+        let long = "deflation3d   step 180000   A = 5244.77329   V = 25132.09399   v = 0.7037";
+        assert!(
+            width(long, 20) > 640 - 2 * TEXT_MARGIN,
+            "wider than the picture"
+        );
+        let (text, size) = fit_line(name, long, 20, 640).unwrap();
+        assert_eq!(text, long);
+        assert!((15..20).contains(&size), "size {size}");
+        assert!(width(&text, size) <= 640 - 2 * TEXT_MARGIN);
+        let twice = long.repeat(2);
+        let (text, size) = fit_line(name, &twice, 20, 640).unwrap();
+        assert_eq!(size, 15);
+        assert!(text.ends_with('…') && twice.starts_with(text.trim_end_matches('…')));
+        assert!(width(&text, size) <= 640 - 2 * TEXT_MARGIN);
+        assert_eq!(fit_line(name, long, 20, 10).unwrap(), (String::new(), 15));
     }
 }

@@ -160,7 +160,7 @@ struct Target {
 }
 
 /// Draw `mesh` as seen by `view`, fitted to `bounds`, with `title` centred in the band at the
-/// top.
+/// top (smaller, or shortened, where it would not fit the width).
 ///
 /// # Errors
 /// `OutputError::Format` if the view is unusable (a zero size, a picture not taller than the
@@ -220,7 +220,7 @@ pub fn render(
     }
     draw_box(&mut target, &camera, bounds, s);
     let mut image = downsample(&target, s);
-    image.draw_text(name, title, 20, [0, 0, 0], (view.width / 2, TITLE_BAND / 2))?;
+    image.draw_heading(name, title, 20, [0, 0, 0], TITLE_BAND / 2)?;
     Ok(image)
 }
 

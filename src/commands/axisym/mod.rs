@@ -103,7 +103,6 @@ pub fn run(args: &AxisymArgs) -> Result<()> {
     } = Diagram::compute(&grid(args), &opts);
     folder::make_out_dir(&args.out, args.force)?;
     // make_out_dir prepares a `snapshots` folder for runs; this command has none.
-    let _ = std::fs::remove_dir(args.out.join("snapshots"));
     write_outputs(&args.out, &curves, &t, decimals(args.dv))?;
     print_summary(&curves, &t, start.elapsed().as_secs_f64(), &args.out);
     Ok(())

@@ -41,7 +41,6 @@ pub fn run(args: &AxisymArgs, list: &[f64], vs: &[f64]) -> Result<()> {
     let opts = Options::with_nodes(args.nodes);
     let slices: Vec<Slice> = list.iter().map(|&c| slice(c, vs, &opts)).collect();
     folder::make_out_dir(&args.out, args.force)?;
-    let _ = std::fs::remove_dir(args.out.join("snapshots"));
     for s in &slices {
         write_branches(&args.out, s)?;
     }

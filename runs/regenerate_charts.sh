@@ -1,0 +1,210 @@
+#!/usr/bin/env bash
+# Re-create the committed charts and pictures of runs/results/ (every PNG, the SVG beside a chart,
+# and the scenes' GIFs) by running the commands that produced them, then copy the figures of the
+# manual (docs/src/figures/, copies of PNGs of runs/results/) again.
+#
+#   bash runs/regenerate_charts.sh            # the cheap groups (a few minutes in all)
+#   bash runs/regenerate_charts.sh GROUP...   # those groups; `all` for every group
+#   bash runs/regenerate_charts.sh --list     # the groups and what each costs
+#
+# Each command writes into $WORK/<group> (default out/regenerate, ignored by git); only the
+# pictures are copied into runs/results/. The data files the commands write beside them (CSV,
+# TXT) stay in $WORK: the committed ones are the record of the runs the manual quotes, and a
+# rerun changes their wall times (and, where a chart plots wall time, the chart). Compare them
+# with `diff -r` when a rerun should have changed the numbers. The binary is $VESICLE (default
+# target/release/vesicle, built with `cargo build --release` when missing).
+#
+# Wall times on a busy 2-core machine (load average 6-8), measured on 2026-12-05 where marked,
+# else estimated from the committed results' own record:
+#   convergence      study convergence                                            74 s, measured
+#   stability        study stability (the Δt × h map, α, the c0 axis)              22 s, measured
+#   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
+#   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
+#   budding          study budding budding.json (41 relaxations)   ~4.7 min (29 of 41 in 200 s)
+#   axisym_c0        axisym --c0=-1,...,3 --nodes 481                ~7 min (438 s wall recorded)
+#   diagram          diagram diagram.json, 84 cases, --jobs 2      ~6-12 min (cases: 743 s, 1 thread each)
+#   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
+#   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
+#   diagram_c0_fine  diagram diagram_c0_fine.json, 165 cases      ~17-35 min (cases: 1 968 s)
+#   budding3d        run budding3d.json (200 000 steps), measure, render    ~14 min (820 s recorded)
+#   deflation3d      run deflation3d.json (215 000 steps), measure, render  ~16 min (961 s recorded)
+#   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
+#   pearling3d       run pearling3d.json (200 000 steps), measure, render   ~62 min (recorded)
+# The recorded scene times are of older builds (pear3d, recorded at 94 s, now takes 11 s). The
+# default (cheap) groups are the first four.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+VESICLE=${VESICLE:-target/release/vesicle}
+WORK=${WORK:-out/regenerate}
+CHEAP=(convergence stability precision pear3d)
+ALL=(convergence stability precision pear3d budding axisym_c0 diagram diagram_fine diagram_c0
+     diagram_c0_fine budding3d deflation3d dumbbell3d pearling3d)
+
+# Run the program, echoing the command.
+vesicle() {
+    echo "+ vesicle $*" >&2
+    "$VESICLE" "$@"
+}
+
+# keep FROM TO: copy one picture into runs/results/ (TO relative to it), and the SVG beside a
+# chart when the committed one has an SVG.
+keep() {
+    cp "$1" "runs/results/$2"
+    if [ -e "runs/results/${2%.png}.svg" ]; then
+        cp "${1%.png}.svg" "runs/results/${2%.png}.svg"
+    fi
+}
+
+# same_names FROM DIR: every committed picture under runs/results/DIR from the same path under
+# FROM (a file the command no longer writes stops the script).
+same_names() {
+    local f
+    git -C "runs/results/$2" ls-files -- '*.png' '*.svg' '*.gif' | while read -r f; do
+        cp "$1/$f" "runs/results/$2/$f"
+    done
+}
+
+# study KIND FILE: `vesicle study KIND runs/studies/FILE` into $WORK/<group>.
+study() {
+    vesicle study "$1" "runs/studies/$2" --out "$out" --force
+}
+
+# scene NAME: run runs/NAME.json into $WORK/NAME (the folder name is the frames' title).
+scene() {
+    vesicle run "runs/$1.json" --out "$out" --force --quiet
+}
+
+# frame STEP TO: the rendered frame of STEP of the scene in $out, kept as scenes/TO.
+frame() {
+    keep "$out/frames/frame_$(printf %08d "$1").png" "scenes/$2"
+}
+
+group_convergence() { study convergence convergence.json; same_names "$out" convergence; }
+group_stability() { study stability stability.json; same_names "$out" stability; }
+group_precision() {
+    study precision precision.json
+    keep "$out/precision_transient.png" precision/precision_transient.png
+    out=$WORK/stationary
+    study stationary stationary.json
+    keep "$out/stationary_pareto.png" precision/precision_stationary.png
+}
+group_pear3d() {
+    scene pear3d
+    vesicle render "$out" --cut y --gif
+    frame 2000 pear3d_02000.png
+    frame 18000 pear3d_18000.png
+    frame 40000 pear3d_40000.png
+    cp "$out/movie.gif" runs/results/scenes/pear3d.gif
+}
+group_budding() {
+    study budding budding.json
+    for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
+}
+group_axisym_c0() {
+    vesicle axisym --c0=-1,-0.5,0,0.5,1,1.5,2,2.5,3 --nodes 481 --out "$out" --force
+    same_names "$out" axisym_c0
+}
+diagram() {
+    vesicle diagram "runs/$1.json" --out "$out" --jobs 2 --force
+    same_names "$out" "$1"
+}
+group_diagram() { diagram diagram; }
+group_diagram_fine() { diagram diagram_fine; }
+group_diagram_c0() { diagram diagram_c0; }
+group_diagram_c0_fine() { diagram diagram_c0_fine; }
+group_budding3d() {
+    scene budding3d
+    vesicle measure "$out" --force
+    vesicle render "$out" --cut y
+    keep "$out/neck.png" scenes/budding3d_neck.png
+    frame 10000 budding3d_010000.png
+    frame 110000 budding3d_110000.png
+    frame 200000 budding3d_200000.png
+}
+group_deflation3d() {
+    scene deflation3d
+    vesicle measure "$out" --force
+    vesicle render "$out" --cut y --gif
+    keep "$out/neck.png" scenes/deflation3d_neck.png
+    frame 140000 deflation3d_140000.png
+    frame 180000 deflation3d_180000.png
+    frame 215000 deflation3d_215000.png
+    cp "$out/movie.gif" runs/results/scenes/deflation3d.gif
+}
+group_dumbbell3d() {
+    scene dumbbell3d
+    vesicle render "$out" --cut y
+    frame 150000 dumbbell3d_150000.png
+}
+group_pearling3d() {
+    scene pearling3d
+    vesicle measure "$out" --force
+    vesicle render "$out" --cut y
+    keep "$out/neck.png" scenes/pearling3d_neck.png
+    frame 60000 pearling3d_060000.png
+    frame 110000 pearling3d_110000.png
+    frame 200000 pearling3d_200000.png
+}
+
+# The manual's figures: docs/src/figures/NAME from runs/results/PATH.
+FIGURES=(
+    axisym_c0_phase.png=axisym_c0/phase.png
+    budding_neck_r0.png=budding/budding_neck_r0.png
+    budding_skewness.png=budding/budding_skewness.png
+    convergence_eps.png=convergence/convergence_eps.png
+    convergence_space.png=convergence/convergence_space.png
+    convergence_space_semilog.png=convergence/convergence_space_semilog.png
+    convergence_sphere.png=convergence/convergence_sphere.png
+    convergence_time.png=convergence/convergence_time.png
+    diagram.png=diagram/diagram.png
+    errors.png=diagram/errors.png
+    thumbnails.png=diagram/thumbnails.png
+    diagram_c0_errors.png=diagram_c0/errors.png
+    diagram_c0_phase.png=diagram_c0/phase.png
+    diagram_c0_fine_errors.png=diagram_c0_fine/errors.png
+    diagram_c0_fine_phase.png=diagram_c0_fine/phase.png
+    precision_stationary.png=precision/precision_stationary.png
+    precision_transient.png=precision/precision_transient.png
+    stability_alpha.png=stability/stability_alpha.png
+    stability_c0.png=stability/stability_c0.png
+    stability_map.png=stability/stability_map.png
+    budding3d_010000.png=scenes/budding3d_010000.png
+    budding3d_110000.png=scenes/budding3d_110000.png
+    budding3d_200000.png=scenes/budding3d_200000.png
+    budding3d_neck.png=scenes/budding3d_neck.png
+    deflation3d_140000.png=scenes/deflation3d_140000.png
+    deflation3d_180000.png=scenes/deflation3d_180000.png
+    deflation3d_215000.png=scenes/deflation3d_215000.png
+    deflation3d_neck.png=scenes/deflation3d_neck.png
+    dumbbell3d_150000.png=scenes/dumbbell3d_150000.png
+    pear3d_02000.png=scenes/pear3d_02000.png
+    pear3d_18000.png=scenes/pear3d_18000.png
+    pear3d_40000.png=scenes/pear3d_40000.png
+    pearling3d_060000.png=scenes/pearling3d_060000.png
+    pearling3d_110000.png=scenes/pearling3d_110000.png
+    pearling3d_200000.png=scenes/pearling3d_200000.png
+    pearling3d_neck.png=scenes/pearling3d_neck.png
+)
+
+if [ "${1:-}" = "--list" ]; then
+    sed -n '/^# Wall times/,/^# default (cheap)/p' "$0"
+    exit 0
+fi
+groups=("$@")
+[ ${#groups[@]} -eq 0 ] && groups=("${CHEAP[@]}")
+[ "${groups[*]}" = "all" ] && groups=("${ALL[@]}")
+for g in "${groups[@]}"; do
+    declare -F "group_$g" >/dev/null || { echo "unknown group $g (see --list)" >&2; exit 2; }
+done
+[ -x "$VESICLE" ] || cargo build --release
+for g in "${groups[@]}"; do
+    out=$WORK/$g
+    mkdir -p "$WORK"
+    start=$SECONDS
+    "group_$g"
+    echo "== $g: $((SECONDS - start)) s" >&2
+done
+for f in "${FIGURES[@]}"; do
+    cp "runs/results/${f#*=}" "docs/src/figures/${f%%=*}"
+done
