@@ -82,7 +82,7 @@ fn check(args: &AxisymArgs) -> Result<()> {
 }
 
 /// Compute the diagram and write `branches.csv`, `transitions.csv`, `contours/*.csv` and
-/// `diagram.png` to `args.out`; print the transition volumes.
+/// `diagram.png` and `diagram.svg` to `args.out`; print the transition volumes.
 ///
 /// # Errors
 /// `Error::Config` for invalid arguments or an existing folder without `--force` (nothing is
@@ -183,18 +183,21 @@ fn write_outputs(out: &Path, curves: &[Vec<Solution>], t: &Transitions, dec: usi
         f.flush().map_err(&err)?;
     }
 
-    let series: Vec<(&str, Vec<(f64, f64)>)> = curves
-        .iter()
-        .zip(Branch::ALL)
-        .map(|(c, b)| (b.name(), c.iter().map(|s| (s.v, s.e)).collect()))
-        .collect();
-    chart::write_timeseries_png(
-        &out.join("diagram.png"),
-        &series,
-        "reduced volume v",
-        "reduced bending energy e",
-        false,
-    )?;
+    let mut figure = chart::Figure::new(
+        "Shape diagram at c0 = 0: the axisymmetric sharp-interface reference",
+        chart::Axis::linear("reduced volume v"),
+        chart::Axis::linear("reduced bending energy e = ∮(2H)² dA / 16π"),
+    );
+    for (i, (c, b)) in curves.iter().zip(Branch::ALL).enumerate() {
+        let points = c.iter().map(|s| (s.v, s.e)).collect();
+        figure.push(chart::Series::new(
+            b.name(),
+            points,
+            chart::colour(i),
+            chart::Mark::Line,
+        ));
+    }
+    figure.write(&out.join("diagram"))?;
     Ok(())
 }
 
