@@ -9,23 +9,41 @@ use std::path::{Path, PathBuf};
 pub enum Error {
     /// Invalid input: `field` is the dotted key of a scene or diagram file, or a flag.
     #[error("invalid input: `{field}`: {reason}")]
-    Config { field: String, reason: String },
+    Config {
+        /// The dotted key, flag or `(name)` refused.
+        field: String,
+        /// Why, for the user.
+        reason: String,
+    },
     /// The run diverged or broke a constraint at step `step`, time `t`: `cause` says which.
     #[error("run stopped at step {step}, t = {t:.6e}: {reason}")]
     Blowup {
+        /// The step that failed (1 for the first).
         step: usize,
+        /// The time the step would have reached.
         t: f64,
+        /// The step, its Δt and the check that failed, in words.
         reason: String,
+        /// The check that failed.
         cause: Cause,
     },
     /// The device failed at step `step`, time `t` (a GPU out of memory, a kernel that failed):
     /// nothing about the scheme.
     #[error("run stopped at step {step}, t = {t:.6e}: the device failed: {reason}")]
-    Device { step: usize, t: f64, reason: String },
+    Device {
+        /// The step that failed.
+        step: usize,
+        /// The time the step would have reached.
+        t: f64,
+        /// What the device reported.
+        reason: String,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {
+        /// The file or folder.
         path: PathBuf,
+        /// The system's error.
         source: std::io::Error,
     },
     /// A study could not compute what it reports (a point without a sharp-interface

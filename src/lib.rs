@@ -22,12 +22,19 @@
 //!   and its lock;
 //! * [`driver`]: the one step loop (clock, stop rules, observers), the time series,
 //!   checkpoints and signals;
-//! * [`commands`]: the command line, `run`/`resume`, `compare`, `render`, `measure`, the
-//!   sharp-interface and phase-field shape diagrams and the studies.
+//! * `commands`: the command line, `run`/`resume`, `compare`, `render`, `measure`, the
+//!   sharp-interface and phase-field shape diagrams and the studies. It is public for the
+//!   `vesicle` binary and the Python bindings, and hidden from this documentation: it is not
+//!   the library's interface (the studies are run through [`run_study`]).
 //!
 //! Walls (`tests/layers.rs`, the table of docs/src/architecture.md): the leaves use at most
 //! [`error`]; each layer reaches only the leaves and the layers listed before it, except that
-//! engines and output do not reach each other; only [`commands`] knows about the command line.
+//! engines and output do not reach each other; only `commands` knows about the command line.
+//!
+//! The names a library user starts from are re-exported here: [`Scene`] (read by [`load`] or
+//! [`load_value`]), [`Problem`] (built by [`build`]), [`Simulation`] and its [`StopRules`],
+//! the [`Engine`] it steps, [`Error`], and the examples in `examples/` (run a scene, read φ,
+//! run a study: `cargo run --release --example run_scene`).
 //!
 //! ```no_run
 //! use vesicle::driver::simulation::{Simulation, StopRules};
@@ -39,7 +46,10 @@
 //! println!("{}: F = {}, residual = {}", stopped.as_str(), last.energy, last.residual);
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod analysis;
+#[doc(hidden)]
 pub mod commands;
 pub mod cpu;
 pub mod driver;
@@ -48,3 +58,9 @@ pub mod error;
 pub mod npy;
 pub mod output;
 pub mod problem;
+
+pub use driver::simulation::{Simulation, StopRules, Stopped};
+pub use engines::{Engine, StepError};
+pub use error::{Error, Result};
+pub use problem::config::{load, load_value, Scene};
+pub use problem::setup::{build, Problem};

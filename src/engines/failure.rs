@@ -19,7 +19,12 @@ pub enum Rejection {
     /// A is off its target by this relative amount (projection).
     AreaDrift(f64),
     /// F_eff rose where the scheme guarantees a decrease.
-    EnergyRise { before: f64, after: f64 },
+    EnergyRise {
+        /// F_eff before the step.
+        before: f64,
+        /// F_eff after it.
+        after: f64,
+    },
 }
 
 impl Rejection {

@@ -67,9 +67,13 @@ impl Metric {
 
 /// A state of the engine: φ in both spaces, its explicit term N̂ and its measures.
 pub struct State {
+    /// φ̂.
     pub hat: Array3<Complex64>,
+    /// The explicit term: N̂ (conserved flow) or ĝ (gradient).
     pub nonlinear: Array3<Complex64>,
+    /// φ on the grid.
     pub phi: Array3<f64>,
+    /// F_sc, A, V.
     pub measures: Measures,
     /// RMS over the full box of μ − μ̄ at the σ given to [`Evaluator::evaluate`] (NaN when none
     /// was given).
@@ -154,10 +158,15 @@ impl Symbols {
 
 /// Evaluates a state from its φ̂: the transforms, tables and scratch, planned once.
 pub struct Evaluator {
+    /// The computed grid.
     pub grid: Grid,
+    /// ε, the interface width.
     pub eps: f64,
+    /// εC0(x, t).
     pub c0: C0,
+    /// The planned transforms.
     pub transform: Transform,
+    /// |k|² and the Parseval weights per axis.
     pub symbols: Symbols,
     explicit: ExplicitTerm,
     /// Spectral scratch: the input of the ∇²φ inverse transform, then FT[f] (the engines also

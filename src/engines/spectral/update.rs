@@ -100,8 +100,9 @@ pub struct Update {
     pub c: Coefficients,
     /// Δt.
     pub dt: f64,
-    /// s2 and s4 ε² of the stabiliser S = s2 k² + s4 ε² k⁴.
+    /// s2 of the stabiliser S = s2 k² + s4 ε² k⁴.
     pub s2: f64,
+    /// s4 ε².
     pub s4e2: f64,
     /// 2ε⁴.
     pub e4x2: f64,
@@ -161,8 +162,11 @@ impl Update {
 /// h_j = (−a_j + Δt b_j S)/D,  n_j = Δt b_j/D,  q_j = −Δt c_σ k⁴ b_j/D,  D = a0 + Δt(2ε⁴k⁶ + S).
 /// ```
 pub struct ValueFactors<const L: usize> {
+    /// h_j, the factor of φ̂ in P̂.
     pub h: [f64; L],
+    /// n_j, the factor of N̂ in P̂.
     pub n: [f64; L],
+    /// q_j, the factor of φ̂ in Q̂.
     pub q: [f64; L],
 }
 

@@ -67,7 +67,9 @@ pub enum Shape {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sphere {
+    /// Radius (of the sphere, the cup's outer ball, the capsule's tube and caps).
     pub radius: f64,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
     #[serde(default)]
     pub center: Option<Vec<f64>>,
 }
@@ -76,7 +78,9 @@ pub struct Sphere {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Ellipsoid {
+    /// Semi-axes, one per dimension.
     pub axes: Vec<f64>,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
     #[serde(default)]
     pub center: Option<Vec<f64>>,
 }
@@ -86,12 +90,17 @@ pub struct Ellipsoid {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spheroid {
+    /// Reduced volume v (reduced area in 2D).
     pub reduced_volume: f64,
+    /// R0 = √(A/4π) (2D: perimeter/2π), in lengths of the grid.
     pub r0: f64,
+    /// Prolate (long along `axis`) or oblate.
     #[serde(default)]
     pub kind: SpheroidKind,
+    /// The symmetry axis (`"x"`, `"y"` or `"z"`; default the last).
     #[serde(default)]
     pub axis: Option<String>,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
     #[serde(default)]
     pub center: Option<Vec<f64>>,
 }
@@ -101,11 +110,16 @@ pub struct Spheroid {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cup {
+    /// Radius (of the sphere, the cup's outer ball, the capsule's tube and caps).
     pub radius: f64,
+    /// Radius of the removed inner ball.
     pub inner_radius: f64,
+    /// Shift of the inner ball's centre along `axis`.
     pub offset: f64,
+    /// The symmetry axis (`"x"`, `"y"` or `"z"`; default the last).
     #[serde(default)]
     pub axis: Option<String>,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
     #[serde(default)]
     pub center: Option<Vec<f64>>,
 }
@@ -114,10 +128,14 @@ pub struct Cup {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Capsule {
+    /// Radius (of the sphere, the cup's outer ball, the capsule's tube and caps).
     pub radius: f64,
+    /// Length of the straight part along `axis`.
     pub length: f64,
+    /// The symmetry axis (`"x"`, `"y"` or `"z"`; default the last).
     #[serde(default)]
     pub axis: Option<String>,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
     #[serde(default)]
     pub center: Option<Vec<f64>>,
 }
@@ -126,6 +144,7 @@ pub struct Capsule {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Union {
+    /// The shapes joined.
     pub of: Vec<Shape>,
 }
 
@@ -133,7 +152,9 @@ pub struct Union {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Difference {
+    /// The shape cut from.
     pub base: Box<Shape>,
+    /// The shape removed.
     pub minus: Box<Shape>,
 }
 
@@ -145,15 +166,21 @@ pub struct Difference {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Axisym {
+    /// The reference solver's branch (with `reduced_volume`).
     #[serde(default)]
     pub branch: Option<AxisymBranch>,
+    /// Reduced volume v (reduced area in 2D).
     #[serde(default)]
     pub reduced_volume: Option<f64>,
+    /// An `r,z` contour file at R0 = 1 (instead of `branch`).
     #[serde(default)]
     pub contour: Option<PathBuf>,
+    /// R0 = √(A/4π) (2D: perimeter/2π), in lengths of the grid.
     pub r0: f64,
+    /// The symmetry axis (`"x"`, `"y"` or `"z"`; default the last).
     #[serde(default)]
     pub axis: Option<String>,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
     #[serde(default)]
     pub center: Option<Vec<f64>>,
 }
