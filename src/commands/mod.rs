@@ -1,7 +1,7 @@
 //! What the command line reaches: [`cli`] (parsing, dispatch, exit codes), [`run`] (`run` and
 //! `resume`), [`compare`], the after-the-run commands [`render`] and [`measure`] over a
-//! [`run_folder`], the phase-field shape [`diagram`] and the [`study`] commands. Only this
-//! layer knows about the command line.
+//! [`run_folder`], the phase-field shape [`diagram`] and the [`study`] commands (listed, and
+//! run by name, by [`studies`]). Only this layer knows about the command line.
 
 pub mod cli;
 pub mod compare;
@@ -10,4 +10,5 @@ pub mod measure;
 pub mod render;
 pub mod run;
 pub mod run_folder;
+pub mod studies;
 pub mod study;
