@@ -3,7 +3,7 @@
 //! scenes in ([`scene`]), the step loop driven with the GIL released and Ctrl-C heard
 //! ([`drive`]), fields and time series out as NumPy arrays ([`arrays`]), errors as exceptions
 //! ([`errors`]), the axisymmetric reference ([`axisym`]) and the command line in process
-//! ([`commands`]: studies and the diagram).
+//! ([`commands`]: any command, and the studies by name with their tables typed).
 
 mod arrays;
 mod axisym;
@@ -27,6 +27,8 @@ fn _vesicle(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(axisym::axisym_solve, m)?)?;
     m.add_function(wrap_pyfunction!(axisym::axisym_follow, m)?)?;
     m.add_function(wrap_pyfunction!(commands::cli, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::studies, m)?)?;
+    m.add_function(wrap_pyfunction!(commands::study, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -18,7 +18,8 @@ Names:
   command line validates it;
 * :class:`Simulation` -- run / step / checkpoint / resume, state, ``phi``, ``history``,
   ``surface()``, writers (``.npy``, ``.vti``, ``.ply``, PNG, charts);
-* :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (c0 = 0);
+* :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (any c̄0);
+* :func:`study` -- the command line's studies (``STUDIES``), their tables typed;
 * :exc:`InvalidInput` (a ``ValueError`` with ``field``), :exc:`BlowUp` (``step``, ``t``,
   ``dt``, ``check``, ``cause``), :exc:`DeviceError` (a GPU that failed during a run: ``step``,
   ``t``); file errors are ``OSError``.
@@ -26,7 +27,7 @@ Names:
 
 from ._vesicle import BlowUp, DeviceError, InvalidInput, Scene, Simulation, __version__
 from . import axisym, commands
-from .commands import cli, diagram, diagram_merge, read_tables, study
+from .commands import STUDIES, cli, diagram, diagram_merge, read_tables, studies, study
 
 __all__ = [
     "Scene",
@@ -37,6 +38,8 @@ __all__ = [
     "axisym",
     "commands",
     "cli",
+    "STUDIES",
+    "studies",
     "study",
     "diagram",
     "diagram_merge",

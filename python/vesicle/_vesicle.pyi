@@ -11,6 +11,7 @@ __version__: str
 Overrides = Mapping[str, Any] | Sequence[str] | None
 StopReason = Literal["stationary", "t_end", "max_steps", "stalled", "callback"]
 Record = dict[str, float | int]
+PathLike = str | os.PathLike[str]
 
 class InvalidInput(ValueError):
     """Invalid input, with the command line's message; ``field`` is the dotted scene key."""
@@ -112,3 +113,14 @@ class Simulation:
 def axisym_solve(branch_name: str, v: float, nodes: int = 241, c0: float = 0.0) -> dict[str, Any]: ...
 def axisym_follow(branch_name: str, vs: Sequence[float], nodes: int = 241, c0: float = 0.0) -> dict[str, Any]: ...
 def cli(args: Sequence[str]) -> int: ...
+def studies() -> list[tuple[str, str]]:
+    """The command line's studies: (name, description)."""
+def study(
+    name: str,
+    file: PathLike,
+    out: PathLike,
+    quick: bool = False,
+    force: bool = False,
+    overrides: Overrides = None,
+) -> dict[str, dict[str, npt.NDArray[Any]]]:
+    """Run ``vesicle study NAME FILE --out OUT``; its tables, typed."""
