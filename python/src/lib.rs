@@ -21,6 +21,7 @@ fn _vesicle(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_class::<scene::Scene>()?;
     m.add_class::<simulation::Simulation>()?;
+    m.add_class::<drive::StepView>()?;
     m.add("InvalidInput", py.get_type::<errors::InvalidInput>())?;
     m.add("BlowUp", py.get_type::<errors::BlowUp>())?;
     m.add("DeviceError", py.get_type::<errors::DeviceError>())?;

@@ -57,7 +57,8 @@ impl Simulation {
     fn state(&self) -> PyResult<MutexGuard<'_, State>> {
         self.state.try_lock().map_err(|_| {
             PyRuntimeError::new_err(
-                "the simulation is running (a callback cannot read it: use the record it is given)",
+                "the simulation is running (a callback cannot read it: use the StepView it is \
+                 given, with the step's record and phi)",
             )
         })
     }
@@ -76,8 +77,17 @@ impl Simulation {
             function: c.unbind(),
             every,
         });
-        let mut state = self.state()?;
-        match drive::run(py, &mut state.stepper, &rules, callback.as_ref()) {
+        let mut guard = self.state()?;
+        let state = &mut *guard;
+        let outputs = &mut [];
+        match drive::run(
+            py,
+            &mut state.stepper,
+            &state.grid,
+            &rules,
+            callback.as_ref(),
+            outputs,
+        ) {
             Ended::Stopped(why) => Ok(why),
             Ended::Raised(e) => Err(e),
             Ended::Failed(e, t) => Err(to_py(py, e, Some(t))),
@@ -202,10 +212,11 @@ impl Simulation {
     /// `max_steps` counts every step since t = 0, not this call's; `stop_residual` bounds the
     /// stationarity residual RMS(μ − mean μ).
     ///
-    /// `callback(record)` is called every `every` steps with the step's record (a dict of the
-    /// timeseries.csv columns); returning False (not None) stops the run, an exception stops
-    /// it and propagates. The callback runs while the simulation is busy: it must not read the
-    /// simulation itself.
+    /// `callback(view)` is called every `every` steps with a StepView of the step: its record
+    /// (the timeseries.csv columns: view["t"], view.t, dict(view)) and view.phi (the full box,
+    /// readable while the callback runs). Returning False (not None) stops the run; an
+    /// exception stops it and propagates. The callback runs while the simulation is busy: it
+    /// must not read the simulation itself, only its view.
     ///
     /// Raises BlowUp if a step fails, KeyboardInterrupt on Ctrl-C; either way the simulation
     /// keeps its last good state.

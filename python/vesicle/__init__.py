@@ -18,6 +18,7 @@ Names:
   command line validates it;
 * :class:`Simulation` -- run / step / checkpoint / resume, state, ``phi``, ``history``,
   ``surface()``, writers (``.npy``, ``.vti``, ``.ply``, PNG, charts);
+* :class:`StepView` -- what a callback is given: the step's record (a mapping) and its ``phi``;
 * :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (any c̄0);
 * :func:`study` -- the command line's studies (``STUDIES``), their tables typed;
 * :exc:`InvalidInput` (a ``ValueError`` with ``field``), :exc:`BlowUp` (``step``, ``t``,
@@ -25,13 +26,18 @@ Names:
   ``t``); file errors are ``OSError``.
 """
 
-from ._vesicle import BlowUp, DeviceError, InvalidInput, Scene, Simulation, __version__
+from collections.abc import Mapping as _Mapping
+
+from ._vesicle import BlowUp, DeviceError, InvalidInput, Scene, Simulation, StepView, __version__
 from . import axisym, commands
 from .commands import STUDIES, cli, diagram, diagram_merge, read_tables, studies, study
+
+_Mapping.register(StepView)
 
 __all__ = [
     "Scene",
     "Simulation",
+    "StepView",
     "InvalidInput",
     "BlowUp",
     "DeviceError",
