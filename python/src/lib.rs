@@ -10,6 +10,7 @@ mod axisym;
 mod commands;
 mod drive;
 mod errors;
+mod outputs;
 mod scene;
 mod simulation;
 

@@ -4,10 +4,11 @@
 use crate::arrays::{field_array, history_dict, points, record_dict, triangles};
 use crate::drive::{self, Callback, Ended, Stepper};
 use crate::errors::{check, to_py};
+use crate::outputs::{Folder, Kept, Snapshot, Unwritten};
 use crate::scene::{from_json, Scene};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 use vesicle::analysis::levelset;
@@ -50,6 +51,8 @@ struct State {
     scene: config::Scene,
     /// The computed grid (to unfold a reduced box).
     grid: Grid,
+    /// Snapshots kept by runs without a folder, until take_snapshots().
+    snapshots: Vec<Snapshot>,
 }
 
 impl Simulation {
@@ -69,6 +72,7 @@ impl Simulation {
         rules: StopRules,
         callback: Option<Bound<'_, PyAny>>,
         every: usize,
+        out: Option<PathBuf>,
     ) -> PyResult<&'static str> {
         if every == 0 {
             return Err(PyValueError::new_err("every must be at least 1"));
@@ -77,17 +81,40 @@ impl Simulation {
             function: c.unbind(),
             every,
         });
+        let callback = callback.as_ref();
         let mut guard = self.state()?;
-        let state = &mut *guard;
-        let outputs = &mut [];
-        match drive::run(
-            py,
-            &mut state.stepper,
-            &state.grid,
-            &rules,
-            callback.as_ref(),
-            outputs,
-        ) {
+        let State {
+            stepper,
+            scene,
+            grid,
+            snapshots,
+        } = &mut *guard;
+        let ended = match out {
+            None => {
+                let mut kept = Kept::new(scene, grid, snapshots);
+                let mut checkpoints = Unwritten(scene.checkpoints());
+                let outputs: &mut [&mut (dyn vesicle::driver::simulation::Observer + Send)] =
+                    &mut [&mut kept, &mut checkpoints];
+                drive::run(py, stepper, grid, &rules, callback, outputs)
+            }
+            Some(dir) => {
+                let folder = check(py, Folder::open(&dir))?;
+                let recorder = check(
+                    py,
+                    folder.recorder(scene.records(), &mut stepper.recorder.history),
+                )?;
+                let in_memory = std::mem::replace(&mut stepper.recorder, recorder);
+                let mut snapshots = folder.snapshots(grid, scene);
+                let mut checkpoints = folder.checkpoints(scene);
+                let outputs: &mut [&mut (dyn vesicle::driver::simulation::Observer + Send)] =
+                    &mut [&mut snapshots, &mut checkpoints];
+                let ended = drive::run(py, stepper, grid, &rules, callback, outputs);
+                let written = std::mem::replace(&mut stepper.recorder, in_memory);
+                stepper.recorder.history = written.history;
+                ended
+            }
+        };
+        match ended {
             Ended::Stopped(why) => Ok(why),
             Ended::Raised(e) => Err(e),
             Ended::Failed(e, t) => Err(to_py(py, e, Some(t))),
@@ -156,6 +183,7 @@ impl Simulation {
                 },
                 scene: resolved,
                 grid: problem.grid,
+                snapshots: Vec::new(),
             }),
         })
     }
@@ -198,19 +226,29 @@ impl Simulation {
                 },
                 scene,
                 grid: problem.grid,
+                snapshots: Vec::new(),
             }),
         })
     }
 
     /// Step until a stop rule fires; return why it stopped: "stationary" (residual below
-    /// stop_residual), "t_end", "max_steps", "stalled" (no further progress possible) or
-    /// "callback" (the callback returned False).
+    /// stop_residual), "t_end", "max_steps", "wall_time", "stalled" (no further progress
+    /// possible) or "callback" (the callback returned False).
     ///
-    /// With none of until, max_steps, stop_residual given, the scene's t_end, max_steps and
-    /// stop_residual apply (a run from t = 0 then matches `vesicle run` bit for bit); with any
-    /// given, only those. `until` is a time (the last step is shortened to land on it);
-    /// `max_steps` counts every step since t = 0, not this call's; `stop_residual` bounds the
-    /// stationarity residual RMS(μ − mean μ).
+    /// With none of until, max_steps, stop_residual given, the scene's t_end, max_steps,
+    /// stop_residual and max_wall_minutes apply (a run from t = 0 then matches `vesicle run`
+    /// bit for bit); with any given, only those. `until` is a time (the last step is shortened
+    /// to land on it); `max_steps` counts every step since t = 0, not this call's;
+    /// `stop_residual` bounds the stationarity residual RMS(μ − mean μ).
+    ///
+    /// The scene's output schedules apply as in `vesicle run`: a row of the history on
+    /// `output.records`, a snapshot on `output.snapshots`, a checkpoint on `output.checkpoints`
+    /// (and at the end), steps landing on their simulated times. With `out` (a folder, created
+    /// if missing, continued if it exists) they are written there as `vesicle run --out`
+    /// writes them: timeseries.csv (the history so far, then row by row),
+    /// snapshots/phi_<step>.npy (.vti, .png as the scene asks) and checkpoint.bin, the folder
+    /// locked meanwhile. Without `out` the snapshots are kept in memory (take_snapshots())
+    /// and no checkpoint is written.
     ///
     /// `callback(view)` is called every `every` steps with a StepView of the step: its record
     /// (the timeseries.csv columns: view["t"], view.t, dict(view)) and view.phi (the full box,
@@ -220,7 +258,8 @@ impl Simulation {
     ///
     /// Raises BlowUp if a step fails, KeyboardInterrupt on Ctrl-C; either way the simulation
     /// keeps its last good state.
-    #[pyo3(signature = (until=None, max_steps=None, stop_residual=None, callback=None, every=1))]
+    #[pyo3(signature = (until=None, max_steps=None, stop_residual=None, callback=None, every=1, out=None))]
+    #[allow(clippy::too_many_arguments)]
     fn run(
         &self,
         py: Python<'_>,
@@ -229,6 +268,7 @@ impl Simulation {
         stop_residual: Option<f64>,
         callback: Option<Bound<'_, PyAny>>,
         every: usize,
+        out: Option<PathBuf>,
     ) -> PyResult<&'static str> {
         let rules = if until.is_none() && max_steps.is_none() && stop_residual.is_none() {
             StopRules::of(&self.state()?.scene)
@@ -240,21 +280,48 @@ impl Simulation {
                 ..StopRules::default()
             }
         };
-        self.drive(py, rules, callback, every)
+        self.drive(py, rules, callback, every, out)
     }
 
     /// Take `n` steps (fewer if the engine stalls, the callback returns False, or a step
-    /// fails); return why it stopped, as run() does ("max_steps" when all n were taken).
-    #[pyo3(signature = (n=1, callback=None, every=1))]
+    /// fails); return why it stopped, as run() does ("max_steps" when all n were taken). The
+    /// output schedules and `out` as in run().
+    #[pyo3(signature = (n=1, callback=None, every=1, out=None))]
     fn step(
         &self,
         py: Python<'_>,
         n: usize,
         callback: Option<Bound<'_, PyAny>>,
         every: usize,
+        out: Option<PathBuf>,
     ) -> PyResult<&'static str> {
         let target = self.state()?.stepper.simulation.clock.step + n;
-        self.drive(py, StopRules::steps(target), callback, every)
+        self.drive(py, StopRules::steps(target), callback, every, out)
+    }
+
+    /// The snapshots kept by runs without `out` (on the scene's `output.snapshots` schedule),
+    /// oldest first, as a list of (step, t, phi) with phi the full box (a read-only float64
+    /// array); they are handed over, not copied, and no longer kept.
+    fn take_snapshots<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let (taken, dim) = {
+            let mut state = self.state()?;
+            (std::mem::take(&mut state.snapshots), state.scene.dim)
+        };
+        let items = taken
+            .into_iter()
+            .map(|s| {
+                let phi = field_array(py, s.phi, dim)?;
+                PyTuple::new(
+                    py,
+                    [
+                        s.step.into_pyobject(py)?.into_any(),
+                        s.t.into_pyobject(py)?.into_any(),
+                        phi,
+                    ],
+                )
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        PyList::new(py, items)
     }
 
     /// Write a checkpoint of the current state into `folder` (created if needed):

@@ -102,10 +102,15 @@ class Simulation:
         stop_residual: float | None = None,
         callback: Callback | None = None,
         every: int = 1,
+        out: PathLike | None = None,
     ) -> StopReason:
-        """Step until a stop rule fires; the reason it stopped."""
-    def step(self, n: int = 1, callback: Callback | None = None, every: int = 1) -> StopReason:
+        """Step until a stop rule fires; the reason it stopped. The scene's output schedules
+        apply: written into ``out`` as ``vesicle run`` writes them, else snapshots kept in
+        memory (take_snapshots())."""
+    def step(self, n: int = 1, callback: Callback | None = None, every: int = 1, out: PathLike | None = None) -> StopReason:
         """Take ``n`` steps."""
+    def take_snapshots(self) -> list[tuple[int, float, npt.NDArray[np.float64]]]:
+        """The snapshots kept by runs without ``out``, handed over: (step, t, phi)."""
     def checkpoint(self, folder: str | os.PathLike[str]) -> None:
         """Write folder/checkpoint.bin (atomically) and folder/timeseries.csv."""
     @property
