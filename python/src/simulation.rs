@@ -6,6 +6,8 @@ use crate::drive::{self, Callback, Ended, Stepper};
 use crate::errors::{check, to_py};
 use crate::outputs::{Folder, Kept, Snapshot, Unwritten};
 use crate::scene::{from_json, Scene};
+use ndarray::{Array3, Axis};
+use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -16,12 +18,14 @@ use vesicle::commands::run;
 use vesicle::driver::checkpoint::Checkpoint;
 use vesicle::driver::observers::Recorder;
 use vesicle::driver::record::TimeSeries;
-use vesicle::driver::simulation::{check_stability, Prepared, StopRules};
+use vesicle::driver::simulation::{build_engine, check_stability, Prepared, StopRules};
+use vesicle::engines::AreaConstraint;
 use vesicle::error::Error;
 use vesicle::output;
 use vesicle::problem::config;
-use vesicle::problem::grid::Grid;
-use vesicle::problem::setup;
+use vesicle::problem::grid::{AxisKind, Grid};
+use vesicle::problem::model::{max_abs_diff, PHI_BLOWUP};
+use vesicle::problem::setup::{self, SYMMETRY_TOL};
 
 /// A simulation of a scene: the engine the scene asks for, prepared and constrained exactly
 /// as `vesicle run` does, at t = 0.
@@ -119,6 +123,76 @@ impl Simulation {
             Ended::Raised(e) => Err(e),
             Ended::Failed(e, t) => Err(to_py(py, e, Some(t))),
         }
+    }
+
+    /// φ given from Python as the engine's field: an array of the scene's shape n (the full
+    /// box), finite, within the engines' blow-up limit, and even about every mirror plane of
+    /// the computed box; restricted to the computed box.
+    fn phi_argument(
+        py: Python<'_>,
+        value: &Bound<'_, PyAny>,
+        scene: &config::Scene,
+        grid: &Grid,
+    ) -> PyResult<Array3<f64>> {
+        let bad = |reason: String| to_py(py, Error::config("phi", reason), None);
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("dtype", "float64")?;
+        let array = py
+            .import("numpy")?
+            .call_method("asarray", (value,), Some(&kwargs))
+            .map_err(|e| bad(format!("is not an array of numbers ({e})")))?;
+        let array: PyReadonlyArrayDyn<'_, f64> = array.extract()?;
+        if array.shape() != scene.n.as_slice() {
+            return Err(bad(format!(
+                "has shape {:?}, the scene's box is n = {:?} (the full box, as Simulation.phi \
+                 gives it)",
+                array.shape(),
+                scene.n
+            )));
+        }
+        let values: Vec<f64> = array.as_array().iter().copied().collect();
+        let at = |i: usize| {
+            let mut index = Vec::new();
+            let mut rest = i;
+            for &len in scene.n.iter().rev() {
+                index.push(rest % len);
+                rest /= len;
+            }
+            index.reverse();
+            index
+        };
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(bad(format!(
+                "holds a non-finite value ({}) at index {:?}",
+                values[i],
+                at(i)
+            )));
+        }
+        if let Some(i) = values.iter().position(|v| v.abs() > PHI_BLOWUP) {
+            return Err(bad(format!(
+                "holds {} at index {:?}: |φ| may not exceed {PHI_BLOWUP}, the engines' blow-up \
+                 limit (φ is about ±1 in the bulk)",
+                values[i],
+                at(i)
+            )));
+        }
+        let full = Array3::from_shape_vec(grid.full_shape(), values).expect("the scene's n");
+        for a in (0..3).filter(|&a| grid.kinds[a] == AxisKind::Mirror) {
+            let mut flipped = full.view();
+            flipped.invert_axis(Axis(a));
+            let d = max_abs_diff(&full, flipped);
+            if d > SYMMETRY_TOL {
+                let name = ["x", "y", "z"][a + scene.dim - 3];
+                return Err(bad(format!(
+                    "is not even about the plane {name} = 0 through the box centre (max |φ − \
+                     mirror φ| = {d:.2e}), a mirror plane of this simulation's reduced box; make \
+                     it even (e.g. (phi + numpy.flip(phi, {})) / 2) or run a scene without that \
+                     plane in symmetry",
+                    a + scene.dim - 3
+                )));
+            }
+        }
+        Ok(grid.restrict(&full))
     }
 }
 
@@ -440,6 +514,60 @@ impl Simulation {
             .unfold(state.stepper.simulation.engine().phi())
             .into_owned();
         field_array(py, full, state.scene.dim)
+    }
+
+    /// Set φ: `sim.phi = array`, an array of the scene's shape n (the full box, as phi
+    /// gives it), finite, with |φ| ≤ 5 (the engines' blow-up limit) and even about every
+    /// mirror plane of a reduced box. The engine is built again on it, as a run starts: the
+    /// state (energy, area, volume, σ, residual) is evaluated anew, t, the step count and the
+    /// area target A0 are kept, and the next step starts the scheme afresh (SBDF2 and L-BFGS
+    /// without their history). The history's row of the current step, if any, is replaced.
+    /// Raises InvalidInput (field "phi") for a wrong shape, a non-finite value or one beyond
+    /// the limit, a field that is not even about a mirror plane, or one whose state diverges
+    /// (its energy not finite). A spectral engine holds φ as its spectrum: phi then reads back
+    /// within round-off (about 1e-15) of the array set.
+    #[setter(phi)]
+    fn set_phi(&self, py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mut guard = self.state()?;
+        let state = &mut *guard;
+        let computed = Self::phi_argument(py, value, &state.scene, &state.grid)?;
+        let (scene, stepper) = (&state.scene, &mut state.stepper);
+        let old = &stepper.simulation;
+        let (clock, timers) = (old.clock, old.timers.clone());
+        let pool = &stepper.pool;
+        let built = py.detach(|| {
+            pool.install(|| -> vesicle::error::Result<_> {
+                let mut problem = setup::frame(scene)?;
+                problem.phi = computed;
+                let mut engine = build_engine(scene, &problem)?;
+                let target = scene.area.target.unwrap_or_else(|| engine.measures().area);
+                engine.set_area(AreaConstraint {
+                    method: scene.area_method(),
+                    alpha: scene.alpha(),
+                    target,
+                });
+                let mut simulation = vesicle::driver::simulation::Simulation::new(
+                    engine, scene.dt, scene.dim, scene.eps,
+                );
+                simulation.clock = clock;
+                simulation.clock.last_rate = f64::NAN;
+                simulation.timers = timers;
+                Ok(simulation)
+            })
+        });
+        // The engine's own refusal of a field (a state that diverged) names its argument.
+        let built = built.map_err(|e| match e {
+            Error::Config { field, reason } if field == "initial" => Error::config("phi", reason),
+            other => other,
+        });
+        stepper.simulation = check(py, built)?;
+        let now = stepper.simulation.record();
+        if let Some(last) = stepper.recorder.history.last_mut() {
+            if last.step == now.step {
+                *last = now;
+            }
+        }
+        Ok(())
     }
 
     /// The time series: a dict of 1-D NumPy arrays keyed by the timeseries.csv columns.

@@ -16,9 +16,9 @@ Names:
 
 * :class:`Scene` -- a scene from a dict or a scene file, with overrides, validated as the
   command line validates it;
-* :class:`Simulation` -- run / step / checkpoint / resume, state, ``phi``, ``history``, the
-  scene's output schedules (``run(out=...)``, ``take_snapshots()``), ``surface()``, writers
-  (``.npy``, ``.vti``, ``.ply``, PNG, charts);
+* :class:`Simulation` -- run / step / checkpoint / resume, state, ``phi`` (read and set),
+  ``history``, the scene's output schedules (``run(out=...)``, ``take_snapshots()``),
+  ``surface()``, writers (``.npy``, ``.vti``, ``.ply``, PNG, charts);
 * :class:`StepView` -- what a callback is given: the step's record (a mapping) and its ``phi``;
 * :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (any c̄0);
 * :func:`study` -- the command line's studies (``STUDIES``), their tables typed;

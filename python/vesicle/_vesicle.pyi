@@ -140,6 +140,10 @@ class Simulation:
     @property
     def phi(self) -> npt.NDArray[np.float64]:
         """φ on the full box, read-only, shape n."""
+    @phi.setter
+    def phi(self, value: npt.ArrayLike) -> None:
+        """Set φ (shape n, finite, |φ| ≤ 5, even about the mirror planes): the engine is
+        built again on it."""
     @property
     def history(self) -> dict[str, npt.NDArray[Any]]:
         """The time series, one array per timeseries.csv column."""
