@@ -506,6 +506,11 @@ impl Simulation {
     /// φ on the full box as a read-only float64 NumPy array of shape n ((nx, ny) in 2D,
     /// (nx, ny, nz) in 3D; a mirrored reduced box unfolded), the same values as the
     /// phi_final.npy `vesicle run` writes. Each read is one new copy.
+    ///
+    /// Settable (`sim.phi = array`): an array of shape n, finite, with |φ| ≤ 5 and even about
+    /// every mirror plane of a reduced box (else InvalidInput, field "phi"); the engine is built
+    /// again on it, the state evaluated anew, t, the step count and A0 kept, the scheme started
+    /// afresh. A spectral engine holds its spectrum: phi reads back within round-off.
     #[getter]
     fn phi<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let state = self.state()?;
