@@ -4,6 +4,8 @@
 import csv
 import json
 import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -118,10 +120,36 @@ def test_without_a_folder_snapshots_are_kept_in_memory(tmp_path, cli):
     assert times[1:] == pytest.approx([0.3 * k for k in range(1, len(times))], abs=1e-9)
 
 
+HOLDER = """
+import pathlib, sys, time, vesicle
+folder = pathlib.Path(sys.argv[1])
+scene = {scene!r}
+
+def wait(view):
+    (folder / "ready").write_text("")
+    while not (folder / "done").exists():
+        time.sleep(0.02)
+    return False
+
+vesicle.Simulation(scene).run(out=folder, callback=wait)
+"""
+
+
 def test_a_folder_another_run_holds_is_refused(tmp_path):
-    (tmp_path / ".lock").write_text("1\n")  # process 1 runs on every Linux
-    sim = vesicle.Simulation(scheduled())
-    with pytest.raises(vesicle.InvalidInput) as raised:
-        sim.run(out=tmp_path)
-    assert raised.value.field == "--out"
-    assert sim.step_count == 0
+    # Another process runs into the folder (its callback waits), holding its lock.
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER.format(scene=scheduled()), str(tmp_path)])
+    try:
+        deadline = time.monotonic() + 60
+        while not (tmp_path / "ready").exists():
+            assert holder.poll() is None and time.monotonic() < deadline
+            time.sleep(0.02)
+        sim = vesicle.Simulation(scheduled())
+        with pytest.raises(vesicle.InvalidInput, match="another vesicle run") as raised:
+            sim.run(out=tmp_path)
+        assert raised.value.field == "--out"
+        assert sim.step_count == 0
+    finally:
+        (tmp_path / "done").write_text("")
+        assert holder.wait(timeout=60) == 0
+    # Released: the folder is free again.
+    assert vesicle.Simulation(scheduled()).run(max_steps=2, out=tmp_path) == "max_steps"
