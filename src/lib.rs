@@ -33,8 +33,9 @@
 //!
 //! The names a library user starts from are re-exported here: [`Scene`] (read by [`load`] or
 //! [`load_value`]), [`Problem`] (built by [`build`]), [`Simulation`] and its [`StopRules`],
-//! the [`Engine`] it steps, [`Error`], and the examples in `examples/` (run a scene, read φ,
-//! run a study: `cargo run --release --example run_scene`).
+//! the [`Engine`] it steps, [`Error`], a study by name ([`run_study`], its tables typed as
+//! [`StudyTable`]), and the examples in `examples/` (run a scene, read φ, run a study:
+//! `cargo run --release --example run_scene`).
 //!
 //! ```no_run
 //! use vesicle::driver::simulation::{Simulation, StopRules};
@@ -59,6 +60,8 @@ pub mod npy;
 pub mod output;
 pub mod problem;
 
+pub use commands::studies::{run as run_study, Args as StudyArgs};
+pub use commands::study::table::{Table as StudyTable, Values as StudyValues};
 pub use driver::simulation::{Simulation, StopRules, Stopped};
 pub use engines::{Engine, StepError};
 pub use error::{Error, Result};

@@ -2,16 +2,23 @@
 a fixed number of steps) run by the command line, by Simulation.run(), and by
 Simulation.run() with a callback on every step.
 
-    python python/bench/bench_overhead.py [--steps 200] [--repeats 5] [--cli target/release/vesicle]
+    python python/bench/bench_overhead.py [--steps 1000] [--repeats 6] [--cli target/release/vesicle]
 
-The three are interleaved in each repeat, so a busy machine slows them alike; the medians and
-their ratios are printed for
+The three are interleaved in each repeat, in an order that turns from repeat to repeat (use a
+multiple of 3 repeats), so a busy machine slows them alike; the medians and their ratios are
+printed for
 
 * the step loop's wall time (summary.json "wall_seconds" for the command line, the last
   record's wall_seconds from Python: the same clock around the same loop);
 * the whole call's wall time: the command line process (start, set-up, loop, writing
   phi_final.npy and summary.json; pictures off) against Simulation(scene) + run() + phi;
-* the CPU time (user + system) of the same calls.
+* the CPU time (user + system) of the same calls;
+
+and, for the callback, the median over repeats of each repeat's own ratio (python+callback /
+python of the same repeat: a machine whose load drifts between repeats moves both alike) and
+what one call costs in microseconds.
+
+The callback is given a StepView; it counts the calls, as the cheapest callback would.
 """
 
 import argparse
@@ -58,7 +65,7 @@ def python(scene, callback):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1000)
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=6)
     parser.add_argument("--n", type=int, default=64)
     parser.add_argument("--cli", default=str(ROOT / "target" / "release" / "vesicle"))
     args = parser.parse_args()
@@ -82,10 +89,17 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         scene_file = pathlib.Path(tmp) / "scene.json"
         scene_file.write_text(scene.to_json())
-        for _ in range(args.repeats):
-            results["cli"].append(command_line(args.cli, scene_file, pathlib.Path(tmp) / "out"))
-            results["python"].append(python(scene, None))
-            results["python+callback"].append(python(scene, every_step))
+        runs = {
+            "cli": lambda: command_line(args.cli, scene_file, pathlib.Path(tmp) / "out"),
+            "python": lambda: python(scene, None),
+            "python+callback": lambda: python(scene, every_step),
+        }
+        order = list(runs)
+        for r in range(args.repeats):
+            # The order turns each repeat: a run right after another is a little slower (about
+            # 2 % here, seen with two identical Python runs), which would bias a fixed order.
+            for name in order[r % 3:] + order[: r % 3]:
+                results[name].append(runs[name]())
     assert calls == args.repeats * args.steps
 
     threads = vesicle.Simulation(scene).threads
@@ -104,6 +118,17 @@ def main():
         for name, c, p in zip(("loop", "call", "CPU"), med["python+callback"], med["python"])
     )
     print(f"python+callback / python: {ratios}")
+    paired = [
+        statistics.median(c[i] / p[i] for c, p in zip(results["python+callback"], results["python"]))
+        for i in range(3)
+    ]
+    ratios = "  ".join(f"{name} {r:.3f}" for name, r in zip(("loop", "call", "CPU"), paired))
+    print(f"python+callback / python, paired by repeat: {ratios}")
+    per_call = [
+        statistics.median((c[i] - p[i]) / args.steps * 1e6 for c, p in zip(results["python+callback"], results["python"]))
+        for i in (0, 2)
+    ]
+    print(f"one callback: {per_call[0]:.1f} µs of loop wall time, {per_call[1]:.1f} µs of CPU time")
 
 
 if __name__ == "__main__":

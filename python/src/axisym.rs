@@ -1,4 +1,5 @@
-//! The axisymmetric sharp-interface reference (c0 = 0 shape diagram) as NumPy arrays.
+//! The axisymmetric sharp-interface reference (the shape diagram, at any reduced spontaneous
+//! curvature c̄0) as NumPy arrays.
 
 use crate::errors::check;
 use numpy::PyArray1;
@@ -25,7 +26,9 @@ fn solution<'py>(py: Python<'py>, s: &Solution) -> PyResult<Bound<'py, PyDict>> 
     let d = PyDict::new(py);
     d.set_item("branch", s.branch.name())?;
     d.set_item("v", s.v)?;
+    d.set_item("c0", s.c0)?;
     d.set_item("e", s.e)?;
+    d.set_item("mean_curvature", s.mean_curvature)?;
     d.set_item("sigma", s.sigma)?;
     d.set_item("pressure", s.pressure)?;
     d.set_item("length", s.length())?;
@@ -41,40 +44,55 @@ fn solution<'py>(py: Python<'py>, s: &Solution) -> PyResult<Bound<'py, PyDict>> 
     Ok(d)
 }
 
-/// The stationary shape of `branch` at reduced volume `v` (see vesicle.axisym.solve).
+/// The options of `nodes` nodes (at least 9) at the reduced spontaneous curvature `c0`
+/// (finite).
+fn options(py: Python<'_>, nodes: usize, c0: f64) -> PyResult<Options> {
+    if nodes < 9 {
+        let e = Error::config("nodes", format!("need at least 9 nodes, got {nodes}"));
+        return Err(crate::errors::to_py(py, e, None));
+    }
+    if !c0.is_finite() {
+        let e = Error::config("c0", format!("must be a finite number, got {c0}"));
+        return Err(crate::errors::to_py(py, e, None));
+    }
+    Ok(Options::with_nodes(nodes).with_c0(c0))
+}
+
+/// The stationary shape of `branch` at reduced volume `v` and reduced spontaneous curvature
+/// `c0` (see vesicle.axisym.solve).
 #[pyfunction]
-#[pyo3(signature = (branch_name, v, nodes=241))]
+#[pyo3(signature = (branch_name, v, nodes=241, c0=0.0))]
 pub fn axisym_solve<'py>(
     py: Python<'py>,
     branch_name: &str,
     v: f64,
     nodes: usize,
+    c0: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let b = branch(py, branch_name)?;
-    let opts = Options::with_nodes(nodes);
+    let opts = options(py, nodes, c0)?;
     let s = check(py, py.detach(|| axisym::solve(b, v, &opts)))?;
     solution(py, &s)
 }
 
-/// A branch followed over reduced volumes `vs` (see vesicle.axisym.follow).
+/// A branch followed over reduced volumes `vs` at reduced spontaneous curvature `c0` (see
+/// vesicle.axisym.follow).
 #[pyfunction]
-#[pyo3(signature = (branch_name, vs, nodes=241))]
+#[pyo3(signature = (branch_name, vs, nodes=241, c0=0.0))]
 pub fn axisym_follow<'py>(
     py: Python<'py>,
     branch_name: &str,
     vs: Vec<f64>,
     nodes: usize,
+    c0: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let b = branch(py, branch_name)?;
-    if nodes < 9 {
-        let e = Error::config("nodes", format!("need at least 9 nodes, got {nodes}"));
-        return Err(crate::errors::to_py(py, e, None));
-    }
-    let opts = Options::with_nodes(nodes);
+    let opts = options(py, nodes, c0)?;
     let f = py.detach(|| axisym::follow(b, &vs, &opts));
     let d = PyDict::new(py);
     let col = |g: fn(&Solution) -> f64| f.shapes.iter().map(g).collect::<Vec<f64>>();
     d.set_item("branch", b.name())?;
+    d.set_item("c0", c0)?;
     d.set_item("v", PyArray1::from_vec(py, col(|s| s.v)))?;
     d.set_item("e", PyArray1::from_vec(py, col(|s| s.e)))?;
     d.set_item("sigma", PyArray1::from_vec(py, col(|s| s.sigma)))?;

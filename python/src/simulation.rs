@@ -4,10 +4,13 @@
 use crate::arrays::{field_array, history_dict, points, record_dict, triangles};
 use crate::drive::{self, Callback, Ended, Stepper};
 use crate::errors::{check, to_py};
+use crate::outputs::{Folder, Kept, Snapshot, Unwritten};
 use crate::scene::{from_json, Scene};
+use ndarray::{Array3, Axis};
+use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 use vesicle::analysis::{levelset, surface};
@@ -15,12 +18,14 @@ use vesicle::commands::run;
 use vesicle::driver::checkpoint::Checkpoint;
 use vesicle::driver::observers::Recorder;
 use vesicle::driver::record::TimeSeries;
-use vesicle::driver::simulation::{check_stability, Prepared, StopRules};
+use vesicle::driver::simulation::{build_engine, check_stability, Prepared, StopRules};
+use vesicle::engines::AreaConstraint;
 use vesicle::error::Error;
 use vesicle::output;
 use vesicle::problem::config;
-use vesicle::problem::grid::Grid;
-use vesicle::problem::setup;
+use vesicle::problem::grid::{AxisKind, Grid};
+use vesicle::problem::model::{max_abs_diff, PHI_BLOWUP};
+use vesicle::problem::setup::{self, SYMMETRY_TOL};
 
 /// A simulation of a scene: the engine the scene asks for, prepared and constrained exactly
 /// as `vesicle run` does, at t = 0.
@@ -50,6 +55,8 @@ struct State {
     scene: config::Scene,
     /// The computed grid (to unfold a reduced box).
     grid: Grid,
+    /// Snapshots kept by runs without a folder, until take_snapshots().
+    snapshots: Vec<Snapshot>,
 }
 
 impl Simulation {
@@ -57,7 +64,8 @@ impl Simulation {
     fn state(&self) -> PyResult<MutexGuard<'_, State>> {
         self.state.try_lock().map_err(|_| {
             PyRuntimeError::new_err(
-                "the simulation is running (a callback cannot read it: use the record it is given)",
+                "the simulation is running (a callback cannot read it: use the StepView it is \
+                 given, with the step's record and phi)",
             )
         })
     }
@@ -68,6 +76,7 @@ impl Simulation {
         rules: StopRules,
         callback: Option<Bound<'_, PyAny>>,
         every: usize,
+        out: Option<PathBuf>,
     ) -> PyResult<&'static str> {
         if every == 0 {
             return Err(PyValueError::new_err("every must be at least 1"));
@@ -76,12 +85,114 @@ impl Simulation {
             function: c.unbind(),
             every,
         });
-        let mut state = self.state()?;
-        match drive::run(py, &mut state.stepper, &rules, callback.as_ref()) {
+        let callback = callback.as_ref();
+        let mut guard = self.state()?;
+        let State {
+            stepper,
+            scene,
+            grid,
+            snapshots,
+        } = &mut *guard;
+        let ended = match out {
+            None => {
+                let mut kept = Kept::new(scene, grid, snapshots);
+                let mut checkpoints = Unwritten(scene.checkpoints());
+                let outputs: &mut [&mut (dyn vesicle::driver::simulation::Observer + Send)] =
+                    &mut [&mut kept, &mut checkpoints];
+                drive::run(py, stepper, grid, &rules, callback, outputs)
+            }
+            Some(dir) => {
+                let folder = check(py, Folder::open(&dir))?;
+                let recorder = check(
+                    py,
+                    folder.recorder(scene.records(), &mut stepper.recorder.history),
+                )?;
+                let in_memory = std::mem::replace(&mut stepper.recorder, recorder);
+                let mut snapshots = folder.snapshots(grid, scene);
+                let mut checkpoints = folder.checkpoints(scene);
+                let outputs: &mut [&mut (dyn vesicle::driver::simulation::Observer + Send)] =
+                    &mut [&mut snapshots, &mut checkpoints];
+                let ended = drive::run(py, stepper, grid, &rules, callback, outputs);
+                let written = std::mem::replace(&mut stepper.recorder, in_memory);
+                stepper.recorder.history = written.history;
+                ended
+            }
+        };
+        match ended {
             Ended::Stopped(why) => Ok(why),
             Ended::Raised(e) => Err(e),
             Ended::Failed(e, t) => Err(to_py(py, e, Some(t))),
         }
+    }
+
+    /// φ given from Python as the engine's field: an array of the scene's shape n (the full
+    /// box), finite, within the engines' blow-up limit, and even about every mirror plane of
+    /// the computed box; restricted to the computed box.
+    fn phi_argument(
+        py: Python<'_>,
+        value: &Bound<'_, PyAny>,
+        scene: &config::Scene,
+        grid: &Grid,
+    ) -> PyResult<Array3<f64>> {
+        let bad = |reason: String| to_py(py, Error::config("phi", reason), None);
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("dtype", "float64")?;
+        let array = py
+            .import("numpy")?
+            .call_method("asarray", (value,), Some(&kwargs))
+            .map_err(|e| bad(format!("is not an array of numbers ({e})")))?;
+        let array: PyReadonlyArrayDyn<'_, f64> = array.extract()?;
+        if array.shape() != scene.n.as_slice() {
+            return Err(bad(format!(
+                "has shape {:?}, the scene's box is n = {:?} (the full box, as Simulation.phi \
+                 gives it)",
+                array.shape(),
+                scene.n
+            )));
+        }
+        let values: Vec<f64> = array.as_array().iter().copied().collect();
+        let at = |i: usize| {
+            let mut index = Vec::new();
+            let mut rest = i;
+            for &len in scene.n.iter().rev() {
+                index.push(rest % len);
+                rest /= len;
+            }
+            index.reverse();
+            index
+        };
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(bad(format!(
+                "holds a non-finite value ({}) at index {:?}",
+                values[i],
+                at(i)
+            )));
+        }
+        if let Some(i) = values.iter().position(|v| v.abs() > PHI_BLOWUP) {
+            return Err(bad(format!(
+                "holds {} at index {:?}: |φ| may not exceed {PHI_BLOWUP}, the engines' blow-up \
+                 limit (φ is about ±1 in the bulk)",
+                values[i],
+                at(i)
+            )));
+        }
+        let full = Array3::from_shape_vec(grid.full_shape(), values).expect("the scene's n");
+        for a in (0..3).filter(|&a| grid.kinds[a] == AxisKind::Mirror) {
+            let mut flipped = full.view();
+            flipped.invert_axis(Axis(a));
+            let d = max_abs_diff(&full, flipped);
+            if d > SYMMETRY_TOL {
+                let name = ["x", "y", "z"][a + scene.dim - 3];
+                return Err(bad(format!(
+                    "is not even about the plane {name} = 0 through the box centre (max |φ − \
+                     mirror φ| = {d:.2e}), a mirror plane of this simulation's reduced box; make \
+                     it even (e.g. (phi + numpy.flip(phi, {})) / 2) or run a scene without that \
+                     plane in symmetry",
+                    a + scene.dim - 3
+                )));
+            }
+        }
+        Ok(grid.restrict(&full))
     }
 }
 
@@ -146,6 +257,7 @@ impl Simulation {
                 },
                 scene: resolved,
                 grid: problem.grid,
+                snapshots: Vec::new(),
             }),
         })
     }
@@ -188,28 +300,40 @@ impl Simulation {
                 },
                 scene,
                 grid: problem.grid,
+                snapshots: Vec::new(),
             }),
         })
     }
 
     /// Step until a stop rule fires; return why it stopped: "stationary" (residual below
-    /// stop_residual), "t_end", "max_steps", "stalled" (no further progress possible) or
-    /// "callback" (the callback returned False).
+    /// stop_residual), "t_end", "max_steps", "wall_time", "stalled" (no further progress
+    /// possible) or "callback" (the callback returned False).
     ///
-    /// With none of until, max_steps, stop_residual given, the scene's t_end, max_steps and
-    /// stop_residual apply (a run from t = 0 then matches `vesicle run` bit for bit); with any
-    /// given, only those. `until` is a time (the last step is shortened to land on it);
-    /// `max_steps` counts every step since t = 0, not this call's; `stop_residual` bounds the
-    /// stationarity residual RMS(μ − mean μ).
+    /// With none of until, max_steps, stop_residual given, the scene's t_end, max_steps,
+    /// stop_residual and max_wall_minutes apply (a run from t = 0 then matches `vesicle run`
+    /// bit for bit); with any given, only those. `until` is a time (the last step is shortened
+    /// to land on it); `max_steps` counts every step since t = 0, not this call's;
+    /// `stop_residual` bounds the stationarity residual RMS(μ − mean μ).
     ///
-    /// `callback(record)` is called every `every` steps with the step's record (a dict of the
-    /// timeseries.csv columns); returning False (not None) stops the run, an exception stops
-    /// it and propagates. The callback runs while the simulation is busy: it must not read the
-    /// simulation itself.
+    /// The scene's output schedules apply as in `vesicle run`: a row of the history on
+    /// `output.records`, a snapshot on `output.snapshots`, a checkpoint on `output.checkpoints`
+    /// (and at the end), steps landing on their simulated times. With `out` (a folder, created
+    /// if missing, continued if it exists) they are written there as `vesicle run --out`
+    /// writes them: timeseries.csv (the history so far, then row by row),
+    /// snapshots/phi_<step>.npy (.vti, .png as the scene asks) and checkpoint.bin, the folder
+    /// locked meanwhile. Without `out` the snapshots are kept in memory (take_snapshots())
+    /// and no checkpoint is written.
+    ///
+    /// `callback(view)` is called every `every` steps with a StepView of the step: its record
+    /// (the timeseries.csv columns: view["t"], view.t, dict(view)) and view.phi (the full box,
+    /// readable while the callback runs). Returning False (not None) stops the run; an
+    /// exception stops it and propagates. The callback runs while the simulation is busy: it
+    /// must not read the simulation itself, only its view.
     ///
     /// Raises BlowUp if a step fails, KeyboardInterrupt on Ctrl-C; either way the simulation
     /// keeps its last good state.
-    #[pyo3(signature = (until=None, max_steps=None, stop_residual=None, callback=None, every=1))]
+    #[pyo3(signature = (until=None, max_steps=None, stop_residual=None, callback=None, every=1, out=None))]
+    #[allow(clippy::too_many_arguments)]
     fn run(
         &self,
         py: Python<'_>,
@@ -218,6 +342,7 @@ impl Simulation {
         stop_residual: Option<f64>,
         callback: Option<Bound<'_, PyAny>>,
         every: usize,
+        out: Option<PathBuf>,
     ) -> PyResult<&'static str> {
         let rules = if until.is_none() && max_steps.is_none() && stop_residual.is_none() {
             StopRules::of(&self.state()?.scene)
@@ -229,21 +354,48 @@ impl Simulation {
                 ..StopRules::default()
             }
         };
-        self.drive(py, rules, callback, every)
+        self.drive(py, rules, callback, every, out)
     }
 
     /// Take `n` steps (fewer if the engine stalls, the callback returns False, or a step
-    /// fails); return why it stopped, as run() does ("max_steps" when all n were taken).
-    #[pyo3(signature = (n=1, callback=None, every=1))]
+    /// fails); return why it stopped, as run() does ("max_steps" when all n were taken). The
+    /// output schedules and `out` as in run().
+    #[pyo3(signature = (n=1, callback=None, every=1, out=None))]
     fn step(
         &self,
         py: Python<'_>,
         n: usize,
         callback: Option<Bound<'_, PyAny>>,
         every: usize,
+        out: Option<PathBuf>,
     ) -> PyResult<&'static str> {
         let target = self.state()?.stepper.simulation.clock.step + n;
-        self.drive(py, StopRules::steps(target), callback, every)
+        self.drive(py, StopRules::steps(target), callback, every, out)
+    }
+
+    /// The snapshots kept by runs without `out` (on the scene's `output.snapshots` schedule),
+    /// oldest first, as a list of (step, t, phi) with phi the full box (a read-only float64
+    /// array); they are handed over, not copied, and no longer kept.
+    fn take_snapshots<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let (taken, dim) = {
+            let mut state = self.state()?;
+            (std::mem::take(&mut state.snapshots), state.scene.dim)
+        };
+        let items = taken
+            .into_iter()
+            .map(|s| {
+                let phi = field_array(py, s.phi, dim)?;
+                PyTuple::new(
+                    py,
+                    [
+                        s.step.into_pyobject(py)?.into_any(),
+                        s.t.into_pyobject(py)?.into_any(),
+                        phi,
+                    ],
+                )
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        PyList::new(py, items)
     }
 
     /// Write a checkpoint of the current state into `folder` (created if needed):
@@ -354,6 +506,11 @@ impl Simulation {
     /// φ on the full box as a read-only float64 NumPy array of shape n ((nx, ny) in 2D,
     /// (nx, ny, nz) in 3D; a mirrored reduced box unfolded), the same values as the
     /// phi_final.npy `vesicle run` writes. Each read is one new copy.
+    ///
+    /// Settable (`sim.phi = array`): an array of shape n, finite, with |φ| ≤ 5 and even about
+    /// every mirror plane of a reduced box (else InvalidInput, field "phi"); the engine is built
+    /// again on it, the state evaluated anew, t, the step count and A0 kept, the scheme started
+    /// afresh. A spectral engine holds its spectrum: phi reads back within round-off.
     #[getter]
     fn phi<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let state = self.state()?;
@@ -362,6 +519,60 @@ impl Simulation {
             .unfold(state.stepper.simulation.engine().phi())
             .into_owned();
         field_array(py, full, state.scene.dim)
+    }
+
+    /// Set φ: `sim.phi = array`, an array of the scene's shape n (the full box, as phi
+    /// gives it), finite, with |φ| ≤ 5 (the engines' blow-up limit) and even about every
+    /// mirror plane of a reduced box. The engine is built again on it, as a run starts: the
+    /// state (energy, area, volume, σ, residual) is evaluated anew, t, the step count and the
+    /// area target A0 are kept, and the next step starts the scheme afresh (SBDF2 and L-BFGS
+    /// without their history). The history's row of the current step, if any, is replaced.
+    /// Raises InvalidInput (field "phi") for a wrong shape, a non-finite value or one beyond
+    /// the limit, a field that is not even about a mirror plane, or one whose state diverges
+    /// (its energy not finite). A spectral engine holds φ as its spectrum: phi then reads back
+    /// within round-off (about 1e-15) of the array set.
+    #[setter(phi)]
+    fn set_phi(&self, py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mut guard = self.state()?;
+        let state = &mut *guard;
+        let computed = Self::phi_argument(py, value, &state.scene, &state.grid)?;
+        let (scene, stepper) = (&state.scene, &mut state.stepper);
+        let old = &stepper.simulation;
+        let (clock, timers) = (old.clock, old.timers.clone());
+        let pool = &stepper.pool;
+        let built = py.detach(|| {
+            pool.install(|| -> vesicle::error::Result<_> {
+                let mut problem = setup::frame(scene)?;
+                problem.phi = computed;
+                let mut engine = build_engine(scene, &problem)?;
+                let target = scene.area.target.unwrap_or_else(|| engine.measures().area);
+                engine.set_area(AreaConstraint {
+                    method: scene.area_method(),
+                    alpha: scene.alpha(),
+                    target,
+                });
+                let mut simulation = vesicle::driver::simulation::Simulation::new(
+                    engine, scene.dt, scene.dim, scene.eps,
+                );
+                simulation.clock = clock;
+                simulation.clock.last_rate = f64::NAN;
+                simulation.timers = timers;
+                Ok(simulation)
+            })
+        });
+        // The engine's own refusal of a field (a state that diverged) names its argument.
+        let built = built.map_err(|e| match e {
+            Error::Config { field, reason } if field == "initial" => Error::config("phi", reason),
+            other => other,
+        });
+        stepper.simulation = check(py, built)?;
+        let now = stepper.simulation.record();
+        if let Some(last) = stepper.recorder.history.last_mut() {
+            if last.step == now.step {
+                *last = now;
+            }
+        }
+        Ok(())
     }
 
     /// The time series: a dict of 1-D NumPy arrays keyed by the timeseries.csv columns.

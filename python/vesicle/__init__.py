@@ -16,27 +16,37 @@ Names:
 
 * :class:`Scene` -- a scene from a dict or a scene file, with overrides, validated as the
   command line validates it;
-* :class:`Simulation` -- run / step / checkpoint / resume, state, ``phi``, ``history``,
+* :class:`Simulation` -- run / step / checkpoint / resume, state, ``phi`` (read and set),
+  ``history``, the scene's output schedules (``run(out=...)``, ``take_snapshots()``),
   ``surface()``, writers (``.npy``, ``.vti``, ``.ply``, PNG, charts);
-* :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (c0 = 0);
+* :class:`StepView` -- what a callback is given: the step's record (a mapping) and its ``phi``;
+* :mod:`vesicle.axisym` -- the axisymmetric sharp-interface reference (any c̄0);
+* :func:`study` -- the command line's studies (``STUDIES``), their tables typed;
 * :exc:`InvalidInput` (a ``ValueError`` with ``field``), :exc:`BlowUp` (``step``, ``t``,
   ``dt``, ``check``, ``cause``), :exc:`DeviceError` (a GPU that failed during a run: ``step``,
   ``t``); file errors are ``OSError``.
 """
 
-from ._vesicle import BlowUp, DeviceError, InvalidInput, Scene, Simulation, __version__
+from collections.abc import Mapping as _Mapping
+
+from ._vesicle import BlowUp, DeviceError, InvalidInput, Scene, Simulation, StepView, __version__
 from . import axisym, commands
-from .commands import cli, diagram, diagram_merge, read_tables, study
+from .commands import STUDIES, cli, diagram, diagram_merge, read_tables, studies, study
+
+_Mapping.register(StepView)
 
 __all__ = [
     "Scene",
     "Simulation",
+    "StepView",
     "InvalidInput",
     "BlowUp",
     "DeviceError",
     "axisym",
     "commands",
     "cli",
+    "STUDIES",
+    "studies",
     "study",
     "diagram",
     "diagram_merge",

@@ -1,6 +1,10 @@
 """The command line's studies and shape diagram from Python: each runs in this process, writes
 its folder (CSV files, charts, text) exactly as the ``vesicle`` program does, and returns its
 tables as NumPy arrays.
+
+The studies are the command line's own list (``STUDIES``, read from the library's registry),
+and a study's tables come back from the library typed, from the rows its CSV files are written
+from.
 """
 
 from __future__ import annotations
@@ -14,11 +18,19 @@ from typing import Any
 import numpy as np
 
 from ._vesicle import cli as _cli
+from ._vesicle import studies as _studies
+from ._vesicle import study as _study
 
 PathLike = str | os.PathLike[str]
 Tables = dict[str, dict[str, np.ndarray]]
 
-STUDIES = ("convergence", "precision", "stability", "stationary")
+#: The studies of ``vesicle study NAME``, in the command line's order (from the library).
+STUDIES: tuple[str, ...] = tuple(name for name, _ in _studies())
+
+
+def studies() -> dict[str, str]:
+    """The studies the command line runs: {name: its one-line description}, in its order."""
+    return dict(_studies())
 
 
 def cli(*args: str | os.PathLike[str]) -> int:
@@ -52,24 +64,19 @@ def read_tables(folder: PathLike) -> Tables:
     return tables
 
 
-def study(kind: str, file: PathLike, out: PathLike, quick: bool = False, force: bool = False) -> Tables:
-    """Run ``vesicle study KIND FILE --out OUT`` and return its tables (read_tables(out)).
+def study(kind: str, file: PathLike, out: PathLike, quick: bool = False, force: bool = False,
+          overrides: Any = None) -> Tables:
+    """Run ``vesicle study KIND FILE --out OUT`` in this process (the engine with the GIL
+    released) and return its tables: {CSV file stem: {column: array}}, counts as int64,
+    numbers as float64 (an empty cell NaN), names as str arrays.
 
-    ``kind`` is "convergence", "precision" or "stability" (``file`` a study file, e.g.
-    runs/studies/stability.json; ``quick`` runs its quick block) or "stationary" (``file`` a
-    scene file; ``quick`` does not apply). ``force`` replaces an existing ``out``.
+    ``kind`` is one of ``STUDIES`` (see studies()): ``file`` is a study file (e.g.
+    runs/studies/stability.json; ``quick`` runs its quick block), or for "stationary" also a
+    scene file, with ``overrides`` (a dict or "key=value" strings, as ``--set``). ``force``
+    replaces an existing ``out``. Raises InvalidInput (field "study") for an unknown kind, and
+    as the command line for a bad file or argument.
     """
-    if kind not in STUDIES:
-        raise ValueError(f"unknown study {kind!r}: expected one of {', '.join(STUDIES)}")
-    args = ["study", kind, file, "--out", out]
-    if quick:
-        if kind == "stationary":
-            raise ValueError("the stationary study has no quick variant")
-        args.append("--quick")
-    if force:
-        args.append("--force")
-    cli(*args)
-    return read_tables(out)
+    return _study(kind, file, out, quick, force, overrides)
 
 
 def diagram(file: PathLike, out: PathLike, case: int | None = None, jobs: int | None = None,
@@ -109,4 +116,4 @@ def diagram_merge(file: PathLike, out: PathLike, force: bool = False) -> Tables:
     return read_tables(out)
 
 
-__all__ = ["STUDIES", "cli", "diagram", "diagram_merge", "read_tables", "study"]
+__all__ = ["STUDIES", "cli", "diagram", "diagram_merge", "read_tables", "studies", "study"]

@@ -8,6 +8,7 @@
 //! anything else.
 
 use crate::commands::run::{self, RunOptions};
+use crate::commands::study::harness::Study as _;
 use crate::error::Error;
 use crate::problem::config::{self, Scene};
 use clap::{Parser, Subcommand};
@@ -181,38 +182,21 @@ struct StudyArgs {
 }
 
 impl StudyArgs {
-    /// Refuse a study file that does not exist.
-    fn exists(&self) -> Result<(), Error> {
-        if self.file.exists() {
-            Ok(())
-        } else {
-            Err(Error::config(
-                "(study file)",
-                format!("{} does not exist", self.file.display()),
-            ))
-        }
-    }
-
-    /// Run the study `S` of the file in one pool of its threads
-    /// ([`crate::commands::study::file::threads`]), into [`Self::folder`].
+    /// Run the study `name` of the file ([`crate::commands::studies::run`]: in one pool of its
+    /// threads), into [`Self::folder`].
     ///
     /// # Errors
     /// A missing or unreadable study file, or the study's own errors.
-    fn run<S: crate::commands::study::harness::Study>(&self) -> Result<(), Error>
-    where
-        S::Output: Send,
-    {
-        self.exists()?;
+    fn run(&self, name: &str) -> Result<(), Error> {
         let out = self.folder();
-        let threads = crate::commands::study::file::threads(&self.file, S::NAME, self.quick)?;
-        crate::cpu::in_pool(threads, || {
-            crate::commands::study::harness::run::<S>(
-                &self.file,
-                self.quick,
-                &out,
-                self.output.force,
-            )
-        })?;
+        let args = crate::commands::studies::Args {
+            file: &self.file,
+            quick: self.quick,
+            set: &[],
+            out: &out,
+            force: self.output.force,
+        };
+        crate::commands::studies::run(name, &args)?;
         Ok(())
     }
 
@@ -415,47 +399,30 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
                 "-stationary"
             };
             let out = output.folder(&args.scene, suffix);
-            if crate::commands::study::file::is_study_file(&args.scene) {
-                if !args.set.is_empty() {
-                    return Err(Error::config(
-                        "--set",
-                        "applies to a scene file; a study file sets its scene's keys itself",
-                    ));
-                }
-                crate::commands::study::stationary::stationary_file(
-                    &args.scene,
-                    quick,
-                    &out,
-                    output.force,
-                )?;
-            } else {
-                if quick {
-                    return Err(Error::config(
-                        "--quick",
-                        "applies to a study file (one with a \"study\" key), not a scene file",
-                    ));
-                }
-                let scene = load(&args)?;
-                with_threads(&scene, || {
-                    crate::commands::study::stationary::stationary(&scene, &out, output.force)
-                })?;
-            }
+            let study = crate::commands::studies::Args {
+                file: &args.scene,
+                quick,
+                set: &args.set,
+                out: &out,
+                force: output.force,
+            };
+            crate::commands::studies::run("stationary", &study)?;
             Ok(0)
         }
         Command::Study(Study::Precision(args)) => {
-            args.run::<crate::commands::study::precision::Precision>()?;
+            args.run(crate::commands::study::precision::Precision::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Stability(args)) => {
-            args.run::<crate::commands::study::stability::Stability>()?;
+            args.run(crate::commands::study::stability::Stability::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Budding(args)) => {
-            args.run::<crate::commands::study::budding::Budding>()?;
+            args.run(crate::commands::study::budding::Budding::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Convergence(args)) => {
-            args.run::<crate::commands::study::convergence::Convergence>()?;
+            args.run(crate::commands::study::convergence::Convergence::NAME)?;
             Ok(0)
         }
         Command::Axisym(args) => {

@@ -40,6 +40,8 @@ pub struct Report {
     pub text: String,
     /// `(file name, CSV bytes)`, from [`table::csv`].
     pub tables: Vec<(String, Vec<u8>)>,
+    /// The same tables as typed columns ([`table::typed`]), for the library's callers.
+    pub typed: Vec<table::Table>,
     /// `(file stem, figure)`: each written as `stem.png` and `stem.svg`.
     pub charts: Vec<(String, Figure)>,
 }
@@ -51,6 +53,7 @@ impl Report {
     /// `Error::Config` if a row cannot be written (a bug).
     pub fn table<R: Row>(&mut self, name: &str, rows: &[R]) -> Result<()> {
         self.tables.push((name.to_string(), table::csv(rows)?));
+        self.typed.push(table::typed(name, rows));
         Ok(())
     }
 

@@ -55,6 +55,26 @@ impl Serialize for Cell<'_> {
     }
 }
 
+/// One column of a study's table as typed values (what the library returns beside the CSV file).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Values {
+    /// Counts.
+    Int(Vec<i64>),
+    /// Numbers (NaN where a value is missing).
+    Float(Vec<f64>),
+    /// Names and classes.
+    Text(Vec<String>),
+}
+
+/// A study's table as typed columns: the CSV file `name.csv`'s columns, from the same rows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// The CSV file's stem (`stability` for `stability.csv`).
+    pub name: String,
+    /// `(CSV header, values)` in the file's order.
+    pub columns: Vec<(String, Values)>,
+}
+
 /// How a float is printed in the text table (counts and names print as they are).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -161,6 +181,52 @@ impl<R> Column<R> {
 pub trait Row: Sized {
     /// The columns, in the order of the CSV file and of the text table.
     fn columns() -> Vec<Column<Self>>;
+}
+
+/// The CSV columns of `rows` as typed values, the table named `name`: a column of counts is
+/// [`Values::Int`], of numbers [`Values::Float`], of names [`Values::Text`] (by its cells' kind;
+/// a column whose cells are of mixed kinds, none in this program, is given as text).
+pub fn typed<'r, R: Row + 'r>(name: &str, rows: impl IntoIterator<Item = &'r R>) -> Table {
+    let rows: Vec<&R> = rows.into_iter().collect();
+    let values = |c: &Column<R>| -> Values {
+        let cells: Vec<Cell> = rows.iter().map(|r| (c.value)(r)).collect();
+        let ints: Option<Vec<i64>> = cells
+            .iter()
+            .map(|v| match v {
+                Cell::Int(n) => Some(*n as i64),
+                _ => None,
+            })
+            .collect();
+        let floats: Option<Vec<f64>> = cells
+            .iter()
+            .map(|v| match v {
+                Cell::Float(x) => Some(*x),
+                _ => None,
+            })
+            .collect();
+        match (ints, floats) {
+            (Some(i), _) if !cells.is_empty() => Values::Int(i),
+            (_, Some(f)) => Values::Float(f),
+            _ => Values::Text(
+                cells
+                    .iter()
+                    .map(|v| match v {
+                        Cell::Text(t) => t.to_string(),
+                        Cell::Int(n) => n.to_string(),
+                        Cell::Float(x) => x.to_string(),
+                    })
+                    .collect(),
+            ),
+        }
+    };
+    let columns = R::columns()
+        .into_iter()
+        .filter_map(|c| c.name.map(|n| (n.to_string(), values(&c))))
+        .collect();
+    Table {
+        name: name.strip_suffix(".csv").unwrap_or(name).to_string(),
+        columns,
+    }
 }
 
 /// `rows` as CSV: the named columns ([`Column::csv`], [`Column::both`]).
@@ -276,6 +342,30 @@ mod tests {
                 steps: 12,
             },
         ]
+    }
+
+    /// The typed table has the CSV's columns, in its order and under its headers, each of its
+    /// cells' kind: names as text (an empty name kept empty), floats bit for bit (NaN kept),
+    /// counts as integers; the printed-only column is left out.
+    #[test]
+    fn rows_become_typed_columns() {
+        let t = typed("runs.csv", &samples());
+        assert_eq!(t.name, "runs");
+        let names: Vec<&str> = t.columns.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["series", "x", "steps"]);
+        assert_eq!(
+            t.columns[0].1,
+            Values::Text(vec!["FD, h = 1".into(), "spectral".into(), String::new()])
+        );
+        match &t.columns[1].1 {
+            Values::Float(x) => {
+                assert_eq!(x[0].to_bits(), (0.1f64 + 0.2).to_bits());
+                assert!(x[1].is_nan());
+                assert_eq!(x[2], 1e-6);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(t.columns[2].1, Values::Int(vec![3, 0, 12]));
     }
 
     /// The CSV has the named columns only; a comma inside a field is quoted; NaN reads `NaN`;

@@ -71,8 +71,16 @@ fn measured(scene: &Scene, plan: &Plan) -> Result<(Measurement, Report)> {
 /// `Error::Config` for an unsuitable scene or an existing `out` without `force`;
 /// `Error::Blowup` if a route diverges.
 pub fn stationary(scene: &Scene, out: &Path, force: bool) -> Result<Measurement> {
-    let plan = Plan::for_scene(scene);
-    harness::run_with::<Stationary>(out, force, || measured(scene, &plan))
+    harness::run_with::<Stationary>(out, force, || on_scene(scene))
+}
+
+/// The study's measurement and report on the scene file's `scene` (the default routes of
+/// [`Plan::for_scene`]), nothing written.
+///
+/// # Errors
+/// As [`stationary`], but for the output folder.
+pub fn on_scene(scene: &Scene) -> Result<(Measurement, Report)> {
+    measured(scene, &Plan::for_scene(scene))
 }
 
 /// Run the study file at `path` (its quick variant if `quick`) into `out` ([`harness::run`]).
