@@ -20,14 +20,14 @@
 #   stability        study stability (the Δt × h map, α, the c0 axis)              22 s, measured
 #   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
-#   budding          study budding budding.json (41 relaxations)   ~4.7 min (29 of 41 in 200 s)
+#   budding          study budding budding.json (41 relaxations)                  505 s, measured
 #   axisym_c0        axisym --c0=-1,...,3 --nodes 481                ~7 min (438 s wall recorded)
 #   diagram          diagram diagram.json, 84 cases, --jobs 2      ~6-12 min (cases: 743 s, 1 thread each)
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
 #   diagram_c0_fine  diagram diagram_c0_fine.json, 165 cases      ~17-35 min (cases: 1 968 s)
 #   budding3d        run budding3d.json (200 000 steps), measure, render    ~14 min (820 s recorded)
-#   deflation3d      run deflation3d.json (215 000 steps), measure, render  ~16 min (961 s recorded)
+#   deflation3d      run deflation3d.json (215 000 steps), measure, render     280 s, measured
 #   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
 #   pearling3d       run pearling3d.json (200 000 steps), measure, render   ~62 min (recorded)
 # The recorded scene times are of older builds (pear3d, recorded at 94 s, now takes 11 s). The
