@@ -29,7 +29,7 @@
 //!
 //! **Mirror axes.** A plan made by [`ColumnFft::new_dct`] computes the DCT-II down the columns
 //! (and, inverse, the lanes route's unnormalised DCT-III) by Makhoul's method, as
-//! [`super::transform`] does on gathered lanes: the first stage reads the rows in Makhoul's
+//! [`crate::Transform`] does on gathered lanes: the first stage reads the rows in Makhoul's
 //! order (`v_p = x_{2p}`, `v_{m−1−p} = x_{2p+1}`) and the post-twiddle pairs rows `k` and
 //! `m − k` of the result while the block is in L1; the inverse pre-twiddles the rows, and its
 //! last stage writes them back in data order. No gather, no scatter: a mirror axis costs what a
@@ -37,7 +37,7 @@
 
 use std::f64::consts::PI;
 
-use super::transform::{dct_twiddle_table, makhoul_positions};
+use crate::{dct_twiddle_table, makhoul_positions};
 use ndarray::ArrayViewMut2;
 use num_complex::Complex64;
 
@@ -257,7 +257,7 @@ impl Dct {
     ///
     /// and before the inverse `V_k = P + iQ`, `V_{n−k} = P − iQ`, `P = c_k a + s_k b`,
     /// `Q = s_k a − c_k b`; row 0 unchanged, the middle row of an even n paired with itself
-    /// (its second output). The formulas of the lanes route ([`super::transform`]), with the
+    /// (its second output). The formulas of the lanes route ([`crate::dct`]), with the
     /// same operations. From the rows `src` into the rows `dst`.
     ///
     /// # Safety
