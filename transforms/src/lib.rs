@@ -35,6 +35,13 @@
 //! the reason it is sound. The FFTs of other lengths are `rustfft`'s and `realfft`'s, planned by
 //! `vesicle-fft-plans`.
 
+// Every `unsafe` block says why it is sound, every `unsafe fn` when it may be called.
+#![warn(
+    unsafe_op_in_unsafe_fn,
+    clippy::undocumented_unsafe_blocks,
+    clippy::missing_safety_doc
+)]
+
 #[cfg(target_arch = "x86_64")]
 mod avx;
 mod columns;

@@ -141,6 +141,9 @@ mod avx2 {
     use std::arch::x86_64::*;
 
     /// [`super::pointwise_sums`] with AVX2/FMA: lane l takes the values j ≡ l (mod 4), as there.
+    ///
+    /// # Safety
+    /// The CPU has AVX2 and FMA; `old` and `big` hold as many values as `phi`.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn pointwise_sums(phi: &[f64], old: &[f64], big: &[f64]) -> [f64; 4] {
         let n = phi.len();
@@ -167,6 +170,9 @@ mod avx2 {
     }
 
     /// [`super::pair_sums`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
+    ///
+    /// # Safety
+    /// The CPU has AVX2 and FMA; `y` and every `v` hold as many values as `s`.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn pair_sums(s: &[f32], y: &[f32], v: [&[f64]; 4]) -> [f64; 6] {
         let n = s.len();
