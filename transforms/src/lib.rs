@@ -19,9 +19,9 @@
 //! function of k, which acts on a packed spectrum real by real (vesicle's `engines::spectral::pieces`).
 //!
 //! Implementation: the last (contiguous) axis is transformed row by row, periodic through a
-//! complex FFT of half its length ([`real_rows`]; `realfft` when the length is odd) or,
+//! complex FFT of half its length (`real_rows.rs`; `realfft` when the length is odd) or,
 //! for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
-//! transformed down the columns in place ([`columns`]) when their length is a product of
+//! transformed down the columns in place (`columns.rs`) when their length is a product of
 //! 2s, 3s and 5s, and otherwise gathered a block of columns at a time into contiguous lanes,
 //! transformed with one batched `rustfft` call and scattered back. A DCT-II of length `m` is
 //! computed with one complex FFT of length `m` (Makhoul's even/odd reordering plus a twiddle); it
