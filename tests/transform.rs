@@ -19,12 +19,20 @@ thread_local! {
     static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
 }
 
+// SAFETY: every call goes on to the system allocator unchanged, so its memory and layouts are
+// the system allocator's; counting allocates nothing and cannot unwind.
 unsafe impl GlobalAlloc for CountingAlloc {
+    /// # Safety
+    /// As for [`GlobalAlloc::alloc`].
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        // SAFETY: the caller's `layout`, as `GlobalAlloc::alloc` requires.
         unsafe { System.alloc(layout) }
     }
+    /// # Safety
+    /// As for [`GlobalAlloc::dealloc`].
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` was allocated by `alloc` above, that is by `System`, with `layout`.
         unsafe { System.dealloc(ptr, layout) }
     }
 }

@@ -15,7 +15,6 @@ pub mod failure;
 pub mod fd;
 pub mod gpu;
 pub mod numerics;
-pub(crate) mod private;
 pub mod relax;
 pub mod spectral;
 pub mod stencil;

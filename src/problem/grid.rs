@@ -15,14 +15,8 @@
 use ndarray::Array3;
 use std::borrow::Cow;
 
-/// Boundary treatment of one axis.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AxisKind {
-    /// Periodic box of `n` points.
-    Periodic,
-    /// Upper half of an even periodic box of `2n` points: Neumann walls half-way between points.
-    Mirror,
-}
+/// Boundary treatment of one axis (defined beside the transforms, in `vesicle-transforms`).
+pub use vesicle_transforms::AxisKind;
 
 /// Grid geometry shared by all engines.
 #[derive(Clone, Debug, PartialEq)]

@@ -28,11 +28,11 @@
 //! same stencil as [`crate::engines::stencil`]'s ghosts.
 
 use super::lanes::{in_lanes, largest, total, Acc, Kernel, Lane, Lanes, LANES};
-use crate::engines::private::Private;
 use crate::engines::stencil::{above, below};
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::{bulk, bulk_at_zero_c0, bulk_derivative, bulk_derivative_at_zero_c0};
 use rayon::prelude::*;
+use vesicle_transforms::Private;
 
 /// The box as planes × rows × row length along the streamed axis, with the axes' walls.
 #[derive(Clone, Copy, Debug)]

@@ -62,8 +62,8 @@ pub(super) fn area_values<const W: usize>(
         (*xx, *xq, *qq) = (aw * x2, aq * x2, aqq * x2);
         (*xd, *qd, *dd) = (aw * xd2, aq * xd2, aw * d2);
     }
-    let [xx, xq, qq, xd, qd, dd] =
-        [&*txx, &*txq, &*tqq, &*txd, &*tqd, &*tdd].map(|v| sum(&v[..len]));
+    let (xx, xq, qq) = (sum(&txx[..len]), sum(&txq[..len]), sum(&tqq[..len]));
+    let (xd, qd, dd) = (sum(&txd[..len]), sum(&tqd[..len]), sum(&tdd[..len]));
     AreaSums {
         xx,
         xq,
@@ -143,7 +143,7 @@ fn gradient_values<const W: usize>(
         (*rr, *res) = (wm * r2, w * m * m * r2);
         *qr = wm * re_dot(*r, *q);
     }
-    [&*trr, &*tres, &*tqr].map(|v| sum(&v[..len]))
+    [sum(&trr[..len]), sum(&tres[..len]), sum(&tqr[..len])]
 }
 }
 

@@ -64,7 +64,7 @@ fn quadratic_values<const L: usize, const W: usize>(
         *pq = aw * re_dot(pv, qv);
         *qq = aw * re_dot(qv, qv);
     }
-    [&tpp[..len], &tpq[..len], &tqq[..len]].map(sum)
+    [sum(&tpp[..len]), sum(&tpq[..len]), sum(&tqq[..len])]
 }
 }
 

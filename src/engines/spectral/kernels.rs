@@ -2,42 +2,13 @@
 //! as interleaved (re, im) reals (or a run of real-space values): a plain sum, a stored L-BFGS
 //! pair's six inner products and the sums of the real-space pass. Each keeps [`LANES`] partial
 //! sums (the last two fuse each multiply-add, `mul_add`), so that the AVX2/FMA build, taken when
-//! the CPU has those instructions, gives the portable build's results bit for bit. [`wide_fn`]
-//! compiles a sweep's element-wise loops for the same instructions.
+//! the CPU has those instructions, gives the portable build's results bit for bit. `wide_fn`
+//! (from `vesicle-transforms`) compiles a sweep's element-wise loops for the same instructions.
 
 /// Partial sums per reduction: one AVX2 register of f64.
 pub const LANES: usize = 4;
 
-/// Defines a function whose body is compiled twice, for AVX2/FMA and as it is, and runs the
-/// first when the CPU has those instructions: the body's element-wise loops are then vectorised
-/// four values wide. Plain `a * b + c` is never fused into an FMA by the compiler, so both
-/// builds give the same values. The arguments are plain names; `const` generics may be given.
-macro_rules! wide_fn {
-    (
-        $(#[$meta:meta])*
-        $vis:vis fn $name:ident $(<$(const $c:ident: $ct:ty),*>)?
-        ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block
-    ) => {
-        $(#[$meta])*
-        #[inline(always)]
-        $vis fn $name $(<$(const $c: $ct),*>)? ($($arg: $ty),*) $(-> $ret)? {
-            #[inline(always)]
-            fn body $(<$(const $c: $ct),*>)? ($($arg: $ty),*) $(-> $ret)? $body
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx2,fma")]
-            fn avx2 $(<$(const $c: $ct),*>)? ($($arg: $ty),*) $(-> $ret)? {
-                body $(::<$($c),*>)? ($($arg),*)
-            }
-            #[cfg(target_arch = "x86_64")]
-            if $crate::cpu::has_avx2_fma() {
-                // SAFETY: the CPU has AVX2 and FMA (checked just now).
-                return unsafe { avx2 $(::<$($c),*>)? ($($arg),*) };
-            }
-            body $(::<$($c),*>)? ($($arg),*)
-        }
-    };
-}
-pub(crate) use wide_fn;
+pub(crate) use vesicle_transforms::wide_fn;
 
 /// Σ_j v_j in [`LANES`] partial sums (a loop the wide build vectorises; the same order, so the
 /// same value, in every build).
@@ -141,6 +112,9 @@ mod avx2 {
     use std::arch::x86_64::*;
 
     /// [`super::pointwise_sums`] with AVX2/FMA: lane l takes the values j ≡ l (mod 4), as there.
+    ///
+    /// # Safety
+    /// The CPU has AVX2 and FMA; `old` and `big` hold as many values as `phi`.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn pointwise_sums(phi: &[f64], old: &[f64], big: &[f64]) -> [f64; 4] {
         let n = phi.len();
@@ -167,6 +141,9 @@ mod avx2 {
     }
 
     /// [`super::pair_sums`] with AVX2/FMA: lane l sums the values j ≡ l (mod 4), as there.
+    ///
+    /// # Safety
+    /// The CPU has AVX2 and FMA; `y` and every `v` hold as many values as `s`.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn pair_sums(s: &[f32], y: &[f32], v: [&[f64]; 4]) -> [f64; 6] {
         let n = s.len();

@@ -5,9 +5,9 @@ use num_complex::Complex64;
 use vesicle_fft_plans::Planner;
 
 use super::{has_avx, Direction, LaneKernel, Work};
-use crate::engines::spectral::columns::ColumnFft;
-use crate::engines::spectral::kernels::wide_fn;
-use crate::problem::grid::AxisKind;
+use crate::columns::ColumnFft;
+use crate::wide_fn;
+use crate::AxisKind;
 
 /// How a strided axis (0 or 1) is transformed.
 pub(super) enum Strided {

@@ -6,8 +6,8 @@ use num_complex::Complex64;
 use vesicle_fft_plans::{ComplexToReal, RealToComplex};
 
 use super::{has_avx, makhoul_position, Direction, LaneKernel, Work};
-use crate::engines::spectral::kernels::wide_fn;
-use crate::engines::spectral::real_rows::RealRows;
+use crate::real_rows::RealRows;
+use crate::wide_fn;
 
 /// The transform along the last (contiguous) axis.
 pub(super) enum LastAxis {

@@ -8,7 +8,7 @@ use vesicle_fft_plans::{Fft, Planner};
 use super::{
     dct_twiddle_table, dct_twiddles, makhoul_positions, Direction, LANE_BUFFER, LANE_PAD, MIN_BATCH,
 };
-use crate::problem::grid::AxisKind;
+use crate::AxisKind;
 
 /// A batched 1D kernel along one axis: a complex FFT (periodic) or a DCT-II/DCT-III computed with
 /// a complex FFT of the same length (mirror). Both act on lanes of `len` contiguous values.

@@ -8,7 +8,7 @@ use crate::cpu::has_avx;
 
 /// Makhoul's reordering for the DCT through an FFT: data index `i` goes to lane position
 /// `i/2` when even and `m − 1 − (i−1)/2` when odd.
-pub(in crate::engines::spectral) fn makhoul_positions(m: usize) -> Vec<usize> {
+pub(crate) fn makhoul_positions(m: usize) -> Vec<usize> {
     (0..m).map(|i| makhoul_position(i, m)).collect()
 }
 
@@ -23,7 +23,7 @@ pub(super) fn makhoul_position(i: usize, m: usize) -> usize {
 }
 
 /// The DCT twiddles `w_k = e^{−iπk/(2m)}`, k = 0..m, of a lane of m values.
-pub(in crate::engines::spectral) fn dct_twiddle_table(m: usize) -> Vec<Complex64> {
+pub(crate) fn dct_twiddle_table(m: usize) -> Vec<Complex64> {
     (0..m)
         .map(|k| Complex64::from_polar(1.0, -PI * k as f64 / (2 * m) as f64))
         .collect()

@@ -29,7 +29,7 @@
 //!
 //! **Mirror axes.** A plan made by [`ColumnFft::new_dct`] computes the DCT-II down the columns
 //! (and, inverse, the lanes route's unnormalised DCT-III) by Makhoul's method, as
-//! [`super::transform`] does on gathered lanes: the first stage reads the rows in Makhoul's
+//! [`crate::Transform`] does on gathered lanes: the first stage reads the rows in Makhoul's
 //! order (`v_p = x_{2p}`, `v_{m−1−p} = x_{2p+1}`) and the post-twiddle pairs rows `k` and
 //! `m − k` of the result while the block is in L1; the inverse pre-twiddles the rows, and its
 //! last stage writes them back in data order. No gather, no scatter: a mirror axis costs what a
@@ -37,7 +37,7 @@
 
 use std::f64::consts::PI;
 
-use super::transform::{dct_twiddle_table, makhoul_positions};
+use crate::{dct_twiddle_table, makhoul_positions};
 use ndarray::ArrayViewMut2;
 use num_complex::Complex64;
 
@@ -257,7 +257,7 @@ impl Dct {
     ///
     /// and before the inverse `V_k = P + iQ`, `V_{n−k} = P − iQ`, `P = c_k a + s_k b`,
     /// `Q = s_k a − c_k b`; row 0 unchanged, the middle row of an even n paired with itself
-    /// (its second output). The formulas of the lanes route ([`super::transform`]), with the
+    /// (its second output). The formulas of the lanes route ([`crate::dct`]), with the
     /// same operations. From the rows `src` into the rows `dst`.
     ///
     /// # Safety
@@ -270,7 +270,7 @@ impl Dct {
         let registers = (0..width)
             .step_by(V::VALUES)
             .map(|c| (c, V::VALUES.min(width - c)));
-        // SAFETY (the loops): every row formed is below n, every column below width.
+        // SAFETY: in the loops, every row formed is below n and every column below width.
         unsafe {
             let (from, to) = (src.at(0, 0), dst.at(0, 0));
             for (c, count) in registers.clone() {
@@ -356,6 +356,10 @@ struct Rows {
 
 impl Rows {
     /// Row `i`, column `c`.
+    ///
+    /// # Safety
+    /// Row `i` (`order[i]` when `order` is not null: then `order` holds an index for every row)
+    /// lies in the rows, and column `c` in that row.
     #[inline(always)]
     unsafe fn at(self, i: usize, c: usize) -> *mut Complex64 {
         // SAFETY: the caller keeps (i, c) inside the rows, and `order` holds every row index.
@@ -573,8 +577,15 @@ fn radix3<V: Vector>(inverse: bool, [a, b, c]: [V; 3]) -> [V; 3] {
 trait Vector: Copy {
     const VALUES: usize;
     /// The first `count` (1..=VALUES) values from `p`, the rest zero.
+    ///
+    /// # Safety
+    /// `p` points to `count` values, readable; the CPU has the register's instructions (an
+    /// implementation's safe methods rely on it: a register exists only where they run).
     unsafe fn load(p: *const Complex64, count: usize) -> Self;
     /// The first `count` values to `p`.
+    ///
+    /// # Safety
+    /// `p` points to `count` values, writable.
     unsafe fn store(self, p: *mut Complex64, count: usize);
     fn add(self, o: Self) -> Self;
     fn sub(self, o: Self) -> Self;
@@ -596,14 +607,19 @@ mod x86 {
     use num_complex::Complex64;
     use std::arch::x86_64::*;
 
+    /// Two complex values in an AVX register. A `Y` exists only where the CPU has AVX2 and FMA:
+    /// its field is private to this module, and outside it only [`Vector::load`] makes one,
+    /// whose callers promise those instructions. So its safe methods may use them.
     #[derive(Clone, Copy)]
     pub(super) struct Y(__m256d);
 
     impl Vector for Y {
         const VALUES: usize = 2;
+        /// # Safety
+        /// As for [`Vector::load`].
         #[inline(always)]
         unsafe fn load(p: *const Complex64, count: usize) -> Self {
-            // SAFETY: the caller's pointer holds `count` values.
+            // SAFETY: the caller's pointer holds `count` values, and the CPU has AVX.
             unsafe {
                 if count == 2 {
                     Y(_mm256_loadu_pd(p.cast()))
@@ -612,9 +628,11 @@ mod x86 {
                 }
             }
         }
+        /// # Safety
+        /// As for [`Vector::store`].
         #[inline(always)]
         unsafe fn store(self, p: *mut Complex64, count: usize) {
-            // SAFETY: the caller's pointer holds `count` values.
+            // SAFETY: the caller's pointer holds `count` values; the CPU has AVX (`self` exists).
             unsafe {
                 if count == 2 {
                     _mm256_storeu_pd(p.cast(), self.0)
@@ -625,19 +643,22 @@ mod x86 {
         }
         #[inline(always)]
         fn add(self, o: Self) -> Self {
-            // SAFETY (all methods): built only inside functions enabling AVX2 and FMA.
+            // SAFETY: a `Y` exists only where the CPU has AVX2 and FMA (see the type).
             Y(unsafe { _mm256_add_pd(self.0, o.0) })
         }
         #[inline(always)]
         fn sub(self, o: Self) -> Self {
+            // SAFETY: a `Y` exists only where the CPU has AVX2 and FMA (see the type).
             Y(unsafe { _mm256_sub_pd(self.0, o.0) })
         }
         #[inline(always)]
         fn scale(self, s: f64) -> Self {
+            // SAFETY: a `Y` exists only where the CPU has AVX2 and FMA (see the type).
             Y(unsafe { _mm256_mul_pd(self.0, _mm256_set1_pd(s)) })
         }
         #[inline(always)]
         fn times(self, w: Complex64) -> Self {
+            // SAFETY: a `Y` exists only where the CPU has AVX2 and FMA (see the type).
             unsafe {
                 let swapped = _mm256_permute_pd(self.0, 0b0101);
                 let cross = _mm256_mul_pd(swapped, _mm256_set1_pd(w.im));
@@ -646,6 +667,7 @@ mod x86 {
         }
         #[inline(always)]
         fn times_i(self) -> Self {
+            // SAFETY: a `Y` exists only where the CPU has AVX2 and FMA (see the type).
             unsafe {
                 let swapped = _mm256_permute_pd(self.0, 0b0101);
                 Y(_mm256_xor_pd(swapped, _mm256_setr_pd(-0.0, 0.0, -0.0, 0.0)))
@@ -653,6 +675,7 @@ mod x86 {
         }
         #[inline(always)]
         fn times_minus_i(self) -> Self {
+            // SAFETY: a `Y` exists only where the CPU has AVX2 and FMA (see the type).
             unsafe {
                 let swapped = _mm256_permute_pd(self.0, 0b0101);
                 Y(_mm256_xor_pd(swapped, _mm256_setr_pd(0.0, -0.0, 0.0, -0.0)))

@@ -16,32 +16,51 @@
 //! spectrum is real, and it is *packed*: two consecutive reals of a row in one complex value,
 //! `Y[j0, j1, p] = X[j0, j1, 2p] + i X[j0, j1, 2p+1]` (the last imaginary part 0 when `n2` is
 //! odd), so that no sweep moves zeros. Every other operator of the program is a real, even
-//! function of k, which acts on a packed spectrum real by real ([`crate::engines::spectral::pieces`]).
+//! function of k, which acts on a packed spectrum real by real (vesicle's `engines::spectral::pieces`).
 //!
 //! Implementation: the last (contiguous) axis is transformed row by row, periodic through a
-//! complex FFT of half its length ([`super::real_rows`]; `realfft` when the length is odd) or,
+//! complex FFT of half its length (`real_rows.rs`; `realfft` when the length is odd) or,
 //! for a mirror axis, two real lanes at a time packed as one complex lane. The other axes are
-//! transformed down the columns in place ([`super::columns`]) when their length is a product of
+//! transformed down the columns in place (`columns.rs`) when their length is a product of
 //! 2s, 3s and 5s, and otherwise gathered a block of columns at a time into contiguous lanes,
 //! transformed with one batched `rustfft` call and scattered back. A DCT-II of length `m` is
 //! computed with one complex FFT of length `m` (Makhoul's even/odd reordering plus a twiddle); it
 //! is C-linear, so a complex lane holding two real lanes (or the real and imaginary parts of one
 //! complex lane) costs one FFT: a packed spectrum's columns are such lanes as they stand.
 //! All buffers live in the struct: a transform call allocates nothing.
+//!
+//! **The crate.** [`Transform`] is the whole public interface (with [`AxisKind`], the boundary of
+//! an axis): a safe API over the hand-written kernels (the column FFT, the real rows' split, the
+//! AVX packing and twiddle loops), whose `unsafe` code stays inside this crate, each block with
+//! the reason it is sound. The FFTs of other lengths are `rustfft`'s and `realfft`'s, planned by
+//! `vesicle-fft-plans`.
+
+// Every `unsafe` block says why it is sound, every `unsafe fn` when it may be called.
+#![warn(
+    unsafe_op_in_unsafe_fn,
+    clippy::undocumented_unsafe_blocks,
+    clippy::missing_safety_doc
+)]
 
 #[cfg(target_arch = "x86_64")]
 mod avx;
+mod columns;
+#[doc(hidden)]
+pub mod cpu;
 mod dct;
 mod lanes;
 mod plan;
+mod private;
+pub use private::Private;
+mod real_rows;
 mod rows;
 mod strided;
 #[cfg(test)]
 mod tests;
+mod wide;
 
-use crate::cpu::has_avx;
-pub(super) use dct::{dct_twiddle_table, makhoul_positions};
-use dct::{dct_twiddles, makhoul_position};
+use cpu::has_avx;
+use dct::{dct_twiddle_table, dct_twiddles, makhoul_position, makhoul_positions};
 use lanes::LaneKernel;
 use rows::LastAxis;
 use strided::{strided_piece, Strided};
@@ -54,9 +73,16 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 use vesicle_fft_plans::Planner;
 
-use super::real_rows::RealRows;
-use crate::engines::private::Private;
-use crate::problem::grid::AxisKind;
+use real_rows::RealRows;
+
+/// Boundary treatment of one axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AxisKind {
+    /// Periodic box of `n` points.
+    Periodic,
+    /// Upper half of an even periodic box of `2n` points: Neumann walls half-way between points.
+    Mirror,
+}
 
 /// Complex values in one batch of gathered lanes (32 KiB: stays in L1 with the FFT scratch).
 const LANE_BUFFER: usize = 2048;

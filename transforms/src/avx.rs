@@ -1,4 +1,8 @@
 //! AVX versions of the packing and twiddle loops: the same operations as the scalar code, so the same values.
+//!
+//! Every function here but [`transpose_pairs`] is safe: it checks the lengths of its slices, and
+//! needs only AVX, which its `#[target_feature]` makes its callers promise (a call from code
+//! built without AVX is `unsafe`, after [`crate::cpu::has_avx`]).
 
 use num_complex::Complex64;
 use std::arch::x86_64::*;
@@ -7,10 +11,10 @@ use std::arch::x86_64::*;
 /// `a[p] = (u.re, v.re)`, `b[p] = (u.im, v.im)` for `(u, v)` = lane values 2p, 2p + 1, two
 /// values of p at a time while 2p + 4 ≤ n; returns the first p not done.
 ///
-/// # Safety
-/// The CPU has AVX; `lane` holds n values, `a` and `b` at least n/2.
+/// # Panics
+/// If `a` or `b` holds fewer than n/2 values.
 #[target_feature(enable = "avx")]
-pub unsafe fn unpack_pairs(lane: &[Complex64], a: &mut [Complex64], b: &mut [Complex64]) -> usize {
+pub fn unpack_pairs(lane: &[Complex64], a: &mut [Complex64], b: &mut [Complex64]) -> usize {
     let n = lane.len();
     assert!(a.len() >= n / 2 && b.len() >= n / 2);
     let (lp, ap, bp) = (
@@ -43,10 +47,10 @@ pub unsafe fn unpack_pairs(lane: &[Complex64], a: &mut [Complex64], b: &mut [Com
 /// and `lane[n−1−p], lane[n−2−p] = (a + ib)_{2p+1}, (a + ib)_{2p+3}`, while 2p + 4 ≤ n;
 /// returns the first data index not done.
 ///
-/// # Safety
-/// The CPU has AVX; `a`, `b` and `lane` hold n values.
+/// # Panics
+/// If `b` or `lane` does not hold n values.
 #[target_feature(enable = "avx")]
-pub unsafe fn makhoul_pack(a: &[f64], b: &[f64], lane: &mut [Complex64]) -> usize {
+pub fn makhoul_pack(a: &[f64], b: &[f64], lane: &mut [Complex64]) -> usize {
     let n = a.len();
     assert!(b.len() == n && lane.len() == n);
     let (ap, bp, lp) = (a.as_ptr(), b.as_ptr(), lane.as_mut_ptr().cast::<f64>());
@@ -72,15 +76,10 @@ pub unsafe fn makhoul_pack(a: &[f64], b: &[f64], lane: &mut [Complex64]) -> usiz
 /// parts) and `b` (imaginary parts) from lane positions p, n − 1 − p, p + 1, n − 2 − p,
 /// while 2p + 4 ≤ n; returns the first data index not done.
 ///
-/// # Safety
-/// As for [`makhoul_pack`].
+/// # Panics
+/// If `b` or `lane` does not hold n values.
 #[target_feature(enable = "avx")]
-pub unsafe fn makhoul_unpack(
-    lane: &[Complex64],
-    a: &mut [f64],
-    b: &mut [f64],
-    scale: f64,
-) -> usize {
+pub fn makhoul_unpack(lane: &[Complex64], a: &mut [f64], b: &mut [f64], scale: f64) -> usize {
     let n = a.len();
     assert!(b.len() == n && lane.len() == n);
     let (lp, ap, bp) = (lane.as_ptr().cast::<f64>(), a.as_mut_ptr(), b.as_mut_ptr());
@@ -112,10 +111,10 @@ pub unsafe fn makhoul_unpack(
 /// scalar formula's operations in its order (no fused multiply-add), so the results are the
 /// same bit for bit.
 ///
-/// # Safety
-/// The CPU has AVX; `w` has at least m values.
+/// # Panics
+/// If `w` has fewer than m values.
 #[target_feature(enable = "avx")]
-pub unsafe fn twiddle_pairs<const POST: bool>(lane: &mut [Complex64], w: &[Complex64]) -> usize {
+pub fn twiddle_pairs<const POST: bool>(lane: &mut [Complex64], w: &[Complex64]) -> usize {
     let m = lane.len();
     let pairs = m.saturating_sub(1) / 2;
     assert!(w.len() >= m);
@@ -126,26 +125,31 @@ pub unsafe fn twiddle_pairs<const POST: bool>(lane: &mut [Complex64], w: &[Compl
     let half = _mm256_set1_pd(0.5);
     let mut k = 1;
     while k < pairs {
-        // w_k, w_{k+1} = (c, −s): c = (c_k, c_k, c_{k+1}, c_{k+1}), s likewise.
-        let wk = _mm256_loadu_pd(w.add(2 * k));
-        let c = _mm256_movedup_pd(wk);
-        let s = _mm256_xor_pd(_mm256_permute_pd(wk, 0b1111), _mm256_set1_pd(-0.0));
-        let a = _mm256_loadu_pd(x.add(2 * k));
-        // b_{k+1}, b_k at m − k − 1, m − k: swapped to b_k, b_{k+1}.
-        let high = x.add(2 * (m - k - 1));
-        let b = _mm256_permute2f128_pd(_mm256_loadu_pd(high), _mm256_loadu_pd(high), 0x01);
-        let (low, up) = if POST {
-            let (sum, diff) = (_mm256_add_pd(a, b), _mm256_sub_pd(a, b));
-            let low = _mm256_sub_pd(_mm256_mul_pd(c, sum), times_i(_mm256_mul_pd(s, diff)));
-            let up = _mm256_add_pd(_mm256_mul_pd(s, sum), times_i(_mm256_mul_pd(c, diff)));
-            (_mm256_mul_pd(half, low), _mm256_mul_pd(half, up))
-        } else {
-            let p = _mm256_add_pd(_mm256_mul_pd(c, a), _mm256_mul_pd(s, b));
-            let q = times_i(_mm256_sub_pd(_mm256_mul_pd(s, a), _mm256_mul_pd(c, b)));
-            (_mm256_add_pd(p, q), _mm256_sub_pd(p, q))
-        };
-        _mm256_storeu_pd(x.add(2 * k), low);
-        _mm256_storeu_pd(high, _mm256_permute2f128_pd(up, up, 0x01));
+        // SAFETY: 1 ≤ k < k + 1 < pairs ≤ (m − 1)/2, so the values k, k + 1 of `w` (m values or
+        // more, asserted) and of the lane, and m − k − 1, m − k < m of the lane, are in their
+        // slices.
+        unsafe {
+            // w_k, w_{k+1} = (c, −s): c = (c_k, c_k, c_{k+1}, c_{k+1}), s likewise.
+            let wk = _mm256_loadu_pd(w.add(2 * k));
+            let c = _mm256_movedup_pd(wk);
+            let s = _mm256_xor_pd(_mm256_permute_pd(wk, 0b1111), _mm256_set1_pd(-0.0));
+            let a = _mm256_loadu_pd(x.add(2 * k));
+            // b_{k+1}, b_k at m − k − 1, m − k: swapped to b_k, b_{k+1}.
+            let high = x.add(2 * (m - k - 1));
+            let b = _mm256_permute2f128_pd(_mm256_loadu_pd(high), _mm256_loadu_pd(high), 0x01);
+            let (low, up) = if POST {
+                let (sum, diff) = (_mm256_add_pd(a, b), _mm256_sub_pd(a, b));
+                let low = _mm256_sub_pd(_mm256_mul_pd(c, sum), times_i(_mm256_mul_pd(s, diff)));
+                let up = _mm256_add_pd(_mm256_mul_pd(s, sum), times_i(_mm256_mul_pd(c, diff)));
+                (_mm256_mul_pd(half, low), _mm256_mul_pd(half, up))
+            } else {
+                let p = _mm256_add_pd(_mm256_mul_pd(c, a), _mm256_mul_pd(s, b));
+                let q = times_i(_mm256_sub_pd(_mm256_mul_pd(s, a), _mm256_mul_pd(c, b)));
+                (_mm256_add_pd(p, q), _mm256_sub_pd(p, q))
+            };
+            _mm256_storeu_pd(x.add(2 * k), low);
+            _mm256_storeu_pd(high, _mm256_permute2f128_pd(up, up, 0x01));
+        }
         k += 2;
     }
     k
@@ -173,7 +177,9 @@ pub unsafe fn transpose_pairs<const DST_ROWS_OUTER: bool>(
     let at = |i: usize, j: usize, stride: usize| 2 * (i * stride + j);
     let (n2, m2) = (n - n % 2, m - m % 2);
     // Rows i, i + 1 and columns j, j + 1 of `src`.
-    let block = |i: usize, j: usize| {
+    // SAFETY: `block` is called with i + 1 < n, j + 1 < m (and `one` below with i < n, j < m):
+    // values inside `src` and `dst` by the caller's conditions.
+    let block = |i: usize, j: usize| unsafe {
         let a = _mm256_loadu_pd(src.add(at(i, j, src_stride)));
         let b = _mm256_loadu_pd(src.add(at(i + 1, j, src_stride)));
         let (lo, hi) = (
@@ -196,7 +202,8 @@ pub unsafe fn transpose_pairs<const DST_ROWS_OUTER: bool>(
             }
         }
     }
-    let one = |i: usize, j: usize| {
+    // SAFETY: as for `block` above.
+    let one = |i: usize, j: usize| unsafe {
         _mm_storeu_pd(
             dst.add(at(j, i, dst_stride)),
             _mm_loadu_pd(src.add(at(i, j, src_stride))),

@@ -1,9 +1,8 @@
-//! Forward + inverse pairs of the planned 3D real transform.
+//! Forward + inverse pairs of the planned 3D real transform (`cargo bench --bench fft`).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use ndarray::Array3;
-use vesicle::engines::spectral::transform::Transform;
-use vesicle::problem::grid::AxisKind;
+use vesicle_transforms::{AxisKind, Transform};
 
 /// Time one forward + inverse pair on a smooth-ish deterministic field.
 fn bench_pair(c: &mut Criterion, name: &str, shape: [usize; 3], kinds: [AxisKind; 3]) {

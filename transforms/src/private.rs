@@ -1,4 +1,5 @@
-//! Scratch owned by one thread of a parallel pass, kept off the cache lines of other data.
+//! Scratch owned by one thread of a parallel pass, kept off the cache lines of other data (the
+//! transforms' plans, and vesicle's FD sweeps).
 
 use std::ops::{Deref, DerefMut};
 
@@ -6,11 +7,11 @@ use std::ops::{Deref, DerefMut};
 /// adjacent-line prefetch.
 const GUARD_BYTES: usize = 128;
 
-/// A thread's own buffer of `len` values between two guards of 128 unused bytes, so
-/// that no line it touches holds another thread's data. Per-thread buffers allocated one after
-/// another otherwise share a line where one ends and the next begins, and two threads writing
-/// them pass the line back and forth: the FD step on 2 threads ran in 0.6 to 1.5 ms at 64³
-/// from one process to the next (`benches/PERFORMANCE.md`).
+/// A thread's own buffer of `len` values between two guards of 128 unused bytes, so that no line
+/// it touches holds another thread's data. Per-thread buffers allocated one after another
+/// otherwise share a line where one ends and the next begins, and two threads writing them pass
+/// the line back and forth (`benches/PERFORMANCE.md`, "Per-thread scratch off other threads'
+/// cache lines").
 #[derive(Debug)]
 pub struct Private<T> {
     buf: Vec<T>,

@@ -5,7 +5,7 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 
 use super::{strided_piece, Direction, LastAxis, Plan, Strided, Work, COLUMN_ALIGN};
-use crate::engines::private::Private;
+use crate::private::Private;
 
 impl Plan {
     /// Zero the padding of a packed spectrum with odd rows (the imaginary part of each row's

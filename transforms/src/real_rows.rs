@@ -101,12 +101,10 @@ impl RealRows {
     }
 }
 
-/// `x` as complex values `x_{2j} + i x_{2j+1}`.
+/// `x` as complex values `x_{2j} + i x_{2j+1}` (`Complex64` is `repr(C)`, two `f64`).
 fn as_complex(x: &mut [f64]) -> &mut [Complex64] {
     assert!(x.len().is_multiple_of(2), "whole rows of even length");
-    // SAFETY: `Complex64` is `repr(C)` with two `f64` fields, so it has the size of two f64 and
-    // their alignment; the slice covers exactly the same bytes and borrows `x` mutably.
-    unsafe { std::slice::from_raw_parts_mut(x.as_mut_ptr().cast(), x.len() / 2) }
+    bytemuck::cast_slice_mut(x)
 }
 
 /// One row's split: `y` (m + 1 values) from `z = F_m z` (m values), `w` the twiddles.
@@ -159,62 +157,60 @@ fn merge(y: &[Complex64], z: &mut [Complex64], w: &[Complex64], s: f64) {
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     //! [`super::split`] and [`super::merge`] two bins a register: bins k, k + 1 and their
-    //! mirrors m − k, m − k − 1 (loaded as one register and its halves swapped).
+    //! mirrors m − k, m − k − 1 (loaded as one register and its halves swapped). Safe functions
+    //! that need AVX2 and FMA (their `#[target_feature]`): a caller built without them calls
+    //! them in an `unsafe` block once it knows the CPU has them; the lengths are asserted.
 
     use num_complex::Complex64;
     use std::arch::x86_64::*;
 
     /// Conjugate (flip the imaginary signs).
-    #[inline(always)]
-    unsafe fn conj(v: __m256d) -> __m256d {
-        unsafe { _mm256_xor_pd(v, _mm256_setr_pd(0.0, -0.0, 0.0, -0.0)) }
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn conj(v: __m256d) -> __m256d {
+        _mm256_xor_pd(v, _mm256_setr_pd(0.0, -0.0, 0.0, -0.0))
     }
 
     /// The two values of `v` swapped.
-    #[inline(always)]
-    unsafe fn swap(v: __m256d) -> __m256d {
-        unsafe { _mm256_permute2f128_pd(v, v, 1) }
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn swap(v: __m256d) -> __m256d {
+        _mm256_permute2f128_pd(v, v, 1)
     }
 
     /// `w v` (`conj`: `w* v`), each sum fused.
-    #[inline(always)]
-    unsafe fn times<const CONJ: bool>(w: __m256d, v: __m256d) -> __m256d {
-        unsafe {
-            let (re, im) = (_mm256_movedup_pd(w), _mm256_permute_pd(w, 0b1111));
-            let cross = _mm256_mul_pd(_mm256_permute_pd(v, 0b0101), im);
-            if CONJ {
-                _mm256_fmsubadd_pd(v, re, cross)
-            } else {
-                _mm256_fmaddsub_pd(v, re, cross)
-            }
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn times<const CONJ: bool>(w: __m256d, v: __m256d) -> __m256d {
+        let (re, im) = (_mm256_movedup_pd(w), _mm256_permute_pd(w, 0b1111));
+        let cross = _mm256_mul_pd(_mm256_permute_pd(v, 0b0101), im);
+        if CONJ {
+            _mm256_fmsubadd_pd(v, re, cross)
+        } else {
+            _mm256_fmaddsub_pd(v, re, cross)
         }
     }
 
     /// `i v` (`NEG`: `−i v`).
-    #[inline(always)]
-    unsafe fn turn<const NEG: bool>(v: __m256d) -> __m256d {
-        unsafe {
-            let swapped = _mm256_permute_pd(v, 0b0101);
-            let sign = if NEG {
-                _mm256_setr_pd(0.0, -0.0, 0.0, -0.0)
-            } else {
-                _mm256_setr_pd(-0.0, 0.0, -0.0, 0.0)
-            };
-            _mm256_xor_pd(swapped, sign)
-        }
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    fn turn<const NEG: bool>(v: __m256d) -> __m256d {
+        let swapped = _mm256_permute_pd(v, 0b0101);
+        let sign = if NEG {
+            _mm256_setr_pd(0.0, -0.0, 0.0, -0.0)
+        } else {
+            _mm256_setr_pd(-0.0, 0.0, -0.0, 0.0)
+        };
+        _mm256_xor_pd(swapped, sign)
     }
 
     /// The bins k = 1, 3, 5, … of [`super::split`] two at a time while k + 1 < m/2; returns the
     /// first bin left.
     ///
-    /// # Safety
-    /// The CPU has AVX2 and FMA; `z`, `w` hold m values and `y` m + 1.
+    /// # Panics
+    /// If `y` holds m values or fewer, or `w` fewer than m.
     #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn split_pairs(
-        z: &[Complex64],
-        y: &mut [Complex64],
-        w: &[Complex64],
-    ) -> usize {
+    pub(super) fn split_pairs(z: &[Complex64], y: &mut [Complex64], w: &[Complex64]) -> usize {
         let m = z.len();
         assert!(y.len() > m && w.len() >= m);
         let (zp, yp, wp) = (
@@ -243,10 +239,10 @@ mod x86 {
     /// The bins k = 1, 3, 5, … of [`super::merge`] two at a time while k + 1 < m/2; returns the
     /// first bin left.
     ///
-    /// # Safety
-    /// The CPU has AVX2 and FMA; `z`, `w` hold m values and `y` m + 1.
+    /// # Panics
+    /// If `y` holds m values or fewer, or `w` fewer than m.
     #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn merge_pairs(
+    pub(super) fn merge_pairs(
         y: &[Complex64],
         z: &mut [Complex64],
         w: &[Complex64],
