@@ -130,6 +130,44 @@ fn pear_bifurcates_from_the_prolate_and_narrows() {
     );
 }
 
+/// The budding limit `L_pear`: two spheres of radii R1 ≥ R2 (units of R0) with the area of
+/// the vesicle, R1² + R2² = 1, and the neck condition 1/R1 + 1/R2 = c̄0 (a sphere of radius R
+/// has 2H = 2/R here, so two spheres of radius 2/c̄0 have e = 0). The returned radii satisfy
+/// both conditions to round-off and v = R1³ + R2³; the formula starts exactly at the two equal
+/// spheres, c̄0 = 2√2 → v = 1/√2 (to round-off, 1e-15), does not exist below, and rises with
+/// c̄0. Independent check: the values of an outside solver of the shape equations (rounded to
+/// three decimals in issue #51) at c̄0 = 3, 3.245, 3.64, 4, within 1e-3.
+#[test]
+fn l_pear_two_sphere_limit() {
+    let edge = 2.0 * std::f64::consts::SQRT_2;
+    let v = axisym::l_pear(edge).unwrap();
+    assert!((v - 1.0 / std::f64::consts::SQRT_2).abs() < 1e-15, "{v}");
+    let (r1, r2) = axisym::l_pear_radii(edge).unwrap();
+    assert!((r1 - r2).abs() < 1e-7, "equal spheres at 2√2: {r1} {r2}");
+    assert!(axisym::l_pear(edge - 1e-12).is_none());
+    assert!(axisym::l_pear(2.0).is_none());
+    assert!(axisym::l_pear(f64::NAN).is_none());
+    let mut last = 0.0;
+    for i in 0..=40 {
+        let c0 = edge + 0.05 * f64::from(i);
+        let (r1, r2) = axisym::l_pear_radii(c0).unwrap();
+        assert!(r1 >= r2 && r2 > 0.0);
+        assert!((r1 * r1 + r2 * r2 - 1.0).abs() < 1e-13, "area at {c0}");
+        assert!((1.0 / r1 + 1.0 / r2 - c0).abs() < 1e-12, "neck at {c0}");
+        let v = axisym::l_pear(c0).unwrap();
+        assert!((v - (r1.powi(3) + r2.powi(3))).abs() < 1e-14);
+        assert!(v > last && v < 1.0, "v = {v} at {c0}");
+        last = v;
+    }
+    for (c0, want) in [(3.0, 0.746), (3.245, 0.789), (3.64, 0.839), (4.0, 0.871)] {
+        let v = axisym::l_pear(c0).unwrap();
+        assert!(
+            (v - want).abs() < 1e-3,
+            "c0 = {c0}: L_pear at {v}, issue {want}"
+        );
+    }
+}
+
 /// At c̄0 = 1 the prolate keeps its up–down symmetry (the odd block of the Hessian stays
 /// positive definite) down to v = 0.3: no pear bifurcates from it.
 #[test]

@@ -45,7 +45,9 @@ pub mod quadrature;
 pub(crate) mod solver;
 
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
-pub use pear::{follow_pear, pear_bifurcation, Bifurcation, PearBranch, PearEnd};
+pub use pear::{
+    follow_pear, l_pear, l_pear_radii, pear_bifurcation, Bifurcation, PearBranch, PearEnd,
+};
 
 /// The branches of the diagram: the three of c0 = 0 ([`Branch::ALL`]) and the pear.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

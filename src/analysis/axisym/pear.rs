@@ -43,6 +43,35 @@ const SCAN_V_MIN: f64 = 0.3;
 /// Step of the finite-difference Hessian (as in the solver).
 const FD_STEP: f64 = 1e-5;
 
+/// The radii `(R1, R2)`, `R1 ≥ R2`, in units of `R0`, of the budding limit shape `L_pear` at
+/// reduced spontaneous curvature `c̄0`: two spheres joined at a point, of total area `4π R0²`
+/// (`R1² + R2² = 1`), whose neck satisfies the limit-shape condition `1/R1 + 1/R2 = c̄0`
+/// (in this program's convention, where a sphere of radius `R` has `2H = 2/R` and zero
+/// energy at `c̄0 = 2/R`: two spheres of radius `2/c̄0` are the `e = 0` case).
+///
+/// With `s = R1 + R2`, `p = R1 R2`: `s = c̄0 p` and `s² − 2p = 1` give
+/// `s = 1/c̄0 + √(1/c̄0² + 1)`, `p = s/c̄0`; the radii are real when `s² ≥ 4p`, i.e.
+/// `c̄0 ≥ 2√2` (equal spheres `R1 = R2 = 1/√2` there). `None` below `2√2` (and for
+/// non-finite `c̄0`): no two spheres of this area meet the neck condition.
+pub fn l_pear_radii(c0: f64) -> Option<(f64, f64)> {
+    if !c0.is_finite() || c0 < 2.0 * std::f64::consts::SQRT_2 {
+        return None;
+    }
+    let s = 1.0 / c0 + (1.0 / (c0 * c0) + 1.0).sqrt();
+    let p = s / c0;
+    // s² − 4p ≥ 0 for c̄0 ≥ 2√2; clamp the round-off at the end point.
+    let d = (s * s - 4.0 * p).max(0.0).sqrt();
+    Some((0.5 * (s + d), 0.5 * (s - d)))
+}
+
+/// The reduced volume of the budding limit shape `L_pear` at `c̄0` (see [`l_pear_radii`]):
+/// `v = R1³ + R2³ = s²(s − 3/c̄0)` with `s = 1/c̄0 + √(1/c̄0² + 1)`; `1/√2` at `c̄0 = 2√2`,
+/// rising with `c̄0` towards 1 (one sphere) as `c̄0 → ∞`. `None` for `c̄0 < 2√2`, where no
+/// `L_pear` exists.
+pub fn l_pear(c0: f64) -> Option<f64> {
+    l_pear_radii(c0).map(|(r1, r2)| r1.powi(3) + r2.powi(3))
+}
+
 /// Where the pear branch leaves the prolate.
 #[derive(Clone, Debug)]
 pub struct Bifurcation {
