@@ -46,7 +46,8 @@ pub(crate) mod solver;
 
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
 pub use pear::{
-    follow_pear, l_pear, l_pear_radii, pear_bifurcation, Bifurcation, PearBranch, PearEnd,
+    follow_pear, l_pear, l_pear_radii, pear_at, pear_bifurcation, prolate_updown, Bifurcation,
+    PearBranch, PearEnd,
 };
 
 /// The branches of the diagram: the three of c0 = 0 ([`Branch::ALL`]) and the pear.

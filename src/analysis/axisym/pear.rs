@@ -198,6 +198,50 @@ fn prolate_mu(tr: &mut Tracker, full: &Basis, v: f64) -> Option<(f64, Vec<f64>)>
     odd_stability(full, &embed(c, full), c.lambda_v)
 }
 
+/// The up–down test function of the prolate at reduced volume `v` and `opts.c0`: the smallest
+/// eigenvalue `μ` of the odd block of the Hessian of the Lagrangian on the tangent space of
+/// the closure (see the module docs). `μ > 0`: the prolate is stable against up–down
+/// asymmetric deformations; its zero in `c̄0` at fixed `v` (or in `v` at fixed `c̄0`) is where
+/// the pear bifurcates. `None` if the prolate is not found at `v`.
+pub fn prolate_updown(v: f64, opts: &Options) -> Option<f64> {
+    let s = super::solve(Branch::Prolate, v, opts).ok()?;
+    let full = full_basis(opts);
+    let mut a = vec![0.0; full.modes.len()];
+    for (k, ak) in s.modes.iter().zip(&s.coefficients) {
+        a[k - 1] = *ak;
+    }
+    odd_stability(&full, &a, s.lambda_v).map(|(mu, _)| mu)
+}
+
+/// The pear of `branch` after its (first) fold, solved at reduced volume `v`: the piece of the
+/// path from its largest `v` down to the next turn, the state there nearest to `v` as the
+/// start of Newton at fixed `v` (closure held). On a subcritical branch this is the piece
+/// that bends back below the prolate, where the pear is the local minimum. `None` if that
+/// piece does not cover `v` or Newton fails.
+pub fn pear_at(v: f64, branch: &PearBranch, opts: &Options) -> Option<Solution> {
+    let shapes = &branch.shapes;
+    let top = (0..shapes.len()).max_by(|&i, &j| shapes[i].v.total_cmp(&shapes[j].v))?;
+    let mut end = top;
+    while end + 1 < shapes.len() && shapes[end + 1].v < shapes[end].v {
+        end += 1;
+    }
+    let piece = &shapes[top..=end];
+    if v > piece[0].v || v < piece[piece.len() - 1].v {
+        return None;
+    }
+    let start = piece
+        .iter()
+        .min_by(|a, b| (a.v - v).abs().total_cmp(&(b.v - v).abs()))?;
+    let full = full_basis(opts);
+    let set = NewtonSettings {
+        tol: opts.tol,
+        max_iter: opts.max_iter,
+        max_step: 0.5,
+    };
+    let c = newton(&full, &start.coefficients, v, true, &set)?;
+    Some(solution(Branch::Pear, &full, &c))
+}
+
 /// The bifurcation internals: the prolate tracker at `v_b`, its full-basis coefficients and
 /// the direction `φ`.
 struct Onset {
