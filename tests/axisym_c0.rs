@@ -265,7 +265,7 @@ fn cli_rejects_bad_c0() {
 }
 
 /// `vesicle axisym --c0 -1,3` end to end on a coarse grid: one branch file per c̄0, the
-/// summary with the pear bifurcation at c̄0 = 3 and none at −1, and the chart.
+/// summary with the pear bifurcation and L_pear at c̄0 = 3 and neither at −1, and the chart.
 #[test]
 fn cli_writes_the_phase_diagram() {
     let dir = std::env::temp_dir().join(format!("axisym_c0_cli_{}", std::process::id()));
@@ -306,5 +306,9 @@ fn cli_writes_the_phase_diagram() {
     assert!(summary
         .lines()
         .any(|l| l.starts_with("-1,pear bifurcation,,")));
+    // L_pear from the two-sphere formula (s²(s − 3/c̄0), s = 1/c̄0 + √(1/c̄0² + 1): 0.745776 at
+    // c̄0 = 3), none below 2√2.
+    assert!(summary.lines().any(|l| l.starts_with("3,L_pear,0.745776,")));
+    assert!(summary.lines().any(|l| l.starts_with("-1,L_pear,,")));
     std::fs::remove_dir_all(&dir).unwrap();
 }
