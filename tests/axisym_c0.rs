@@ -241,6 +241,35 @@ fn stable_pear_below_the_prolate_at_c0_3() {
     );
 }
 
+/// Towards the budding limit the pear's poles become those of L_pear's two spheres: the sum of
+/// the pole curvatures ψ' (1/R at a sphere's pole) approaches the neck condition
+/// 1/R1 + 1/R2 = c̄0 = 3 as v falls towards L_pear(3) = 0.7458. Far from it (v = 0.868, just
+/// below the fold) the sum is above 4 (measured 4.22 with K = 80); near it (v = 0.76, 0.75,
+/// 0.7465) within 0.2 of 3 (measured 3.08, 3.14, 2.95: the unresolved neck, 0.042 R0 instead of
+/// closing, leaves an error of that size, and K = 120 gives 3.04, 3.15, 2.95). The unit sphere
+/// has both pole curvatures 1.
+#[test]
+fn pear_pole_curvatures_approach_the_neck_condition() {
+    let sphere = axisym::solve(Branch::Prolate, 1.0, &Options::default()).unwrap();
+    let (a, b) = sphere.pole_curvatures();
+    assert!((a - 1.0).abs() < 1e-9 && (b - 1.0).abs() < 1e-9, "{a} {b}");
+    let mut opts = Options::default().with_c0(3.0);
+    opts.neck_min = 0.005;
+    let branch = axisym::follow_pear(0.745, &opts);
+    let sum = |v: f64| {
+        let s = axisym::pear_at(v, &branch, &opts).unwrap();
+        let (k0, k1) = s.pole_curvatures();
+        k0 + k1
+    };
+    assert!(sum(0.868) > 4.0);
+    let limit = axisym::l_pear(3.0).unwrap();
+    assert!(limit < 0.7465);
+    for v in [0.76, 0.75, 0.7465] {
+        let k = sum(v);
+        assert!((k - 3.0).abs() < 0.2, "v = {v}: ψ'(0) + ψ'(L) = {k}");
+    }
+}
+
 /// At c̄0 = 1 the prolate keeps its up–down symmetry (the odd block of the Hessian stays
 /// positive definite) down to v = 0.3: no pear bifurcates from it.
 #[test]
