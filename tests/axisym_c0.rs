@@ -246,8 +246,8 @@ fn stable_pear_below_the_prolate_at_c0_3() {
 /// 1/R1 + 1/R2 = c̄0 = 3 as v falls towards L_pear(3) = 0.7458. Far from it (v = 0.868, just
 /// below the fold) the sum is above 4 (measured 4.22 with K = 80); near it (v = 0.76, 0.75,
 /// 0.7465) within 0.2 of 3 (measured 3.08, 3.14, 2.95: the unresolved neck, 0.042 R0 instead of
-/// closing, leaves an error of that size, and K = 120 gives 3.04, 3.15, 2.95). The unit sphere
-/// has both pole curvatures 1.
+/// closing, leaves an error of that size: K = 120 gives 3.04, 3.15, 2.95 and K = 160 3.21,
+/// 3.15, 2.95). The unit sphere has both pole curvatures 1.
 #[test]
 fn pear_pole_curvatures_approach_the_neck_condition() {
     let sphere = axisym::solve(Branch::Prolate, 1.0, &Options::default()).unwrap();
