@@ -213,14 +213,21 @@ pub fn prolate_updown(v: f64, opts: &Options) -> Option<f64> {
     odd_stability(&full, &a, s.lambda_v).map(|(mu, _)| mu)
 }
 
-/// The pear of `branch` after its (first) fold, solved at reduced volume `v`: the piece of the
-/// path from its largest `v` down to the next turn, the state there nearest to `v` as the
+/// The pear of `branch` after its first fold, solved at reduced volume `v`: the piece of the
+/// path from its first local maximum of `v` down to the next turn, the state there nearest to `v` as the
 /// start of Newton at fixed `v` (closure held). On a subcritical branch this is the piece
 /// that bends back below the prolate, where the pear is the local minimum. `None` if that
 /// piece does not cover `v` or Newton fails.
 pub fn pear_at(v: f64, branch: &PearBranch, opts: &Options) -> Option<Solution> {
     let shapes = &branch.shapes;
-    let top = (0..shapes.len()).max_by(|&i, &j| shapes[i].v.total_cmp(&shapes[j].v))?;
+    if shapes.is_empty() {
+        return None;
+    }
+    // The first fold: the first state after which v falls (the path's first local maximum of
+    // v; the start itself when the branch falls from the outset).
+    let top = (0..shapes.len() - 1)
+        .find(|&i| shapes[i + 1].v < shapes[i].v)
+        .unwrap_or(shapes.len() - 1);
     let mut end = top;
     while end + 1 < shapes.len() && shapes[end + 1].v < shapes[end].v {
         end += 1;
