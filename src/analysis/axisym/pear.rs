@@ -214,9 +214,9 @@ pub fn prolate_updown(v: f64, opts: &Options) -> Option<f64> {
 }
 
 /// The pear of `branch` after its first fold, solved at reduced volume `v`: the piece of the
-/// path from its first local maximum of `v` down to the next turn, the state there nearest to `v` as the
-/// start of Newton at fixed `v` (closure held). On a subcritical branch this is the piece
-/// that bends back below the prolate, where the pear is the local minimum. `None` if that
+/// path from its first local maximum of `v` down to the next turn, the state there nearest to
+/// `v` as the start of Newton at fixed `v` (closure held). On a subcritical branch this is the
+/// piece that bends back below the prolate, where the pear is the local minimum. `None` if that
 /// piece does not cover `v` or Newton fails.
 pub fn pear_at(v: f64, branch: &PearBranch, opts: &Options) -> Option<Solution> {
     let shapes = &branch.shapes;
