@@ -35,6 +35,8 @@
 //! `A`) and `σ = P v / 2 + c̄0 J − c̄0²/2` (a dilation by `R0` changes `E_b` by
 //! `8πκ (−c0 J + c0² R0/2) dR0`, `J = ∮2H dA/(8π R0)`; at `c0 = 0`, `2σA = 3PV`).
 
+use std::f64::consts::PI;
+
 pub mod branches;
 pub mod diagram;
 pub(crate) mod eigen;
@@ -45,7 +47,10 @@ pub mod quadrature;
 pub(crate) mod solver;
 
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
-pub use pear::{follow_pear, pear_bifurcation, Bifurcation, PearBranch, PearEnd};
+pub use pear::{
+    follow_pear, l_pear, l_pear_radii, pear_at, pear_bifurcation, prolate_updown, Bifurcation,
+    PearBranch, PearEnd,
+};
 
 /// The branches of the diagram: the three of c0 = 0 ([`Branch::ALL`]) and the pear.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -206,6 +211,22 @@ impl Solution {
             .filter(|&i| r[i] <= r[i - 1] && r[i] < r[i + 1] && i > 1 && i < r.len() - 2)
             .map(|i| parabola_min(s[i - 1], s[i], s[i + 1], r[i - 1], r[i], r[i + 1]))
             .min_by(f64::total_cmp)
+    }
+
+    /// The curvatures `ψ'` at the two poles, `(s = 0, s = L)`, in units of `1/R0`: at a pole
+    /// both principal curvatures equal `ψ'`, so `2H = 2ψ'` there (1 on the unit sphere). From
+    /// the modes, `ψ'(0) = (π + Σ k π a_k)/L` and `ψ'(L) = (π + Σ (−1)^k k π a_k)/L`. Near the
+    /// budding limit `L_pear` the poles are those of its two spheres, and `ψ'(0) + ψ'(L)`
+    /// approaches the neck condition `1/R1 + 1/R2 = c̄0`.
+    pub fn pole_curvatures(&self) -> (f64, f64) {
+        let l = self.length();
+        let (mut d0, mut d1) = (PI, PI);
+        for (k, a) in self.modes.iter().zip(&self.coefficients) {
+            let ka = *k as f64 * PI * a;
+            d0 += ka;
+            d1 += if k % 2 == 0 { ka } else { -ka };
+        }
+        (d0 / l, d1 / l)
     }
 
     /// Size of the up–down asymmetric part: `√Σ_{k odd} a_k²` (0 on symmetric branches).

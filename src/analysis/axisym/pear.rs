@@ -43,6 +43,35 @@ const SCAN_V_MIN: f64 = 0.3;
 /// Step of the finite-difference Hessian (as in the solver).
 const FD_STEP: f64 = 1e-5;
 
+/// The radii `(R1, R2)`, `R1 ≥ R2`, in units of `R0`, of the budding limit shape `L_pear` at
+/// reduced spontaneous curvature `c̄0`: two spheres joined at a point, of total area `4π R0²`
+/// (`R1² + R2² = 1`), whose neck satisfies the limit-shape condition `1/R1 + 1/R2 = c̄0`
+/// (in this program's convention, where a sphere of radius `R` has `2H = 2/R` and zero
+/// energy at `c̄0 = 2/R`: two spheres of radius `2/c̄0` are the `e = 0` case).
+///
+/// With `s = R1 + R2`, `p = R1 R2`: `s = c̄0 p` and `s² − 2p = 1` give
+/// `s = 1/c̄0 + √(1/c̄0² + 1)`, `p = s/c̄0`; the radii are real when `s² ≥ 4p`, i.e.
+/// `c̄0 ≥ 2√2` (equal spheres `R1 = R2 = 1/√2` there). `None` below `2√2` (and for
+/// non-finite `c̄0`): no two spheres of this area meet the neck condition.
+pub fn l_pear_radii(c0: f64) -> Option<(f64, f64)> {
+    if !c0.is_finite() || c0 < 2.0 * std::f64::consts::SQRT_2 {
+        return None;
+    }
+    let s = 1.0 / c0 + (1.0 / (c0 * c0) + 1.0).sqrt();
+    let p = s / c0;
+    // s² − 4p ≥ 0 for c̄0 ≥ 2√2; clamp the round-off at the end point.
+    let d = (s * s - 4.0 * p).max(0.0).sqrt();
+    Some((0.5 * (s + d), 0.5 * (s - d)))
+}
+
+/// The reduced volume of the budding limit shape `L_pear` at `c̄0` (see [`l_pear_radii`]):
+/// `v = R1³ + R2³ = s²(s − 3/c̄0)` with `s = 1/c̄0 + √(1/c̄0² + 1)`; `1/√2` at `c̄0 = 2√2`,
+/// rising with `c̄0` towards 1 (one sphere) as `c̄0 → ∞`. `None` for `c̄0 < 2√2`, where no
+/// `L_pear` exists.
+pub fn l_pear(c0: f64) -> Option<f64> {
+    l_pear_radii(c0).map(|(r1, r2)| r1.powi(3) + r2.powi(3))
+}
+
 /// Where the pear branch leaves the prolate.
 #[derive(Clone, Debug)]
 pub struct Bifurcation {
@@ -167,6 +196,57 @@ fn prolate_mu(tr: &mut Tracker, full: &Basis, v: f64) -> Option<(f64, Vec<f64>)>
     }
     let c = tr.current();
     odd_stability(full, &embed(c, full), c.lambda_v)
+}
+
+/// The up–down test function of the prolate at reduced volume `v` and `opts.c0`: the smallest
+/// eigenvalue `μ` of the odd block of the Hessian of the Lagrangian on the tangent space of
+/// the closure (see the module docs). `μ > 0`: the prolate is stable against up–down
+/// asymmetric deformations; its zero in `c̄0` at fixed `v` (or in `v` at fixed `c̄0`) is where
+/// the pear bifurcates. `None` if the prolate is not found at `v`.
+pub fn prolate_updown(v: f64, opts: &Options) -> Option<f64> {
+    let s = super::solve(Branch::Prolate, v, opts).ok()?;
+    let full = full_basis(opts);
+    let mut a = vec![0.0; full.modes.len()];
+    for (k, ak) in s.modes.iter().zip(&s.coefficients) {
+        a[k - 1] = *ak;
+    }
+    odd_stability(&full, &a, s.lambda_v).map(|(mu, _)| mu)
+}
+
+/// The pear of `branch` after its first fold, solved at reduced volume `v`: the piece of the
+/// path from its first local maximum of `v` down to the next turn, the state there nearest to
+/// `v` as the start of Newton at fixed `v` (closure held). On a subcritical branch this is the
+/// piece that bends back below the prolate, where the pear is the local minimum. `None` if that
+/// piece does not cover `v` or Newton fails.
+pub fn pear_at(v: f64, branch: &PearBranch, opts: &Options) -> Option<Solution> {
+    let shapes = &branch.shapes;
+    if shapes.is_empty() {
+        return None;
+    }
+    // The first fold: the first state after which v falls (the path's first local maximum of
+    // v; the start itself when the branch falls from the outset).
+    let top = (0..shapes.len() - 1)
+        .find(|&i| shapes[i + 1].v < shapes[i].v)
+        .unwrap_or(shapes.len() - 1);
+    let mut end = top;
+    while end + 1 < shapes.len() && shapes[end + 1].v < shapes[end].v {
+        end += 1;
+    }
+    let piece = &shapes[top..=end];
+    if v > piece[0].v || v < piece[piece.len() - 1].v {
+        return None;
+    }
+    let start = piece
+        .iter()
+        .min_by(|a, b| (a.v - v).abs().total_cmp(&(b.v - v).abs()))?;
+    let full = full_basis(opts);
+    let set = NewtonSettings {
+        tol: opts.tol,
+        max_iter: opts.max_iter,
+        max_step: 0.5,
+    };
+    let c = newton(&full, &start.coefficients, v, true, &set)?;
+    Some(solution(Branch::Pear, &full, &c))
 }
 
 /// The bifurcation internals: the prolate tracker at `v_b`, its full-basis coefficients and

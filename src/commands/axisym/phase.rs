@@ -4,7 +4,7 @@
 
 use super::{io_err, AxisymArgs};
 use crate::analysis::axisym::phase::{slice, Slice};
-use crate::analysis::axisym::{Branch, Options, PearEnd, Solution};
+use crate::analysis::axisym::{self, Branch, Options, PearEnd, Solution};
 use crate::error::{Error, Result};
 use crate::output::chart::{colour, Axis, Figure, Mark, Series, Shape};
 use crate::output::{create_file, folder};
@@ -190,11 +190,11 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
             Some(PearEnd::Neck { v, neck }) => {
                 let e = s.pear.last.as_ref().map(|l| l.e);
                 row(
-                    "L_pear (neck stop)",
+                    "pear neck stop",
                     Some(*v),
                     e,
                     Some(*neck),
-                    "continuation stopped at the neck threshold; the limit lies below this v",
+                    "continuation stopped at the neck threshold (not budding: the neck is open)",
                 )
             }
             Some(PearEnd::Stalled { v }) => {
@@ -202,6 +202,19 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
             }
             Some(PearEnd::Grid) => row("pear reaches v-min", None, None, None, ""),
             None => Ok(()),
+        }
+        .map_err(&err)?;
+        match axisym::l_pear_radii(s.c0) {
+            Some((r1, r2)) => row(
+                "L_pear",
+                axisym::l_pear(s.c0),
+                None,
+                Some(0.0),
+                &format!(
+                    "two spheres R1 = {r1:.5} and R2 = {r2:.5} (R0 = 1) with 1/R1 + 1/R2 = c0"
+                ),
+            ),
+            None => row("L_pear", None, None, None, "none: c0 < 2*sqrt(2)"),
         }
         .map_err(&err)?;
         for (b, c) in Branch::ALL.iter().zip(&s.curves) {
@@ -220,7 +233,8 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
 }
 
 /// The phase diagram: a marker at every `(v, c̄0)` of the grid coloured by the lowest-energy
-/// branch, the pear bifurcation line and the line where the pear's neck reaches the threshold.
+/// branch, the pear bifurcation line, the line where the pear's neck reaches the threshold and
+/// the budding limit L_pear of the two-sphere formula (for c̄0 ≥ 2√2).
 pub fn phase_figure(slices: &[Slice]) -> Figure {
     let mut fig = Figure::new(
         "lowest-energy shape, spontaneous-curvature model",
@@ -273,10 +287,22 @@ pub fn phase_figure(slices: &[Slice]) -> Figure {
         .collect();
     if !limit_line.is_empty() {
         fig.push(Series::new(
-            "L_pear (neck at threshold)",
+            "pear neck at threshold",
             limit_line,
             colour(5),
             Mark::Dashed,
+        ));
+    }
+    let l_pear_line: Vec<(f64, f64)> = slices
+        .iter()
+        .filter_map(|s| axisym::l_pear(s.c0).map(|v| (v, s.c0)))
+        .collect();
+    if !l_pear_line.is_empty() {
+        fig.push(Series::new(
+            "L_pear (two-sphere limit)",
+            l_pear_line,
+            colour(6),
+            Mark::LinePoints(Shape::Diamond),
         ));
     }
     fig
@@ -310,6 +336,10 @@ fn print_slice(s: &Slice) {
         None => println!("  no pear bifurcation on the prolate for v ≥ 0.3"),
     }
     if let Some(PearEnd::Neck { v, neck }) = &s.pear.end {
-        println!("  pear neck {neck:.4} at v = {v:.4} (continuation stopped)");
+        println!("  pear neck {neck:.4} at v = {v:.4} (continuation stopped; the neck is open)");
+    }
+    match axisym::l_pear(s.c0) {
+        Some(v) => println!("  L_pear (two-sphere limit, 1/R1 + 1/R2 = c0) at v = {v:.5}"),
+        None => println!("  no L_pear (c0 < 2√2)"),
     }
 }
