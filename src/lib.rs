@@ -60,8 +60,9 @@ pub mod npy;
 pub mod output;
 pub mod problem;
 
-pub use commands::studies::{run as run_study, Args as StudyArgs};
-pub use commands::study::table::{Table as StudyTable, Values as StudyValues};
+pub use commands::studies::{
+    run as run_study, Args as StudyArgs, Table as StudyTable, Values as StudyValues,
+};
 pub use driver::simulation::{Simulation, StopRules, Stopped};
 pub use engines::{Engine, StepError};
 pub use error::{Error, Result};

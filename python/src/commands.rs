@@ -9,7 +9,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
-use vesicle::commands::studies::{self as registry, Column};
+use vesicle::commands::studies::{self as registry, Values};
 
 /// Run the `vesicle` command line with `args` (without the program name) in this process and
 /// return its exit code; what it prints goes to this process's stdout and stderr.
@@ -67,9 +67,9 @@ pub fn study<'py>(
         let columns = PyDict::new(py);
         for (header, column) in t.columns {
             let array = match column {
-                Column::Int(v) => PyArray1::from_vec(py, v).into_any(),
-                Column::Float(v) => PyArray1::from_vec(py, v).into_any(),
-                Column::Text(v) => {
+                Values::Int(v) => PyArray1::from_vec(py, v).into_any(),
+                Values::Float(v) => PyArray1::from_vec(py, v).into_any(),
+                Values::Text(v) => {
                     let list = PyList::new(py, v)?;
                     py.import("numpy")?.call_method1("array", (list,))?
                 }

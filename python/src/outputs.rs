@@ -9,7 +9,7 @@ use vesicle::driver::observers::{Checkpointer, Recorder, Snapshots};
 use vesicle::driver::record::{Record, TimeSeries};
 use vesicle::driver::simulation::{Flow, Now, Observer};
 use vesicle::error::{Error, Result};
-use vesicle::output::lock::{self, RunLock};
+use vesicle::output::lock::RunLock;
 use vesicle::problem::config::{Scene, Schedule};
 use vesicle::problem::grid::Grid;
 
@@ -79,8 +79,8 @@ impl Observer for Unwritten {
 }
 
 /// A run folder written from Python, as `vesicle run` writes it during a run: held by its lock,
-/// `timeseries.csv` (the history so far, then a row at a time), `snapshots/` and
-/// `checkpoint.bin`.
+/// `timeseries.csv` (the history so far, then a row at a time), `snapshots/` (made by the
+/// first snapshot) and `checkpoint.bin`.
 pub struct Folder {
     dir: PathBuf,
     _lock: RunLock,
@@ -93,10 +93,8 @@ impl Folder {
     /// # Errors
     /// `Error::Config` on field `--out` if another process writes there; `Error::Io`.
     pub fn open(dir: &Path) -> Result<Self> {
-        lock::refuse_if_held(dir)?;
-        let snapshots = dir.join("snapshots");
-        std::fs::create_dir_all(&snapshots).map_err(|source| Error::Io {
-            path: snapshots,
+        std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+            path: dir.to_path_buf(),
             source,
         })?;
         Ok(Folder {

@@ -307,15 +307,7 @@ pub fn exit_code(e: &Error) -> i32 {
 }
 
 fn load(args: &SceneArgs) -> Result<Scene, Error> {
-    if !args.scene.exists() {
-        return Err(Error::config(
-            "(scene file)",
-            format!("{} does not exist", args.scene.display()),
-        ));
-    }
-    let scene = config::load(&args.scene, &args.set)?;
-    crate::driver::simulation::check_engine(&scene)?;
-    Ok(scene)
+    super::load_scene(&args.scene, &args.set)
 }
 
 /// Run `f` in a pool of the scene's [`Scene::threads`].

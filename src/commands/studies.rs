@@ -13,7 +13,6 @@ use crate::commands::study::precision::Precision;
 use crate::commands::study::stability::Stability;
 use crate::commands::study::stationary::{self, Stationary};
 use crate::error::{Error, Result};
-use crate::problem::config;
 use clap::CommandFactory;
 use std::path::Path;
 
@@ -56,7 +55,7 @@ pub fn names() -> Vec<String> {
     list().into_iter().map(|e| e.name).collect()
 }
 
-pub use super::study::table::{Table, Values as Column};
+pub use super::study::table::{Table, Values};
 
 /// What a study is run on, as `vesicle study NAME FILE [--quick] [--set K=V] --out OUT
 /// [--force]`.
@@ -114,7 +113,7 @@ impl<S: Study> Study for Tables<S> {
 /// The study `S` of a study file in one pool of its threads ([`file::threads`]).
 fn run_file<S: Study>(args: &Args) -> Result<Vec<Table>> {
     refuse_set(args)?;
-    exists(args.file, "(study file)")?;
+    super::existing(args.file, "(study file)")?;
     let threads = file::threads(args.file, S::NAME, args.quick)?;
     crate::cpu::in_pool(threads, || {
         harness::run::<Tables<S>>(args.file, args.quick, args.out, args.force)
@@ -134,9 +133,7 @@ fn run_stationary(args: &Args) -> Result<Vec<Table>> {
                 "applies to a study file (one with a \"study\" key), not a scene file",
             ));
         }
-        exists(args.file, "(scene file)")?;
-        let scene = config::load(args.file, args.set)?;
-        crate::driver::simulation::check_engine(&scene)?;
+        let scene = super::load_scene(args.file, args.set)?;
         crate::cpu::in_pool(scene.threads(), || {
             harness::run_with::<Tables<Stationary>>(args.out, args.force, || {
                 let (_, report) = stationary::on_scene(&scene)?;
@@ -153,17 +150,6 @@ fn refuse_set(args: &Args) -> Result<()> {
         Err(Error::config(
             "--set",
             "applies to a scene file; a study file sets its scene's keys itself",
-        ))
-    }
-}
-
-fn exists(path: &Path, field: &str) -> Result<()> {
-    if path.exists() {
-        Ok(())
-    } else {
-        Err(Error::config(
-            field,
-            format!("{} does not exist", path.display()),
         ))
     }
 }

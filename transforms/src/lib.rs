@@ -45,7 +45,6 @@
 #[cfg(target_arch = "x86_64")]
 mod avx;
 mod columns;
-#[doc(hidden)]
 pub mod cpu;
 mod dct;
 mod lanes;

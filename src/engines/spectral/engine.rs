@@ -364,8 +364,8 @@ mod tests {
             }
             let u = e.update(0.7);
             assert_eq!(u.levels(), if scheme == "sbdf2" { 2 } else { 1 });
-            let [app, apq, aqq] = e.passes().area_quadratic(&u).expect("cpu");
             let passes = e.passes_mut();
+            let [app, apq, aqq] = passes.area_quadratic(&u).expect("cpu");
             for sigma in [-0.3, 0.0, 0.7] {
                 let predicted = app + 2.0 * sigma * apq + sigma * sigma * aqq;
                 let written = passes.write_update(&u, sigma).expect("cpu");

@@ -199,11 +199,6 @@ impl<P: Passes> Stepper<P> {
         }
     }
 
-    /// The device's passes.
-    pub fn passes(&self) -> &P {
-        &self.passes
-    }
-
     /// The device's passes, writable (tests drive single passes).
     #[cfg(test)]
     pub(crate) fn passes_mut(&mut self) -> &mut P {

@@ -125,13 +125,13 @@ impl Update {
         }
     }
 
-    /// Levels of history this step reads: 2 when a2 ≠ 0 (SBDF2 after its first step), else 1.
+    /// Levels of history this step reads: the last j with a_j ≠ 0 (SBDF2 after its first step
+    /// reads 2, every first-order step 1).
     pub fn levels(&self) -> usize {
-        if self.c.a[2] != 0.0 {
-            2
-        } else {
-            1
-        }
+        (1..=MAX_LEVELS)
+            .rev()
+            .find(|&j| self.c.a[j] != 0.0)
+            .unwrap_or(1)
     }
 
     /// S = s2 k + s4 ε² k² at |k|² = `k`.
