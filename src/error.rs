@@ -147,4 +147,6 @@ pub enum Cause {
     Area,
     /// F_eff rose where the scheme guarantees a decrease.
     EnergyRise,
+    /// The bilayer couple's area difference was not held.
+    AreaDifference,
 }

@@ -90,6 +90,7 @@ fn cause_name(cause: vesicle::engines::Cause) -> &'static str {
         Cause::Volume => "volume",
         Cause::Area => "area",
         Cause::EnergyRise => "energy rise",
+        Cause::AreaDifference => "area difference",
     }
 }
 

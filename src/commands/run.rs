@@ -9,9 +9,10 @@ use crate::driver::observers::{Checkpointer, Progress, Recorder, Snapshots};
 use crate::driver::record::{Record, TimeSeries};
 use crate::driver::signals::Interrupts;
 use crate::driver::simulation::{
-    build_engine, check_stability, stability_bound, Prepared, Simulation, StopRules, Stopped,
+    build_engine, check_stability, constrain, stability_bound, Prepared, Simulation, StopRules,
+    Stopped,
 };
-use crate::engines::{AreaConstraint, Engine};
+use crate::engines::Engine;
 use crate::error::{Error, Result};
 use crate::output;
 use crate::output::folder::{check_out_dir, make_out_dir};
@@ -172,11 +173,7 @@ pub fn restore(
         .area
         .target
         .ok_or_else(|| Error::config("checkpoint", "its scene lacks the resolved area.target"))?;
-    engine.set_area(AreaConstraint {
-        method: scene.area_method(),
-        alpha: scene.alpha(),
-        target,
-    });
+    constrain(engine.as_mut(), scene, target)?;
     engine
         .restore(&mut checkpoint.engine, checkpoint.clock.t)
         .map_err(|m| Error::config("checkpoint", m))?;

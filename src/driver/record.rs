@@ -38,6 +38,42 @@ pub struct Record {
     pub rejected: usize,
     /// Wall-clock seconds since the time loop started.
     pub wall_seconds: f64,
+    /// With an area-difference term (ADE or the bilayer couple): its columns; then
+    /// `reduced_energy` is w.
+    #[serde(flatten)]
+    pub couple: Option<CoupleColumns>,
+}
+
+/// The columns of a run with an area-difference term (docs/src/theory/ade.md), after the
+/// others.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct CoupleColumns {
+    /// e, the reduced bending energy.
+    pub bending_energy: f64,
+    /// Δa = M/M₁.
+    pub da: f64,
+    /// w = e + πα(Δa − Δa0)² (e for the bilayer couple).
+    pub w: f64,
+    /// c̄0,eff = c̄0 + 2πα(Δa0 − Δa), or c̄0 − λM₁/E₁ for the bilayer couple.
+    pub c0_eff: f64,
+    /// λ, the term's multiplier.
+    pub lambda: f64,
+}
+
+/// The names of [`CoupleColumns`], as the CSV header appends them.
+pub const COUPLE_COLUMNS: [&str; 5] = ["bending_energy", "da", "w", "c0_eff", "lambda"];
+
+impl CoupleColumns {
+    /// The values in the order of [`COUPLE_COLUMNS`].
+    pub fn values(&self) -> [f64; 5] {
+        [
+            self.bending_energy,
+            self.da,
+            self.w,
+            self.c0_eff,
+            self.lambda,
+        ]
+    }
 }
 
 impl Record {
@@ -65,6 +101,17 @@ impl Record {
     pub fn of(step: usize, t: f64, dt: f64, engine: &dyn Engine, dim: usize, eps: f64) -> Self {
         let m = engine.measures();
         let r = m.reduced(dim, eps);
+        let couple = engine.area_difference().map(|term| {
+            let lambda = engine.lambda();
+            let w = r.energy + term.reduced_energy(m.curvature);
+            CoupleColumns {
+                bending_energy: r.energy,
+                da: term.da(m.curvature),
+                w,
+                c0_eff: term.c0_eff(m.curvature, lambda),
+                lambda,
+            }
+        });
         Record {
             step,
             t,
@@ -73,12 +120,13 @@ impl Record {
             area: m.area,
             volume: m.volume,
             reduced_volume: r.volume,
-            reduced_energy: r.energy,
+            reduced_energy: couple.map_or(r.energy, |c| c.w),
             sigma: engine.sigma(),
             residual: engine.residual(),
             rate: f64::NAN,
             rejected: 0,
             wall_seconds: 0.0,
+            couple,
         }
     }
 }
@@ -105,25 +153,42 @@ pub const HEADER: &str =
     "step,t,dt,energy,area,volume,reduced_volume,reduced_energy,sigma,residual,\
 rate,rejected,wall_seconds";
 
-/// Writes `timeseries.csv` row by row (values in shortest round-trip form).
+/// Writes `timeseries.csv` row by row (values in shortest round-trip form). The header comes
+/// with the first row (with [`COUPLE_COLUMNS`] appended when its record has them), or at the
+/// first flush of a file with no rows.
 pub struct TimeSeries {
     path: PathBuf,
     out: BufWriter<File>,
+    header_written: bool,
 }
 
 impl TimeSeries {
-    /// Create the file and write the header.
+    /// Create the file (the header follows with the first row).
     ///
     /// # Errors
     /// `Error::Io` if the file cannot be created.
     pub fn create(path: &Path) -> Result<Self> {
         let file = File::create(path).map_err(|source| io(path, source))?;
-        let mut ts = TimeSeries {
+        Ok(TimeSeries {
             path: path.to_path_buf(),
             out: BufWriter::new(file),
+            header_written: false,
+        })
+    }
+
+    /// Write the header if it is not yet written: with the area-difference columns when
+    /// `couple`.
+    fn header(&mut self, couple: bool) -> Result<()> {
+        if self.header_written {
+            return Ok(());
+        }
+        self.header_written = true;
+        let extra = if couple {
+            format!(",{}", COUPLE_COLUMNS.join(","))
+        } else {
+            String::new()
         };
-        writeln!(ts.out, "{HEADER}").map_err(|e| io(path, e))?;
-        Ok(ts)
+        writeln!(self.out, "{HEADER}{extra}").map_err(|e| io(&self.path, e))
     }
 
     /// Continue the file at `path` after its row of `step`: rows of later steps (written after
@@ -136,7 +201,8 @@ impl TimeSeries {
     pub fn resume(path: &Path, step: usize) -> Result<(Self, Vec<Record>)> {
         let text = std::fs::read_to_string(path).map_err(|source| io(path, source))?;
         let mut lines = text.lines();
-        if lines.next() != Some(HEADER) {
+        let couple_header = format!("{HEADER},{}", COUPLE_COLUMNS.join(","));
+        if !matches!(lines.next(), Some(h) if h == HEADER || h == couple_header) {
             return Err(Error::config(
                 "timeseries.csv",
                 format!("{} does not start with the header {HEADER}", path.display()),
@@ -177,7 +243,8 @@ impl TimeSeries {
     }
 
     fn write_row(&mut self, r: &Record) -> Result<()> {
-        writeln!(
+        self.header(r.couple.is_some())?;
+        write!(
             self.out,
             "{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.step,
@@ -194,7 +261,13 @@ impl TimeSeries {
             r.rejected,
             r.wall_seconds
         )
-        .map_err(|e| io(&self.path, e))
+        .map_err(|e| io(&self.path, e))?;
+        if let Some(c) = &r.couple {
+            for v in c.values() {
+                write!(self.out, ",{v}").map_err(|e| io(&self.path, e))?;
+            }
+        }
+        writeln!(self.out).map_err(|e| io(&self.path, e))
     }
 
     /// Flush buffered rows to disk.
@@ -202,6 +275,7 @@ impl TimeSeries {
     /// # Errors
     /// `Error::Io` on a write failure.
     pub fn flush(&mut self) -> Result<()> {
+        self.header(false)?;
         self.out.flush().map_err(|e| io(&self.path, e))
     }
 }
@@ -225,8 +299,21 @@ fn parse_row(line: &str) -> Option<Record> {
         rate: x()?,
         rejected: count(x()?)?,
         wall_seconds: x()?,
+        couple: None,
     };
-    Some(r)
+    let rest: Vec<f64> = f.map(|v| v.parse::<f64>().ok()).collect::<Option<_>>()?;
+    let couple = match rest[..] {
+        [] => None,
+        [bending_energy, da, w, c0_eff, lambda] => Some(CoupleColumns {
+            bending_energy,
+            da,
+            w,
+            c0_eff,
+            lambda,
+        }),
+        _ => return None,
+    };
+    Some(Record { couple, ..r })
 }
 
 fn io(path: &Path, source: std::io::Error) -> Error {

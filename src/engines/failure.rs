@@ -18,6 +18,8 @@ pub enum Rejection {
     VolumeDrift(f64),
     /// A is off its target by this relative amount (projection).
     AreaDrift(f64),
+    /// The bilayer couple's M is off its target by this relative amount.
+    AreaDifferenceDrift(f64),
     /// F_eff rose where the scheme guarantees a decrease.
     EnergyRise {
         /// F_eff before the step.
@@ -35,6 +37,7 @@ impl Rejection {
             Rejection::Diverged(_) => Cause::BlewUp,
             Rejection::VolumeDrift(_) => Cause::Volume,
             Rejection::EnergyRise { .. } => Cause::EnergyRise,
+            Rejection::AreaDifferenceDrift(_) => Cause::AreaDifference,
         }
     }
 }
@@ -46,6 +49,10 @@ impl std::fmt::Display for Rejection {
             Rejection::Diverged(d) => write!(f, "{}", d.0),
             Rejection::VolumeDrift(d) => write!(f, "volume drifted by {d:.2e} (relative)"),
             Rejection::AreaDrift(d) => write!(f, "area off its target by {d:.2e} (relative)"),
+            Rejection::AreaDifferenceDrift(d) => write!(
+                f,
+                "the bilayer couple's area difference is off its target by {d:.2e} (relative)"
+            ),
             Rejection::EnergyRise { before, after } => write!(
                 f,
                 "F_eff rose from {before:.12e} to {after:.12e} (relative {:.2e})",

@@ -19,6 +19,7 @@ pub mod relax;
 pub mod spectral;
 pub mod stencil;
 
+use crate::problem::area_difference::AreaDifference;
 use crate::problem::config::AreaMethod;
 use crate::problem::model::Measures;
 use ndarray::{Array3, ArrayView3, CowArray, Ix3};
@@ -102,6 +103,22 @@ pub trait Engine {
     /// [`StepError`] if the state diverged, broke a constraint or the device failed; the
     /// engine then still holds the last good state.
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError>;
+    /// Hold the area-difference term (ADE or the bilayer couple) at its reference area; the
+    /// driver calls it after [`Engine::set_area`]. Engines without the term refuse its scenes
+    /// in [`supports`].
+    ///
+    /// # Errors
+    /// A sentence if the engine cannot hold the term.
+    fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), String>;
+    /// The area-difference term the engine holds, if any.
+    fn area_difference(&self) -> Option<AreaDifference> {
+        None
+    }
+    /// The area-difference multiplier λ of the current state (μ holds λ δM/δφ); 0 without
+    /// the term.
+    fn lambda(&self) -> f64 {
+        0.0
+    }
     /// The step the engine proposes next (adaptive engines), or `dt` unchanged.
     fn next_dt(&self, dt: f64) -> f64 {
         dt

@@ -208,6 +208,9 @@ pub struct Measures {
     pub area: f64,
     /// V = ∫ (1 + φ)/2.
     pub volume: f64,
+    /// M = ∫ Φ₀(1 − φ²), the integrated mean curvature's functional
+    /// ([`crate::problem::area_difference`]); 0 unless the scene has an area-difference term.
+    pub curvature: f64,
 }
 
 /// Reduced volume and reduced energy (docs/src/theory/model.md, sharp-interface normalisation).

@@ -100,8 +100,10 @@ pub fn classify(steps: &[StepSample], failure: Option<Cause>, c: &Criteria) -> C
     {
         return Class::BlownUp;
     }
-    if matches!(failure, Some(Cause::Area | Cause::Volume))
-        || steps.iter().any(|s| s.area_error > c.area)
+    if matches!(
+        failure,
+        Some(Cause::Area | Cause::Volume | Cause::AreaDifference)
+    ) || steps.iter().any(|s| s.area_error > c.area)
     {
         return Class::ConstraintLost;
     }

@@ -18,7 +18,9 @@
 mod start;
 mod stop;
 
-pub use start::{build_engine, check_engine, check_stability, stability_bound, Prepared};
+pub use start::{
+    build_engine, check_engine, check_stability, constrain, stability_bound, Prepared,
+};
 pub use stop::{StopRules, Stopped};
 
 use crate::driver::awake::KeepAwake;
@@ -380,6 +382,7 @@ mod tests {
                 energy: 1.0,
                 area: 1.0,
                 volume: 1.0,
+                curvature: 0.0,
             }
         }
         fn residual(&self) -> f64 {

@@ -7,6 +7,7 @@ use crate::engines::relax::RelaxEngine;
 use crate::engines::spectral::{self, SpectralEngine};
 use crate::engines::{AreaConstraint, Diverged, Engine};
 use crate::error::{Error, Result};
+use crate::problem::area_difference::AreaDifference;
 use crate::problem::config::{AdaptiveSpec, Device, Dynamics, Method, Scene, Scheme};
 use crate::problem::grid::Grid;
 use crate::problem::setup::Problem;
@@ -152,16 +153,36 @@ impl Prepared {
             }
         };
         let a0 = scene.area.target.unwrap_or(engine.measures().area);
-        engine.set_area(AreaConstraint {
-            method: scene.area_method(),
-            alpha: scene.alpha(),
-            target: a0,
-        });
+        constrain(engine.as_mut(), scene, a0)?;
         Ok(Prepared {
             simulation: Simulation::new(engine, scene.dt, scene.dim, scene.eps),
             area_target: Ok(a0),
         })
     }
+}
+
+/// Install the area constraint of `scene` with A0 = `a0` on `engine`, and its area-difference
+/// term (ADE or the bilayer couple) with R0 = √(A0/4π).
+///
+/// # Errors
+/// `Error::Config` on field `ade` (or `bilayer_couple`) if the engine cannot hold the term.
+pub fn constrain(engine: &mut (dyn Engine + Send), scene: &Scene, a0: f64) -> Result<()> {
+    engine.set_area(AreaConstraint {
+        method: scene.area_method(),
+        alpha: scene.alpha(),
+        target: a0,
+    });
+    if let Some(term) = AreaDifference::of(scene, a0) {
+        let field = if scene.ade.is_some() {
+            "ade"
+        } else {
+            "bilayer_couple"
+        };
+        engine
+            .set_area_difference(term)
+            .map_err(|m| Error::config(field, m))?;
+    }
+    Ok(())
 }
 
 /// The problem with its field after `scene.prepare_steps` unconstrained fixed steps of
@@ -175,6 +196,8 @@ fn prepare(scene: &Scene, problem: &Problem) -> Result<Preparation> {
     // the prepared field's volume).
     let mut prep_scene = scene.clone();
     prep_scene.volume = None;
+    prep_scene.ade = None;
+    prep_scene.bilayer_couple = None;
     prep_scene.adaptive = AdaptiveSpec::Flag(false);
     prep_scene.dynamics = Dynamics::Conserved;
     prep_scene.scheme = Scheme::Sbdf1;

@@ -28,6 +28,9 @@ use crate::engines::stencil;
 use crate::engines::{
     AreaConstraint, Diverged, Engine, Rejection, Saved, SavedArray, StepError, StepReport,
 };
+use crate::problem::area_difference::{
+    curvature_density, curvature_variation_local, AreaDifference,
+};
 use crate::problem::config::AreaMethod;
 use crate::problem::grid::Grid;
 use crate::problem::model::{
@@ -83,6 +86,9 @@ pub struct FdEngine {
     volume0: f64,
     /// Refuse steps that raise F_eff (explicit Euler below its bound is dissipative).
     energy_guard: bool,
+    /// The ADE term (its λ lagged: that of the current state) and its two work arrays (φ²,
+    /// then ∇²_h φ²).
+    couple: Option<(AreaDifference, Array3<f64>)>,
 }
 
 impl FdEngine {
@@ -119,6 +125,7 @@ impl FdEngine {
             projection: None,
             volume0: 0.0,
             energy_guard: true,
+            couple: None,
             grid,
         };
         e.refresh(t)?;
@@ -135,6 +142,17 @@ impl FdEngine {
         let (uniform, field) = self.c0.parts(r);
         let phi = self.phi.as_slice().expect("standard layout");
         let lap = self.next_phi.as_slice().expect("standard layout");
+        let curvature = match self.couple {
+            Some(_) => {
+                let sum: f64 = phi
+                    .iter()
+                    .zip(lap)
+                    .map(|(&p, &l)| curvature_density(p, l, e2))
+                    .sum();
+                sum * self.grid.cell_volume() * self.grid.mirror_factor()
+            }
+            None => 0.0,
+        };
         let big = self.next_mu.as_slice_mut().expect("standard layout");
         // Φ_h = f(φ) − ε²∇²_h φ, with Σ Φ², max|φ| and Σ φ.
         let partials = big.par_chunks_mut(PAR_CHUNK).enumerate().map(|(j, b)| {
@@ -160,6 +178,7 @@ impl FdEngine {
             area: stencil::area(&self.grid, self.eps, &self.phi),
             // V = Σ (1 + φ)/2 h^d
             volume: 0.5 * (phi.len() as f64 + sum_phi) * dv,
+            curvature,
         };
         blow_up(max_abs, self.measures.energy)
     }
@@ -205,6 +224,13 @@ impl FdEngine {
         Ok(Some(change / dt))
     }
 
+    /// F_ade of a state with measures `m` (0 without the term).
+    fn ade_energy(&self, m: &Measures) -> f64 {
+        self.couple
+            .as_ref()
+            .map_or(0.0, |(t, _)| t.energy(m.curvature))
+    }
+
     /// The FD stability bound at the current σ.
     pub fn bound(&self) -> f64 {
         stability_bound(&self.grid, self.eps, self.sigma)
@@ -228,8 +254,11 @@ impl FdEngine {
             }
         }
         if self.energy_guard && !self.c0.is_ramped() && dt > 0.0 {
-            let s = self.sigma;
-            let (f0, f1) = (before.energy + s * before.area, m.energy + s * m.area);
+            let (s, ade) = (self.sigma, |m: &Measures| self.ade_energy(m));
+            let (f0, f1) = (
+                before.energy + ade(&before) + s * before.area,
+                m.energy + ade(&m) + s * m.area,
+            );
             if f1 > f0 + ENERGY_RISE_TOL * f0.abs() {
                 return Err(StepError::Rejected {
                     check: Rejection::EnergyRise {
@@ -287,7 +316,17 @@ impl FdEngine {
             }
             sum
         });
-        let sum = sum_in_fixed_tree(partials, || 0.0, |a, b| a + b);
+        let mut sum = sum_in_fixed_tree(partials, || 0.0, |a, b| a + b);
+        if let Some((term, work)) = self.couple.as_mut() {
+            sum = add_curvature_potential(
+                (&self.grid, e2),
+                term.multiplier(self.measures.curvature),
+                [phi, lap],
+                work,
+                &mut self.work,
+                mu,
+            );
+        }
         let mean = sum / mu.len() as f64;
         let partials = mu
             .par_chunks(PAR_CHUNK)
@@ -387,6 +426,7 @@ impl FdEngine {
             energy: sums.energy * dv,
             area: -AREA_PREFACTOR * self.eps * sums.phi_lap * dv,
             volume: 0.5 * (self.grid.len() as f64 + sums.phi) * dv,
+            curvature: 0.0,
         }
     }
 
@@ -448,6 +488,27 @@ impl FdEngine {
     }
 }
 
+/// Add λ δM/δφ to `mu` (μ_h of a state, `phi` and `lap` = ∇²_h φ):
+/// δM/δφ = (3φ² − 1)(1 − φ²) − 2φΦ₀ + ε²∇²_h(φ²), Φ₀ = φ³ − φ − ε²∇²_h φ, with `square` and
+/// `lap_square` work arrays; returns Σ μ after it.
+fn add_curvature_potential(
+    (grid, e2): (&Grid, f64),
+    lambda: f64,
+    [phi, lap]: [&[f64]; 2],
+    square: &mut Array3<f64>,
+    lap_square: &mut Array3<f64>,
+    mu: &mut [f64],
+) -> f64 {
+    square.iter_mut().zip(phi).for_each(|(s, &p)| *s = p * p);
+    stencil::laplacian(grid, square, lap_square);
+    let mut sum = 0.0;
+    for (i, (m, &ls)) in mu.iter_mut().zip(lap_square.iter()).enumerate() {
+        *m += lambda * (curvature_variation_local(phi[i], lap[i], e2) + e2 * ls);
+        sum += *m;
+    }
+    sum
+}
+
 /// Divergence of a state with max|φ| = `max_abs` and F = `energy` ([`model::diverged`]).
 fn blow_up(max_abs: f64, energy: f64) -> Result<(), Diverged> {
     if model::diverged(max_abs, energy) {
@@ -491,11 +552,28 @@ impl Engine for FdEngine {
     /// multi-pass with it.
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
         self.max_bound_ratio = self.max_bound_ratio.max(dt / self.bound());
-        if self.projection.is_some() {
+        if self.projection.is_some() || self.couple.is_some() {
             self.step_multipass(t, dt)
         } else {
             self.step_fused(t, dt)
         }
+    }
+
+    fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), String> {
+        self.couple = Some((term, self.grid.zeros()));
+        self.refresh(self.t).map_err(|d| d.0)?;
+        self.refresh_mu();
+        Ok(())
+    }
+
+    fn area_difference(&self) -> Option<AreaDifference> {
+        self.couple.as_ref().map(|(t, _)| *t)
+    }
+
+    fn lambda(&self) -> f64 {
+        self.couple
+            .as_ref()
+            .map_or(0.0, |(t, _)| t.multiplier(self.measures.curvature))
     }
 
     fn max_dt_over_bound(&self) -> Option<f64> {
@@ -519,6 +597,7 @@ impl Engine for FdEngine {
             .scalar("energy", self.measures.energy)
             .scalar("area", self.measures.area)
             .scalar("volume", self.measures.volume)
+            .scalar("curvature", self.measures.curvature)
             .scalar("residual", self.residual)
             .array("phi", SavedArray::Real(self.phi.view().into()))
     }
@@ -550,6 +629,7 @@ impl Engine for FdEngine {
                 energy,
                 area,
                 volume,
+                curvature: saved.get("curvature").unwrap_or(self.measures.curvature),
             };
             self.residual = residual;
         }

@@ -178,6 +178,7 @@ fn finish(
         energy: phi_sq * cell,
         area,
         volume: 0.5 * (dev.points() as f64 + phi_sum) * cell,
+        curvature: 0.0,
     };
     if model::diverged(max_abs, state.measures.energy) {
         return Ok(Err(Diverged(format!(

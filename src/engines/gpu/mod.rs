@@ -51,6 +51,15 @@ pub fn supports(scene: &Scene) -> Result<(), Unsupported> {
     if scene.n.iter().any(|m| m % 2 != 0) {
         return refuse("n", "the GPU engine needs even lengths");
     }
+    if scene.ade.is_some() {
+        return refuse("ade", "the GPU engine has no area-difference term yet");
+    }
+    if scene.bilayer_couple.is_some() {
+        return refuse(
+            "bilayer_couple",
+            "the GPU engine has no area-difference term yet",
+        );
+    }
     if matches!(scene.c0, C0Spec::Field(_)) {
         return refuse("c0", "the GPU engine takes a uniform c0 only");
     }

@@ -5,6 +5,7 @@ use super::lbfgs::{Pair, ARMIJO, MAX_BACKTRACKS, MAX_MEMORY};
 use super::RelaxEngine;
 use crate::engines::spectral::saved;
 use crate::engines::{AreaConstraint, Engine, Saved, SavedArray, StepError, StepReport};
+use crate::problem::area_difference::AreaDifference;
 use crate::problem::model::Measures;
 use ndarray::Array3;
 
@@ -41,13 +42,14 @@ impl Engine for RelaxEngine {
             self.write_direction(&mut d);
         }
         self.direction = d;
-        let f0 = self.cur.measures.energy;
+        let f0 = self.objective(&self.cur.measures);
         let mut alpha = 1.0;
         let mut rejected = 0;
         std::mem::swap(&mut self.cur.nonlinear, &mut self.trial.nonlinear);
         loop {
             let accepted = self.try_step(alpha, t + dt).is_ok()
-                && self.trial.measures.energy <= f0 + ARMIJO * alpha * self.direction.slope;
+                && self.objective(&self.trial.measures)
+                    <= f0 + ARMIJO * alpha * self.direction.slope;
             if accepted {
                 break;
             }
@@ -71,6 +73,27 @@ impl Engine for RelaxEngine {
             rate: f64::NAN,
             rejected,
         })
+    }
+
+    fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), String> {
+        self.ev.area_difference = Some(term);
+        // ĝ of the current state gains λ m̂ (the state's measures and sums are its own).
+        self.ev
+            .evaluate(&mut self.cur, 0.0, None, None)
+            .map_err(|d| d.0)?;
+        self.reset_memory();
+        self.refresh_gradient();
+        Ok(())
+    }
+
+    fn area_difference(&self) -> Option<AreaDifference> {
+        self.ev.area_difference
+    }
+
+    fn lambda(&self) -> f64 {
+        self.ev
+            .area_difference
+            .map_or(0.0, |t| t.multiplier(self.cur.measures.curvature))
     }
 
     fn stalled(&self) -> bool {

@@ -9,7 +9,7 @@ use crate::engines::spectral::pieces::{for_each_piece, per_width, reals, reals_m
 use crate::engines::{AreaConstraint, Diverged};
 use crate::problem::config::{AreaMethod, Scene};
 use crate::problem::grid::Grid;
-use crate::problem::model::C0;
+use crate::problem::model::{Measures, C0};
 use ndarray::Array3;
 use num_complex::Complex64;
 use rayon::prelude::*;
@@ -167,6 +167,9 @@ impl RelaxEngine {
             explicit,
             scene.threads(),
         );
+        if scene.ade.is_some() {
+            ev = ev.with_curvature();
+        }
         let cur = ev.state_of(&phi, 0.0)?;
         let zeros = Array3::zeros(cur.hat.raw_dim());
         let memory = scene.lbfgs_memory.min(MAX_MEMORY);
@@ -202,6 +205,15 @@ impl RelaxEngine {
         };
         e.refresh_gradient();
         Ok(e)
+    }
+
+    /// The energy the iteration minimises: F_sc, plus F_ade with the area-difference term.
+    pub(super) fn objective(&self, m: &Measures) -> f64 {
+        m.energy
+            + self
+                .ev
+                .area_difference
+                .map_or(0.0, |t| t.energy(m.curvature))
     }
 
     /// Pairs held in the memory (at most `lbfgs_memory`).

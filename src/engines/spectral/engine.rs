@@ -3,6 +3,7 @@
 //! ([`Evaluator`]). [`SpectralEngine`] is the shared [`Stepper`] on them; the update's formula
 //! is in [`super::update`].
 
+use super::curvature::{add_couple, couple_sums, CoupleInputs, CoupleSums};
 use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm, State};
 use super::kernels::{sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
@@ -13,6 +14,7 @@ use super::stepper::{
 use super::update::{Update, MAX_LEVELS};
 use crate::engines::numerics::sum_in_fixed_tree;
 use crate::engines::{Diverged, Saved, SavedArray};
+use crate::problem::area_difference::AreaDifference;
 use crate::problem::config::{Laplacian, Scene, Stabilizer};
 use crate::problem::grid::Grid;
 use crate::problem::model::{Measures, C0};
@@ -122,6 +124,32 @@ impl<'a> Inputs<'a> {
     }
 }
 
+/// A spectrum as interleaved reals.
+fn flat(a: &Array3<Complex64>) -> &[f64] {
+    reals(a.as_slice().expect("standard layout"))
+}
+
+/// The area-difference term's inputs of an update reading `levels` levels: (φ̂, N̂, m̂) of the
+/// current state `cur` and, with two, of the one before (`prev`, `prev_curvature`).
+fn couple_inputs<'a>(
+    cur: &'a State,
+    prev: Option<&'a [Array3<Complex64>; 2]>,
+    prev_curvature: Option<&'a Array3<Complex64>>,
+    levels: usize,
+) -> CoupleInputs<'a> {
+    let mut inputs = vec![[
+        flat(&cur.hat),
+        flat(&cur.nonlinear),
+        flat(&cur.curvature_hat),
+    ]];
+    if levels > 1 {
+        let [h, n] = prev.expect("two levels need the history");
+        let m = prev_curvature.expect("and its m̂");
+        inputs.push([flat(h), flat(n), flat(m)]);
+    }
+    CoupleInputs { levels: inputs }
+}
+
 /// Frozen-coefficient stability bound of the semi-implicit step at σ = 0:
 /// with the bulk linearisation −2k²(2 + ε²k²)² split into implicit b = 2ε⁴k⁶ + S and explicit
 /// a = 8k² + 8ε²k⁴, the amplification (1 + Δt(S − a))/(1 + Δt(b + S)) stays in [−1, 1] for
@@ -166,10 +194,14 @@ impl SpectralEngine {
             ExplicitTerm::ConservedRhs,
             scene.threads(),
         );
+        if scene.ade.is_some() || scene.bilayer_couple.is_some() {
+            ev = ev.with_curvature();
+        }
         let cur = ev.state_of(&phi, 0.0)?;
         let passes = CpuPasses {
             states: States::new(cur, ev.blank()),
             ev,
+            prev_curvature: None,
         };
         Ok(Stepper::with_passes(passes, scene, c0_ramped))
     }
@@ -180,6 +212,8 @@ impl SpectralEngine {
 pub struct CpuPasses {
     ev: Evaluator,
     states: States<State>,
+    /// m̂ⁿ⁻¹ of the area-difference term, beside the history of two-level schemes.
+    prev_curvature: Option<Array3<Complex64>>,
 }
 
 impl DeviceState for State {
@@ -302,7 +336,15 @@ impl Passes for CpuPasses {
     }
 
     fn accept(&mut self, keep_history: bool) -> Result<(), DeviceFailure> {
-        self.states.accept(keep_history, |s| Ok(s.clone()))
+        self.states.accept(keep_history, |s| Ok(s.clone()))?;
+        if keep_history && self.ev.area_difference.is_some() {
+            let old = &mut self.states.next.curvature_hat;
+            match &mut self.prev_curvature {
+                Some(m) => std::mem::swap(m, old),
+                None => self.prev_curvature = Some(old.clone()),
+            }
+        }
+        Ok(())
     }
 
     fn spectra(&self) -> (SavedArray<'_>, Option<[SavedArray<'_>; 2]>) {
@@ -332,11 +374,59 @@ impl Passes for CpuPasses {
         self.ev
             .evaluate(&mut self.states.cur, t, None, Some(sigma))
             .map_err(|d| d.0)?;
+        // m̂ⁿ⁻¹ is not saved: it is evaluated again from φ̂ⁿ⁻¹.
+        self.prev_curvature = None;
+        if let (Some(_), Some([h, _])) = (self.ev.area_difference, &self.states.prev) {
+            let mut before = self.ev.blank();
+            before.hat.assign(h);
+            self.ev
+                .evaluate(&mut before, t, None, None)
+                .map_err(|d| d.0)?;
+            self.prev_curvature = Some(before.curvature_hat);
+        }
         Ok(())
     }
 
     fn name(&self) -> &'static str {
         "spectral"
+    }
+
+    fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), DeviceFailure> {
+        self.ev.area_difference = Some(term);
+        Ok(())
+    }
+
+    fn couple_sums(&self, u: &Update) -> Result<CoupleSums, DeviceFailure> {
+        let total = 2 * self.states.cur.hat.len();
+        let (prev, prev_m) = (self.states.prev.as_ref(), self.prev_curvature.as_ref());
+        let inputs = couple_inputs(&self.states.cur, prev, prev_m, u.levels());
+        Ok(couple_sums(&self.ev.symbols, u, &inputs, total))
+    }
+
+    fn add_couple(&mut self, u: &Update, lambda: f64) -> Result<f64, DeviceFailure> {
+        let States { cur, next, prev } = &mut self.states;
+        let inputs = couple_inputs(cur, prev.as_ref(), self.prev_curvature.as_ref(), u.levels());
+        let out = [
+            reals_mut(next.hat.as_slice_mut().expect("standard layout")),
+            reals_mut(next.nonlinear.as_slice_mut().expect("standard layout")),
+            reals_mut(self.ev.spare.as_slice_mut().expect("standard layout")),
+        ];
+        Ok(add_couple(&self.ev.symbols, u, &inputs, lambda, out))
+    }
+
+    fn set_residual(&mut self, next: bool, sigma: f64, lambda: f64) -> Result<(), DeviceFailure> {
+        let state = if next {
+            &self.states.next
+        } else {
+            &self.states.cur
+        };
+        let residual = self.ev.residual_with(state, sigma, lambda);
+        if next {
+            self.states.next.residual = residual;
+        } else {
+            self.states.cur.residual = residual;
+        }
+        Ok(())
     }
 }
 

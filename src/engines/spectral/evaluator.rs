@@ -13,11 +13,13 @@
 //! inputs itself, in the sweep that makes φ̂ (as the time step does), skips the first sweep
 //! ([`Evaluator::finish`]).
 
+use super::curvature::CurvatureScratch;
 use super::kernels::{pointwise_sums, sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::engines::Diverged;
+use crate::problem::area_difference::AreaDifference;
 use crate::problem::config::Laplacian;
 use crate::problem::grid::Grid;
 use crate::problem::model::{
@@ -81,6 +83,8 @@ pub struct State {
     /// With [`ExplicitTerm::Gradient`]: (⟨q, q⟩_M, ⟨ĝ, q⟩), q = M⁻¹â, whose ratio is the area
     /// multiplier that makes M⁻¹(ĝ + σâ) tangent to A = A0 (zeros otherwise).
     pub multiplier_sums: (f64, f64),
+    /// m̂ = FT[δM/δφ] of the area-difference term ([`super::curvature`]); empty without it.
+    pub curvature_hat: Array3<Complex64>,
 }
 
 /// Per-axis tables of the spectrum's modes ([`crate::engines::spectral::pieces`]). At mode (i0, i1, i2)
@@ -168,7 +172,11 @@ pub struct Evaluator {
     pub transform: Transform,
     /// |k|² and the Parseval weights per axis.
     pub symbols: Symbols,
-    explicit: ExplicitTerm,
+    pub(super) explicit: ExplicitTerm,
+    /// The area-difference term's scratch, when the scene has one.
+    pub(super) curvature: Option<CurvatureScratch>,
+    /// The area-difference term at its reference area (the gradient's λ reads it).
+    pub area_difference: Option<AreaDifference>,
     /// Spectral scratch: the input of the ∇²φ inverse transform, then FT[f] (the engines also
     /// use it between evaluations).
     pub spare: Array3<Complex64>,
@@ -198,11 +206,20 @@ impl Evaluator {
             work2: grid.zeros(),
             slab_sums: Vec::new(),
             explicit,
+            curvature: None,
+            area_difference: None,
             eps,
             c0,
             transform,
             grid,
         }
+    }
+
+    /// The evaluator with the area-difference term's functional M and variation m̂ in every
+    /// evaluation ([`super::curvature`]); its law is set later ([`Evaluator::area_difference`]).
+    pub fn with_curvature(mut self) -> Self {
+        self.curvature = Some(CurvatureScratch::new(&self));
+        self
     }
 
     /// The state holding the real field `phi`, evaluated at time `t`.
@@ -228,6 +245,10 @@ impl Evaluator {
             measures: Measures::default(),
             residual: f64::NAN,
             multiplier_sums: (0.0, 0.0),
+            curvature_hat: match self.curvature {
+                Some(_) => Array3::zeros(self.transform.spectral_shape()),
+                None => Array3::zeros((0, 0, 0)),
+            },
         }
     }
 
@@ -305,6 +326,7 @@ impl Evaluator {
             area,
             // V = Σ (1 + φ)/2 h^d
             volume: 0.5 * (phi.len() as f64 + sums.phi) * dv,
+            curvature: 0.0,
         };
         if model::diverged(sums.max_abs, state.measures.energy) {
             return Err(Diverged(format!(
@@ -327,6 +349,8 @@ impl Evaluator {
             None => f64::NAN,
         };
         state.multiplier_sums = (combined.qq, combined.gq);
+        self.evaluate_curvature(state);
+        self.add_curvature_gradient(state);
         Ok(sums.change)
     }
 }

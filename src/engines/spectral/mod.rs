@@ -1,6 +1,7 @@
 //! Spectral machinery: planned real transforms on the computational grid.
 
 pub(crate) mod control;
+pub mod curvature;
 pub mod engine;
 pub mod evaluator;
 pub(crate) mod kernels;

@@ -11,11 +11,13 @@
 //! projection takes the root nearest the last σ and rejects a step with no real root.
 
 use super::control;
+use super::curvature::CoupleSums;
 use super::update::{self, Update};
 use crate::engines::numerics::nearest_root;
 use crate::engines::{
     AreaConstraint, Diverged, Engine, Rejection, Saved, SavedArray, StepError, StepReport,
 };
+use crate::problem::area_difference::{AreaDifference, Law};
 use crate::problem::config::{AdaptiveSettings, AreaMethod, Scene, Scheme, Stabilizer, VolumeRamp};
 use crate::problem::grid::Grid;
 use crate::problem::model::Measures;
@@ -150,7 +152,41 @@ pub trait Passes {
     fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String>;
     /// Short name for logs and tables.
     fn name(&self) -> &'static str;
+    /// Hold the area-difference term `term` (ADE or the bilayer couple). A device without it
+    /// fails (its scenes are refused before: [`crate::engines::supports`]).
+    fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), DeviceFailure> {
+        let _ = term;
+        Err(no_area_difference(self.name()))
+    }
+    /// The sums of the update `u` with the area-difference term ([`CoupleSums`]).
+    fn couple_sums(&self, u: &Update) -> Result<CoupleSums, DeviceFailure> {
+        let _ = u;
+        Err(no_area_difference(self.name()))
+    }
+    /// Add λR̂ of the update `u` to the written next state (and its inverse inputs); returns
+    /// its area.
+    fn add_couple(&mut self, u: &Update, lambda: f64) -> Result<f64, DeviceFailure> {
+        let _ = (u, lambda);
+        Err(no_area_difference(self.name()))
+    }
+    /// Set the residual of the next state (`next`) or the current one at multipliers `sigma`
+    /// and `lambda` (μ with λ δM/δφ).
+    fn set_residual(&mut self, next: bool, sigma: f64, lambda: f64) -> Result<(), DeviceFailure> {
+        let _ = (next, sigma, lambda);
+        Err(no_area_difference(self.name()))
+    }
 }
+
+/// The failure of a device asked for the area-difference term it does not have.
+fn no_area_difference(device: &str) -> DeviceFailure {
+    DeviceFailure(format!("the {device} engine has no area-difference term"))
+}
+
+/// Secant iterations of the bilayer couple's multiplier before a step is rejected.
+const COUPLE_ITERATIONS: usize = 8;
+
+/// |M − M0|/M0 the bilayer couple holds each step (round-off of M's sum over the box).
+const COUPLE_TOL: f64 = 1e-12;
 
 /// The spectral conserved flow on the device `P` (module documentation).
 pub struct Stepper<P> {
@@ -175,6 +211,10 @@ pub struct Stepper<P> {
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see [`Stepper::check_constraints`]).
     energy_guard: bool,
+    /// The area-difference term, if the scene has one.
+    couple: Option<AreaDifference>,
+    /// Its multiplier λ of the current state.
+    lambda: f64,
 }
 
 impl<P: Passes> Stepper<P> {
@@ -196,6 +236,8 @@ impl<P: Passes> Stepper<P> {
             c0_ramped,
             dt_next: None,
             energy_guard: true,
+            couple: None,
+            lambda: 0.0,
         }
     }
 
@@ -208,6 +250,19 @@ impl<P: Passes> Stepper<P> {
     /// F_sc, A, V of the current state.
     fn current(&self) -> Measures {
         self.passes.states().cur.measures()
+    }
+
+    /// `m` with the area-difference term added to its energy: F_ade (ADE), or λ(M − M0)
+    /// with the step's multiplier `lambda` (the bilayer couple's Lagrangian, whose term
+    /// vanishes once M is held): the functional the flow decreases.
+    fn with_ade(&self, mut m: Measures, lambda: f64) -> Measures {
+        if let Some(term) = &self.couple {
+            m.energy += match term.law {
+                Law::Elastic { .. } => term.energy(m.curvature),
+                Law::Couple { .. } => lambda * (m.curvature - term.target()),
+            };
+        }
+        m
     }
 
     /// The update of a step of `dt` from the current state: the scheme's coefficients after the
@@ -232,6 +287,71 @@ impl<P: Passes> Stepper<P> {
                 let [app, apq, aqq] = self.passes.area_quadratic(u)?;
                 nearest_root(aqq, apq, app - self.area.target, self.sigma)
             }
+        })
+    }
+
+    /// σ and λ of this step's update with the area-difference term `term`, from its sums `s`
+    /// ([`CoupleSums`]), with `miss` what the bilayer couple's linearised M is taken to miss
+    /// (the negative of the secant's shift; 0 at the first try): λ = l0 + l1 σ from
+    ///
+    /// ```text
+    /// ADE, implicit:  λ = κ_λ (M_lin(σ, λ) − M0)     lagged:  λ = κ_λ (Mⁿ − M0)
+    /// bilayer couple: M_lin(σ, λ) + miss = M0,       M_lin = Mⁿ + c_P + σ c_Q + λ c_R
+    /// ```
+    ///
+    /// then σ as [`Stepper::choose_sigma`] does, on the area of P̂ + l0R̂ + σ(Q̂ + l1R̂). `None` if
+    /// the projection has no real root.
+    fn choose_multipliers(
+        &self,
+        term: &AreaDifference,
+        s: &CoupleSums,
+        miss: f64,
+    ) -> Option<(f64, f64)> {
+        let [app, apq, aqq, apr, aqr, arr] = s.area;
+        let [cp, cq, cr] = s.curvature;
+        let (mn, m0) = (self.current().curvature, term.target());
+        let (l0, l1) = match term.law {
+            Law::Elastic { lagged: true, .. } => (term.multiplier(mn), 0.0),
+            Law::Elastic { .. } => {
+                let k = term.stiffness();
+                let d = 1.0 - k * cr;
+                (k * (mn + cp - m0) / d, k * cq / d)
+            }
+            Law::Couple { .. } => ((m0 - miss - mn - cp) / cr, -cq / cr),
+        };
+        let sigma = match self.area.method {
+            AreaMethod::None => 0.0,
+            AreaMethod::Lagrangian => self.sigma,
+            AreaMethod::Projection => {
+                let pp = app + 2.0 * l0 * apr + l0 * l0 * arr;
+                let pq = apq + l1 * apr + l0 * aqr + l0 * l1 * arr;
+                let qq = aqq + 2.0 * l1 * aqr + l1 * l1 * arr;
+                nearest_root(qq, pq, pp - self.area.target, self.sigma)?
+            }
+        };
+        Some((sigma, l0 + l1 * sigma))
+    }
+
+    /// Write the update with multipliers σ, λ into the next state and evaluate it at `t_new`
+    /// (σ_after its σ for the residual); max|φ^{n+1} − φ^n| into `max_change`.
+    fn write_and_finish(
+        &mut self,
+        u: &Update,
+        (sigma, lambda): (f64, f64),
+        t_new: f64,
+        sigma_after: f64,
+    ) -> Result<Result<(), Rejection>, DeviceFailure> {
+        let mut area = self.passes.write_update(u, sigma)?;
+        if self.couple.is_some() {
+            area = self.passes.add_couple(u, lambda)?;
+        }
+        self.set_volume(t_new)?;
+        Ok(match self.passes.finish_next(area, t_new, sigma_after)? {
+            Ok(change) => {
+                self.max_change = change;
+                Ok(())
+            }
+            Err(d) => Err(Rejection::Diverged(d)),
         })
     }
 
@@ -260,23 +380,66 @@ impl<P: Passes> Stepper<P> {
     }
 
     /// Try one step of size `dt` from time `t`: on success the next state holds the result (its
-    /// residual at the new σ) and the σ of the state after it is returned; a rejection says
-    /// why; `Err` if the device failed.
-    fn attempt(&mut self, t: f64, dt: f64) -> Result<Result<f64, Rejection>, DeviceFailure> {
+    /// residual at the new multipliers) and the σ and λ of the state after it are returned; a
+    /// rejection says why; `Err` if the device failed. The bilayer couple's λ is corrected by
+    /// secant iterations until M^{n+1} = M0 to [`COUPLE_TOL`].
+    fn attempt(&mut self, t: f64, dt: f64) -> Result<Result<(f64, f64), Rejection>, DeviceFailure> {
         let u = self.update(dt);
-        let Some(sigma) = self.choose_sigma(&u)? else {
-            return Ok(Err(Rejection::NoRealRoot));
+        let t_new = t + dt;
+        let Some(term) = self.couple else {
+            let Some(sigma) = self.choose_sigma(&u)? else {
+                return Ok(Err(Rejection::NoRealRoot));
+            };
+            let sigma_after =
+                control::sigma_after(&self.area, self.sigma, self.current().area, sigma);
+            if let Err(r) = self.write_and_finish(&u, (sigma, 0.0), t_new, sigma_after)? {
+                return Ok(Err(r));
+            }
+            return Ok(self
+                .check_constraints((sigma, 0.0), t, t_new)
+                .map(|()| (sigma_after, 0.0)));
         };
-        let area = self.passes.write_update(&u, sigma)?;
-        self.set_volume(t + dt)?;
-        let sigma_after = control::sigma_after(&self.area, self.sigma, self.current().area, sigma);
-        self.max_change = match self.passes.finish_next(area, t + dt, sigma_after)? {
-            Ok(change) => change,
-            Err(d) => return Ok(Err(Rejection::Diverged(d))),
+        let sums = self.passes.couple_sums(&u)?;
+        // The bilayer couple solves M_lin(σ, λ) = M0 + shift, the shift found by the secant
+        // method on M^{n+1}(shift) = M0 (its first correction the chord's, slope 1).
+        let m0 = term.target();
+        let (mut shift, mut last): (f64, Option<(f64, f64)>) = (0.0, None);
+        let mut iterations = 0;
+        let (multipliers, sigma_after) = loop {
+            let Some(multipliers) = self.choose_multipliers(&term, &sums, -shift) else {
+                return Ok(Err(Rejection::NoRealRoot));
+            };
+            let sigma_after =
+                control::sigma_after(&self.area, self.sigma, self.current().area, multipliers.0);
+            if let Err(r) = self.write_and_finish(&u, multipliers, t_new, sigma_after)? {
+                return Ok(Err(r));
+            }
+            let m_new = self.passes.states().next.measures().curvature;
+            iterations += 1;
+            let held = (m_new - m0).abs() <= COUPLE_TOL * m0.abs();
+            if !matches!(term.law, Law::Couple { .. }) || held {
+                break (multipliers, sigma_after);
+            }
+            if iterations == COUPLE_ITERATIONS {
+                return Ok(Err(Rejection::AreaDifferenceDrift(
+                    (m_new - m0).abs() / m0.abs(),
+                )));
+            }
+            let slope = match last {
+                Some((s0, m_old)) if m_new != m_old => (m_new - m_old) / (shift - s0),
+                _ => 1.0,
+            };
+            last = Some((shift, m_new));
+            shift += (m0 - m_new) / slope;
         };
+        let lambda_after = match term.law {
+            Law::Elastic { .. } => term.multiplier(self.passes.states().next.measures().curvature),
+            Law::Couple { .. } => multipliers.1,
+        };
+        self.passes.set_residual(true, sigma_after, lambda_after)?;
         Ok(self
-            .check_constraints(sigma, t, t + dt)
-            .map(|()| sigma_after))
+            .check_constraints(multipliers, t, t_new)
+            .map(|()| (sigma_after, lambda_after)))
     }
 
     /// Volume (and area under projection) held; F_eff (at the σ of the update) must not rise
@@ -286,7 +449,12 @@ impl<P: Passes> Stepper<P> {
     /// for a step that starts (time `t`) while a volume ramp runs: deflating does work on the
     /// vesicle, so F may rise; once V0 is constant the guard holds again. The volume is checked
     /// against its target at the step's end, `t_new`.
-    fn check_constraints(&self, sigma: f64, t: f64, t_new: f64) -> Result<(), Rejection> {
+    fn check_constraints(
+        &self,
+        (sigma, lambda): (f64, f64),
+        t: f64,
+        t_new: f64,
+    ) -> Result<(), Rejection> {
         let ramping = self.volume_ramp.is_some_and(|r| t < r.ramp_time);
         let guard = self.energy_guard
             && control::dissipative(self.adaptive.as_ref(), self.scheme)
@@ -294,8 +462,8 @@ impl<P: Passes> Stepper<P> {
             && !self.c0_ramped;
         let states = self.passes.states();
         control::check_step(
-            &states.cur.measures(),
-            &states.next.measures(),
+            &self.with_ade(states.cur.measures(), lambda),
+            &self.with_ade(states.next.measures(), lambda),
             sigma,
             self.volume_target(t_new),
             &self.area,
@@ -343,20 +511,40 @@ where
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
         let adaptive = self.adaptive.clone();
         let device = |f: DeviceFailure| StepError::Device(f.0);
-        let (sigma_after, dt, rejected) = control::with_retries(adaptive.as_ref(), dt, |dt| {
-            self.attempt(t, dt).map_err(device)
-        })?;
-        let f_old = self.current().energy;
+        let ((sigma_after, lambda_after), dt, rejected) =
+            control::with_retries(adaptive.as_ref(), dt, |dt| {
+                self.attempt(t, dt).map_err(device)
+            })?;
+        let f_old = self.with_ade(self.current(), self.lambda).energy;
         self.accept(sigma_after, dt).map_err(device)?;
+        self.lambda = lambda_after;
         let rate = self.max_change / dt;
         if let Some(a) = &self.adaptive {
-            self.dt_next = Some(control::propose(a, dt, f_old, self.current().energy));
+            let f_new = self.with_ade(self.current(), self.lambda).energy;
+            self.dt_next = Some(control::propose(a, dt, f_old, f_new));
         }
         Ok(StepReport { dt, rate, rejected })
     }
 
     fn next_dt(&self, dt: f64) -> f64 {
         self.dt_next.unwrap_or(dt)
+    }
+
+    fn lambda(&self) -> f64 {
+        self.lambda
+    }
+
+    fn area_difference(&self) -> Option<AreaDifference> {
+        self.couple
+    }
+
+    fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), String> {
+        self.passes.set_area_difference(term).map_err(|f| f.0)?;
+        self.couple = Some(term);
+        self.lambda = term.multiplier(self.current().curvature);
+        self.passes
+            .set_residual(false, self.sigma, self.lambda)
+            .map_err(|f| f.0)
     }
 
     fn guard_energy(&mut self, on: bool) {
@@ -375,6 +563,9 @@ where
             .scalar("dt_prev", self.dt_prev)
             .scalar("dt_next", self.dt_next.unwrap_or(f64::NAN))
             .array("phi_hat", hat);
+        if self.couple.is_some() {
+            saved = saved.scalar("lambda", self.lambda);
+        }
         if let Some([hat, nonlinear]) = history {
             saved = saved
                 .array("prev_phi_hat", hat)
@@ -397,6 +588,13 @@ where
             _ => None,
         };
         self.passes
-            .restore(SavedSpectra { hat, history }, t, self.sigma)
+            .restore(SavedSpectra { hat, history }, t, self.sigma)?;
+        if self.couple.is_some() {
+            self.lambda = saved.get("lambda")?;
+            self.passes
+                .set_residual(false, self.sigma, self.lambda)
+                .map_err(|f| f.0)?;
+        }
+        Ok(())
     }
 }

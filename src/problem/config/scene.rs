@@ -65,6 +65,14 @@ pub struct Scene {
     /// conserves the volume of the prepared initial field.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub volume: Option<VolumeRamp>,
+    /// Area-difference elasticity: `{"alpha": α, "da0": Δa0}` adds πα(Δa − Δa0)² to the
+    /// reduced energy (3D only; docs/src/theory/ade.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ade: Option<AdeSpec>,
+    /// The bilayer couple: `{"da": Δa}` holds the reduced integrated mean curvature Δa fixed
+    /// with a second multiplier (3D only; spectral conserved dynamics).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bilayer_couple: Option<BilayerCoupleSpec>,
     /// Mirror planes through the box centre: e.g. `["x","y","z"]`, `[]`, or `"auto"`.
     #[serde(default)]
     pub symmetry: Symmetry,
@@ -97,6 +105,40 @@ pub struct Scene {
     /// with the `gpu` feature).
     #[serde(default, skip_serializing_if = "Device::is_cpu")]
     pub device: Device,
+}
+
+/// `ade`: the area-difference elasticity's modulus ratio α = κ̄/κ and preferred Δa0.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdeSpec {
+    /// α = κ̄/κ ≥ 0.
+    pub alpha: f64,
+    /// Δa0, the preferred reduced area difference (1 on a sphere).
+    pub da0: f64,
+    /// How the spectral engine's conserved step treats the multiplier λ: `implicit` (default,
+    /// solved with σ in the step) or `lagged` (λ of the current state; for stability studies).
+    /// The FD reference always lags λ; L-BFGS minimises the energy itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multiplier: Option<AdeMultiplier>,
+}
+
+/// The treatment of the ADE multiplier λ in the conserved spectral step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AdeMultiplier {
+    /// λ^{n+1} = λ(M^{n+1}), M linearised about φⁿ, solved with σ.
+    #[default]
+    Implicit,
+    /// λⁿ from the current state.
+    Lagged,
+}
+
+/// `bilayer_couple`: the reduced area difference Δa the run holds.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BilayerCoupleSpec {
+    /// Δa (1 on a sphere).
+    pub da: f64,
 }
 
 /// Where the spectral engine runs.

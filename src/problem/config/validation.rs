@@ -62,6 +62,7 @@ impl Scene {
         self.validate_area()?;
         self.validate_volume()?;
         self.validate_c0()?;
+        self.validate_area_difference()?;
         self.validate_symmetry()?;
         if let Initial::Shape(s) = &self.initial {
             validate_shape(s, "initial", self.dim)?;
@@ -230,6 +231,59 @@ impl Scene {
                 "volume",
                 "relaxational dynamics has no time to ramp the volume in; use conserved dynamics",
             ));
+        }
+        Ok(())
+    }
+
+    /// `ade` and `bilayer_couple`: one or the other, 3D only (in 2D ∮κ ds = 2π for every
+    /// closed curve, so the term is a constant), finite values, α ≥ 0, Δa > 0; the bilayer
+    /// couple's second multiplier is solved by the spectral conserved step only.
+    fn validate_area_difference(&self) -> Result<()> {
+        let field = match (&self.ade, &self.bilayer_couple) {
+            (None, None) => return Ok(()),
+            (Some(_), Some(_)) => return Err(Error::config(
+                "bilayer_couple",
+                "give ade or bilayer_couple, not both (the bilayer couple is ADE's limit α → ∞)",
+            )),
+            (Some(_), None) => "ade",
+            (None, Some(_)) => "bilayer_couple",
+        };
+        if self.dim != 3 {
+            return Err(Error::config(
+                field,
+                "in 2D the integrated curvature ∮κ ds = 2π of every closed curve is constant: \
+                 the area difference has no effect; use dim 3",
+            ));
+        }
+        if let Some(a) = &self.ade {
+            finite("ade.alpha", a.alpha)?;
+            if a.alpha < 0.0 {
+                return Err(Error::config(
+                    "ade.alpha",
+                    format!("must be ≥ 0, got {}", a.alpha),
+                ));
+            }
+            finite("ade.da0", a.da0)?;
+            if a.multiplier.is_some()
+                && (self.method == Method::Fd || self.dynamics == Dynamics::Relaxational)
+            {
+                return Err(Error::config(
+                    "ade.multiplier",
+                    "only the spectral conserved step chooses how to treat λ (the fd reference \
+                     lags it; relaxational dynamics minimises the energy itself)",
+                ));
+            }
+        }
+        if let Some(b) = &self.bilayer_couple {
+            positive("bilayer_couple.da", b.da)?;
+            if self.method == Method::Fd || self.dynamics == Dynamics::Relaxational {
+                return Err(Error::config(
+                    "bilayer_couple",
+                    "the bilayer couple's second multiplier is solved by the spectral conserved \
+                     step only; use method spectral with conserved dynamics (or ade with a \
+                     large alpha)",
+                ));
+            }
         }
         Ok(())
     }
