@@ -389,6 +389,12 @@ mod tests {
             1.0
         }
         fn set_area(&mut self, _area: AreaConstraint) {}
+        fn set_area_difference(
+            &mut self,
+            _term: crate::problem::area_difference::AreaDifference,
+        ) -> std::result::Result<(), String> {
+            Err("no area-difference term".into())
+        }
         fn step(&mut self, _t: f64, _dt: f64) -> std::result::Result<StepReport, StepError> {
             Err(self.failure.clone())
         }

@@ -45,7 +45,7 @@ pub fn for_each_mode(sym: &Symbols, total: usize, mut f: impl FnMut(usize, f64, 
 
 /// The reals of one mode starting at `at`.
 #[inline]
-fn at<'a>(v: &'a [f64], at: usize, width: usize) -> &'a [f64] {
+fn at(v: &[f64], at: usize, width: usize) -> &[f64] {
     &v[at..at + width]
 }
 
