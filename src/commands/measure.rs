@@ -26,6 +26,7 @@
 
 use crate::analysis::components;
 use crate::analysis::levelset::{self, LevelSet};
+use crate::analysis::surface;
 use crate::commands::run_folder::{self, RunInfo};
 use crate::error::{Error, Result};
 use crate::output::chart;
@@ -61,6 +62,9 @@ pub struct ShapeMeasure {
     /// Connected pieces of {φ > 0} ([`components::count`]): 1 for a connected chain or a bud on
     /// its neck, more once pieces have separated at the grid's resolution.
     pub pieces: usize,
+    /// Δa = ∮2H dA / (8πR0) of the φ = 0 mesh ([`surface::Mesh::integrated_mean_curvature`], R0 from the
+    /// mesh's area): the area difference of ADE; NaN for a 2D field or an open surface.
+    pub surface_da: f64,
 }
 
 /// The dominant Fourier mode of a radius profile.
@@ -246,7 +250,19 @@ pub fn measure_field(phi: &Array3<f64>, axis: usize, h: f64, step: usize, t: f64
         skewness: skewness(&r, h),
         surface: levelset::measure_refined(phi, 3, h),
         pieces: components::count(phi),
+        surface_da: surface_area_difference(phi, h),
     }
+}
+
+/// Δa = ∮2H dA / (8πR0), R0 = √(A/4π), of the φ = 0 mesh of `phi` (NaN when the mesh is empty
+/// or open).
+pub fn surface_area_difference(phi: &Array3<f64>, h: f64) -> f64 {
+    let mesh = surface::extract(phi, h);
+    if mesh.triangles.is_empty() || !mesh.is_closed() {
+        return f64::NAN;
+    }
+    let r0 = (mesh.area() / (4.0 * PI)).sqrt();
+    mesh.integrated_mean_curvature() / (8.0 * PI * r0)
 }
 
 /// The largest relative departure of the φ = 0 area and volume from the first state's over
@@ -383,7 +399,7 @@ fn time_of(step: usize, rows: &[(usize, f64)], info: &RunInfo) -> f64 {
 /// The CSV header of `measure.csv`.
 pub const CSV_HEADER: &str = "step,t,r_max,r_neck,z_neck,mode,wavelength,amplitude,r_tube,\
                               wavelength_over_2pi_r_tube,skewness,surface_area,surface_volume,\
-                              surface_reduced_volume,pieces";
+                              surface_reduced_volume,pieces,surface_da";
 
 /// The rows as CSV (an absent neck is written `NaN`).
 fn csv_text(rows: &[ShapeMeasure]) -> String {
@@ -392,7 +408,7 @@ fn csv_text(rows: &[ShapeMeasure]) -> String {
         let (r_neck, z_neck) = m.neck.unwrap_or((f64::NAN, f64::NAN));
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             m.step,
             m.t,
             m.r_max,
@@ -407,7 +423,8 @@ fn csv_text(rows: &[ShapeMeasure]) -> String {
             m.surface.area,
             m.surface.volume,
             m.surface.reduced_volume,
-            m.pieces
+            m.pieces,
+            m.surface_da
         );
     }
     s
@@ -441,7 +458,7 @@ fn write_chart(path: &Path, rows: &[ShapeMeasure]) -> Result<()> {
 /// one always).
 pub fn table(rows: &[ShapeMeasure], limit: usize) -> String {
     let mut s = String::from(
-        "    step          t    r_max   r_neck   mode  wavelength  λ/2πR_tube  skewness      A(φ=0)      V(φ=0)  v(φ=0)  pieces\n",
+        "    step          t    r_max   r_neck   mode  wavelength  λ/2πR_tube  skewness      A(φ=0)      V(φ=0)  v(φ=0)  pieces  Δa(φ=0)\n",
     );
     let stride = rows.len().div_ceil(limit.max(1)).max(1);
     let last = rows.len().saturating_sub(1);
@@ -454,7 +471,7 @@ pub fn table(rows: &[ShapeMeasure], limit: usize) -> String {
             .map_or("       -".to_string(), |(r, _)| format!("{r:8.3}"));
         let _ = writeln!(
             s,
-            "{:8} {:10.4e} {:8.3} {neck} {:6} {:11.3} {:11.3} {:9.4} {:11.2} {:11.2} {:7.4} {:7}",
+            "{:8} {:10.4e} {:8.3} {neck} {:6} {:11.3} {:11.3} {:9.4} {:11.2} {:11.2} {:7.4} {:7} {:8.4}",
             m.step,
             m.t,
             m.r_max,
@@ -465,7 +482,8 @@ pub fn table(rows: &[ShapeMeasure], limit: usize) -> String {
             m.surface.area,
             m.surface.volume,
             m.surface.reduced_volume,
-            m.pieces
+            m.pieces,
+            m.surface_da
         );
     }
     if let Some((area, volume)) = surface_drift(rows) {
