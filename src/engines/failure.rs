@@ -18,7 +18,8 @@ pub enum Rejection {
     VolumeDrift(f64),
     /// A is off its target by this relative amount (projection).
     AreaDrift(f64),
-    /// The bilayer couple's M is off its target by this relative amount.
+    /// The area-difference multiplier's equation (the bilayer couple's M = M0, ADE's
+    /// λ = κ_λ(M − M0)) missed by this amount relative to M0.
     AreaDifferenceDrift(f64),
     /// F_eff rose where the scheme guarantees a decrease.
     EnergyRise {
@@ -51,7 +52,8 @@ impl std::fmt::Display for Rejection {
             Rejection::AreaDrift(d) => write!(f, "area off its target by {d:.2e} (relative)"),
             Rejection::AreaDifferenceDrift(d) => write!(
                 f,
-                "the bilayer couple's area difference is off its target by {d:.2e} (relative)"
+                "the area-difference multiplier missed its equation by {d:.2e} of M0 (the \
+                 bilayer couple's Δa or ADE's implicit λ)"
             ),
             Rejection::EnergyRise { before, after } => write!(
                 f,

@@ -182,10 +182,11 @@ fn no_area_difference(device: &str) -> DeviceFailure {
     DeviceFailure(format!("the {device} engine has no area-difference term"))
 }
 
-/// Secant iterations of the bilayer couple's multiplier before a step is rejected.
-const COUPLE_ITERATIONS: usize = 8;
+/// Secant iterations of the area-difference multiplier before a step is rejected.
+const COUPLE_ITERATIONS: usize = 12;
 
-/// |M − M0|/M0 the bilayer couple holds each step (round-off of M's sum over the box).
+/// The area-difference multiplier's equation is held each step to this fraction of M0
+/// (round-off of M's sum over the box): |M − M0| for the bilayer couple.
 const COUPLE_TOL: f64 = 1e-12;
 
 /// The spectral conserved flow on the device `P` (module documentation).
@@ -291,12 +292,12 @@ impl<P: Passes> Stepper<P> {
     }
 
     /// σ and λ of this step's update with the area-difference term `term`, from its sums `s`
-    /// ([`CoupleSums`]), with `miss` what the bilayer couple's linearised M is taken to miss
-    /// (the negative of the secant's shift; 0 at the first try): λ = l0 + l1 σ from
+    /// ([`CoupleSums`]), with `miss` what the linearised M is taken to miss of M^{n+1} (0 at
+    /// the first try): λ = l0 + l1 σ from
     ///
     /// ```text
-    /// ADE, implicit:  λ = κ_λ (M_lin(σ, λ) − M0)     lagged:  λ = κ_λ (Mⁿ − M0)
-    /// bilayer couple: M_lin(σ, λ) + miss = M0,       M_lin = Mⁿ + c_P + σ c_Q + λ c_R
+    /// ADE, implicit:  λ = κ_λ (M_lin(σ, λ) + miss − M0)     lagged:  λ = κ_λ (Mⁿ − M0)
+    /// bilayer couple: M_lin(σ, λ) + miss = M0,              M_lin = Mⁿ + c_P + σ c_Q + λ c_R
     /// ```
     ///
     /// then σ as [`Stepper::choose_sigma`] does, on the area of P̂ + l0R̂ + σ(Q̂ + l1R̂). `None` if
@@ -315,7 +316,7 @@ impl<P: Passes> Stepper<P> {
             Law::Elastic { .. } => {
                 let k = term.stiffness();
                 let d = 1.0 - k * cr;
-                (k * (mn + cp - m0) / d, k * cq / d)
+                (k * (mn + cp + miss - m0) / d, k * cq / d)
             }
             Law::Couple { .. } => ((m0 - miss - mn - cp) / cr, -cq / cr),
         };
@@ -381,8 +382,10 @@ impl<P: Passes> Stepper<P> {
 
     /// Try one step of size `dt` from time `t`: on success the next state holds the result (its
     /// residual at the new multipliers) and the σ and λ of the state after it are returned; a
-    /// rejection says why; `Err` if the device failed. The bilayer couple's λ is corrected by
-    /// secant iterations until M^{n+1} = M0 to [`COUPLE_TOL`].
+    /// rejection says why; `Err` if the device failed. With the area-difference term, λ is
+    /// corrected until it holds with M^{n+1} itself, to [`COUPLE_TOL`] of M0: ADE's implicit
+    /// λ = κ_λ(M^{n+1} − M0) and the bilayer couple's M^{n+1} = M0, each by secant iterations
+    /// on M's linearisation error.
     fn attempt(&mut self, t: f64, dt: f64) -> Result<Result<(f64, f64), Rejection>, DeviceFailure> {
         let u = self.update(dt);
         let t_new = t + dt;
@@ -400,13 +403,15 @@ impl<P: Passes> Stepper<P> {
                 .map(|()| (sigma_after, 0.0)));
         };
         let sums = self.passes.couple_sums(&u)?;
-        // The bilayer couple solves M_lin(σ, λ) = M0 + shift, the shift found by the secant
-        // method on M^{n+1}(shift) = M0 (its first correction the chord's, slope 1).
-        let m0 = term.target();
-        let (mut shift, mut last): (f64, Option<(f64, f64)>) = (0.0, None);
+        let [cp, cq, cr] = sums.curvature;
+        let (mn, m0) = (self.current().curvature, term.target());
+        let m_lin = |(s, l): (f64, f64)| mn + cp + s * cq + l * cr;
+        // What M_lin misses of M^{n+1}, found by the secant method on the equation λ must
+        // satisfy (its first correction the chord's, slope −1).
+        let (mut miss, mut last): (f64, Option<(f64, f64)>) = (0.0, None);
         let mut iterations = 0;
         let (multipliers, sigma_after) = loop {
-            let Some(multipliers) = self.choose_multipliers(&term, &sums, -shift) else {
+            let Some(multipliers) = self.choose_multipliers(&term, &sums, miss) else {
                 return Ok(Err(Rejection::NoRealRoot));
             };
             let sigma_after =
@@ -416,21 +421,26 @@ impl<P: Passes> Stepper<P> {
             }
             let m_new = self.passes.states().next.measures().curvature;
             iterations += 1;
-            let held = (m_new - m0).abs() <= COUPLE_TOL * m0.abs();
-            if !matches!(term.law, Law::Couple { .. }) || held {
+            // The equation λ must satisfy with M^{n+1}, as a residual in M's units: ADE's
+            // M^{n+1} − M_lin − miss (λ = κ_λ(M^{n+1} − M0) once it vanishes), the couple's
+            // M^{n+1} − M0; each falls by about the change of `miss`.
+            let off = match term.law {
+                Law::Elastic { lagged: true, .. } => 0.0,
+                Law::Elastic { .. } => m_new - m_lin(multipliers) - miss,
+                Law::Couple { .. } => m_new - m0,
+            };
+            if off.abs() <= COUPLE_TOL * m0.abs() {
                 break (multipliers, sigma_after);
             }
-            if iterations == COUPLE_ITERATIONS {
-                return Ok(Err(Rejection::AreaDifferenceDrift(
-                    (m_new - m0).abs() / m0.abs(),
-                )));
-            }
             let slope = match last {
-                Some((s0, m_old)) if m_new != m_old => (m_new - m_old) / (shift - s0),
-                _ => 1.0,
+                Some((x0, r0)) if off != r0 => (off - r0) / (miss - x0),
+                _ => -1.0,
             };
-            last = Some((shift, m_new));
-            shift += (m0 - m_new) / slope;
+            last = Some((miss, off));
+            miss -= off / slope;
+            if iterations == COUPLE_ITERATIONS {
+                return Ok(Err(Rejection::AreaDifferenceDrift(off.abs() / m0.abs())));
+            }
         };
         let lambda_after = match term.law {
             Law::Elastic { .. } => term.multiplier(self.passes.states().next.measures().curvature),
