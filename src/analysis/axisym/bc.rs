@@ -29,8 +29,10 @@ use crate::error::{Error, Result};
 /// [`bc_solution`] starts Newton from the curve's shape nearest in `Δa` if it is this close.
 const NEAR: f64 = 0.02;
 
-/// Amplitude of the unstable eigenvector added to the prolate to start the pear.
-const PEAR_KICK: f64 = 0.05;
+/// Amplitudes of the unstable eigenvector added to the prolate to start the pear, in order.
+const PEAR_KICKS: [f64; 3] = [0.05, 0.2, 0.5];
+
+
 
 /// A branch of the BC model followed in `Δa` at fixed `v`.
 #[derive(Clone, Debug)]
@@ -143,7 +145,7 @@ const H_MIN: f64 = 1e-4;
 const MAX_STEPS: usize = 200;
 /// The continuation stops where `|c̄0,eff|` exceeds this (the shape is then close to a limit
 /// shape or a sphere-like end the modes do not resolve).
-const C_MAX: f64 = 40.0;
+const C_MAX: f64 = 150.0;
 
 /// Newton for a BC shape with `Δa` free on the hyperplane `d·(a − p) = 0`: the BC KKT system
 /// with the row of `J − Δa` replaced by the arclength condition (the column of `∇J`, and so
@@ -309,7 +311,7 @@ fn both_ways(
 /// walk in the direction of increasing (`up`) or decreasing `Δa` after `shape` (e.g. when the
 /// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05),
 /// where the oblate first touches itself, at a neck below [`Options::neck_min`], or where
-/// `|c̄0,eff| > 40`. A branch without a start shape gives an empty curve.
+/// `|c̄0,eff| > 150`. A branch without a start shape gives an empty curve.
 pub fn bc_curve_until(
     branch: Branch,
     v: f64,
@@ -435,6 +437,12 @@ fn pear_path(
     // Secant (Illinois) on μ(Δa) with BC solves from the nearer bracketing shape.
     let (mut xa, mut xb) = (sa.da(), sb.da());
     let (mut ca, mut cb) = (sa.coefficients.clone(), sb.coefficients.clone());
+    // Prolates on the unstable side (μ < 0), nearest the bifurcation last.
+    let mut unstable: Vec<Solution> = [(&sa, fa), (&sb, fb)]
+        .iter()
+        .filter(|(_, f)| *f < 0.0)
+        .map(|(s, _)| (*s).clone())
+        .collect();
     let mut side = 0i8;
     let mut best = sb.clone();
     for _ in 0..40 {
@@ -451,6 +459,9 @@ fn pear_path(
         let Some((f, _)) = updown(&s, opts) else {
             break;
         };
+        if f < 0.0 {
+            unstable.push(s.clone());
+        }
         if (f > 0.0) == (fb > 0.0) {
             fa = if side == 1 { 0.5 * fa } else { fa };
             side = 1;
@@ -467,29 +478,26 @@ fn pear_path(
     }
     let da_b = best.da();
     let bif = Some(best.clone());
-    // Just past the bifurcation on the unstable side (μ < 0), kicked along φ.
-    let (s_unst, d_unst) = if fb < 0.0 { (&cb, xb) } else { (&ca, xa) };
-    let past = da_b + 1e-4 * (d_unst - da_b).signum();
-    let Some(c) = w.solve_at(past, s_unst) else {
-        return (Vec::new(), bif);
-    };
-    let prol = solution(Branch::Prolate, &w.basis, &c);
-    let Some((_, phi)) = updown(&prol, opts) else {
-        return (Vec::new(), bif);
-    };
-    let full = full_basis(&opts.with_model(Model::Bc { da: past }));
-    let a0 = to_full(&prol, full.modes.len());
-    let mut pw = Walker::new(Branch::Pear, v, full, true, opts);
-    let set = pw.set;
-    let found = [PEAR_KICK, 2.0 * PEAR_KICK, 4.0 * PEAR_KICK]
-        .iter()
-        .find_map(|kick| {
+    // Prolates past the bifurcation on the unstable side (μ < 0), kicked along φ and
+    // descended at their Δa.
+    let mut found = None;
+    'tries: for prol in unstable.iter().rev() {
+        let Some((_, phi)) = updown(prol, opts) else {
+            continue;
+        };
+        let full = full_basis(&opts.with_model(Model::Bc { da: prol.da() }));
+        let a0 = to_full(prol, full.modes.len());
+        let pw = Walker::new(Branch::Pear, v, full, true, opts);
+        for kick in PEAR_KICKS {
             let a: Vec<f64> = a0.iter().zip(&phi).map(|(a, p)| a + kick * p).collect();
-            minimise(&pw.basis, &a, v, true, &set).filter(|c| {
-                c.a.iter().step_by(2).map(|x| x * x).sum::<f64>().sqrt() > 1e-3
-            })
-        });
-    let Some(c1) = found else {
+            let asym = |c: &Converged| c.a.iter().step_by(2).map(|x| x * x).sum::<f64>().sqrt();
+            if let Some(c) = minimise(&pw.basis, &a, v, true, &pw.set).filter(|c| asym(c) > 1e-3) {
+                found = Some((pw, c));
+                break 'tries;
+            }
+        }
+    }
+    let Some((mut pw, c1)) = found else {
         return (Vec::new(), bif);
     };
     // A second pear state a little further from the bifurcation.
