@@ -56,11 +56,7 @@ pub fn ade_image(shapes: &[Solution], alpha: f64) -> Vec<AdePoint> {
             AdePoint {
                 da0: da0[i],
                 da: s.da(),
-                w: Model::Ade {
-                    alpha,
-                    da0: da0[i],
-                }
-                .energy(s.e, s.da()),
+                w: Model::Ade { alpha, da0: da0[i] }.energy(s.e, s.da()),
                 e: s.e,
                 c0_eff: s.c0_eff,
                 stable: slope > 0.0,
@@ -87,7 +83,10 @@ pub fn ade_solution(
     opts: &Options,
 ) -> Result<Solution> {
     if !(alpha > 0.0 && alpha.is_finite()) {
-        return Err(Error::config("alpha", format!("need 0 < α < ∞, got {alpha}")));
+        return Err(Error::config(
+            "alpha",
+            format!("need 0 < α < ∞, got {alpha}"),
+        ));
     }
     if !(v > 0.0 && v < 1.0) {
         return Err(Error::config("v", format!("need 0 < v < 1, got {v}")));
@@ -145,8 +144,7 @@ pub fn ade_solution(
         max_iter: opts.max_iter,
         max_step: 0.5,
     };
-    let c = newton(&basis, &a0, v, !branch.up_down_symmetric(), &set).ok_or_else(|| {
-        Error::config("da0", format!("Newton failed at Δa0 = {da0}, v = {v}"))
-    })?;
+    let c = newton(&basis, &a0, v, !branch.up_down_symmetric(), &set)
+        .ok_or_else(|| Error::config("da0", format!("Newton failed at Δa0 = {da0}, v = {v}")))?;
     Ok(solution(branch, &basis, &c))
 }

@@ -32,8 +32,6 @@ const NEAR: f64 = 0.02;
 /// Amplitudes of the unstable eigenvector added to the prolate to start the pear, in order.
 const PEAR_KICKS: [f64; 3] = [0.05, 0.2, 0.5];
 
-
-
 /// A branch of the BC model followed in `Δa` at fixed `v`.
 #[derive(Clone, Debug)]
 pub struct BcCurve {
@@ -127,7 +125,13 @@ fn sc_start(branch: Branch, v: f64, opts: &Options) -> Option<Solution> {
 /// A walker of `branch` (not the pear) started at its SC shape at `v`.
 fn start(branch: Branch, v: f64, opts: &Options) -> Option<Walker> {
     let s = sc_start(branch, v, opts)?;
-    let mut w = Walker::new(branch, v, basis_of(branch, opts), !branch.up_down_symmetric(), opts);
+    let mut w = Walker::new(
+        branch,
+        v,
+        basis_of(branch, opts),
+        !branch.up_down_symmetric(),
+        opts,
+    );
     // The SC shape at another c̄0 is the BC shape at its Δa (the multiplier absorbs the
     // difference); the basis keeps opts.c0.
     let c = w.solve_at(s.da(), &s.coefficients)?;
@@ -169,7 +173,11 @@ fn newton_arc(
         let nc = cons.len();
         let mut rhs: Vec<f64> = grad.iter().map(|g| -g).collect();
         rhs.extend(cons.iter().map(|(c, _)| -c));
-        let arc: f64 = d.iter().zip(a.iter().zip(p)).map(|(d, (x, y))| d * (x - y)).sum();
+        let arc: f64 = d
+            .iter()
+            .zip(a.iter().zip(p))
+            .map(|(d, (x, y))| d * (x - y))
+            .sum();
         rhs[n + nc - 1] = -arc;
         let residual = rhs.iter().fold(0.0f64, |m, r| m.max(r.abs()));
         if !residual.is_finite() {
@@ -199,7 +207,11 @@ fn newton_arc(
         kkt[last * dim..last * dim + n].copy_from_slice(d);
         let dx = lu_solve(&mut kkt, &mut rhs, dim)?;
         let big = dx[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let f = if big > set.max_step { set.max_step / big } else { 1.0 };
+        let f = if big > set.max_step {
+            set.max_step / big
+        } else {
+            1.0
+        };
         for (x, dxi) in a.iter_mut().zip(&dx) {
             *x += f * dxi;
         }

@@ -138,7 +138,15 @@ pub(crate) fn kkt_matrix(h: &[f64], rows: &[&[f64]], n: usize, mu: f64) -> Vec<f
 }
 
 /// The [`Converged`] state of `a` with multipliers `lam`.
-fn converged(basis: &Basis, a: Vec<f64>, lam: &[f64], closure: bool, ev: Eval, it: usize, res: f64) -> Converged {
+fn converged(
+    basis: &Basis,
+    a: Vec<f64>,
+    lam: &[f64],
+    closure: bool,
+    ev: Eval,
+    it: usize,
+    res: f64,
+) -> Converged {
     let (lv, lg, lj) = split(basis, lam, closure);
     Converged {
         a,

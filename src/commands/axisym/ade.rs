@@ -282,7 +282,11 @@ fn figure(slices: &[VSlice], lows: &[Lowest], which: Which, xs: &[f64]) -> Figur
             "preferred area difference Δa0",
         ),
     };
-    let mut fig = Figure::new(title, Axis::linear("reduced volume v"), Axis::linear(ylabel));
+    let mut fig = Figure::new(
+        title,
+        Axis::linear("reduced volume v"),
+        Axis::linear(ylabel),
+    );
     let shapes = [
         Shape::Circle,
         Shape::Square,
@@ -301,7 +305,12 @@ fn figure(slices: &[VSlice], lows: &[Lowest], which: Which, xs: &[f64]) -> Figur
             })
             .collect();
         if !pts.is_empty() {
-            fig.push(Series::new(b.name(), pts, colour(i), Mark::Points(shapes[i])));
+            fig.push(Series::new(
+                b.name(),
+                pts,
+                colour(i),
+                Mark::Points(shapes[i]),
+            ));
         }
     }
     let changes: Vec<(f64, f64)> = slices

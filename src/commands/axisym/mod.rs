@@ -47,7 +47,12 @@ pub struct AxisymArgs {
     #[arg(long, conflicts_with = "bc", requires = "da0")]
     pub ade: Option<f64>,
     /// Preferred reduced area differences Δa0 of --ade, comma separated.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, requires = "ade")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        requires = "ade"
+    )]
     pub da0: Option<Vec<f64>>,
     /// The bilayer-couple model: the (v, Δa) diagram over --da (files as for --ade).
     #[arg(long, requires = "da")]
