@@ -11,7 +11,7 @@ use crate::analysis::axisym::{
     ade_da0, ade_image, l_pear_at, l_sto_at, limit_line, Branch, Limit, LimitShape, Options,
 };
 use crate::error::{Error, Result};
-use crate::output::chart::{colour, Axis, Figure, Mark, Series, Shape};
+use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use crate::output::{create_file, folder};
 use std::io::Write;
 use std::path::Path;
@@ -287,6 +287,11 @@ fn figure(slices: &[VSlice], lows: &[Lowest], which: Which, xs: &[f64]) -> Figur
         Axis::linear("reduced volume v"),
         Axis::linear(ylabel),
     );
+    if matches!(which, Which::Bc) {
+        // The BC chart leaves its lower left empty (no shapes below L_sto at small v there).
+        fig.legend = Corner::LowerLeft;
+    }
+    let (lo, hi) = (xs[0], xs[xs.len() - 1]);
     let shapes = [
         Shape::Circle,
         Shape::Square,
@@ -334,6 +339,7 @@ fn figure(slices: &[VSlice], lows: &[Lowest], which: Which, xs: &[f64]) -> Figur
     let bif: Vec<(f64, f64)> = slices
         .iter()
         .filter_map(|s| pear_bifurcation_x(s, which).map(|x| (s.v, x)))
+        .filter(|(_, x)| *x >= lo && *x <= hi)
         .collect();
     if !bif.is_empty() {
         fig.push(Series::new(
@@ -343,7 +349,6 @@ fn figure(slices: &[VSlice], lows: &[Lowest], which: Which, xs: &[f64]) -> Figur
             Mark::LinePoints(Shape::Cross),
         ));
     }
-    let (lo, hi) = (xs[0], xs[xs.len() - 1]);
     for (name, kind, c) in [
         ("L_pear (two spheres)", Limit::Pear, 6),
         ("L_sto (sphere in sphere)", Limit::Stomatocyte, 7),
