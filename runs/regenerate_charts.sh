@@ -22,8 +22,8 @@
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations)                  505 s, measured
 #   axisym_c0        axisym --c0=-1,...,3 --nodes 481                ~7 min (438 s wall recorded)
-#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                    BC_S s, measured
-#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121              ADE_S s, measured
+#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     49 s, measured
+#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121               61 s, measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
@@ -166,6 +166,8 @@ group_pearling3d() {
 # The manual's figures: docs/src/figures/NAME from runs/results/PATH.
 FIGURES=(
     axisym_c0_phase.png=axisym_c0/phase.png
+    axisym_bc_phase.png=axisym_bc/phase.png
+    axisym_ade_phase.png=axisym_ade/phase.png
     budding_neck_r0.png=budding/budding_neck_r0.png
     budding_skewness.png=budding/budding_skewness.png
     convergence_eps.png=convergence/convergence_eps.png

@@ -173,3 +173,64 @@ fn small_diagrams_end_to_end() {
         assert!(matches!(b.points[1].1, Branch::Prolate | Branch::Pear));
     }
 }
+
+/// `vesicle axisym --ade` refuses α ≤ 0 with exit 2, naming the flag, and writes nothing.
+#[test]
+fn cli_rejects_bad_alpha() {
+    let dir = std::env::temp_dir().join(format!("axisym_ade_bad_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vesicle"))
+        .args(["axisym", "--ade=-1", "--da0=1,1.2", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--ade"));
+    assert!(!dir.exists());
+}
+
+/// `vesicle axisym --bc --da LIST` end to end on two volumes (61 nodes): the files, and the
+/// L_pear row at v = 0.9 with the two-sphere Δa = R1 + R2 of `l_pear_at`.
+#[test]
+fn cli_writes_the_bc_diagram() {
+    let dir = std::env::temp_dir().join(format!("axisym_bc_cli_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vesicle"))
+        .args([
+            "axisym",
+            "--bc",
+            "--da=0.9,1.0,1.1,1.2",
+            "--v-min",
+            "0.85",
+            "--v-max",
+            "0.9",
+            "--dv",
+            "0.05",
+            "--nodes",
+            "61",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for f in [
+        "branches_v0.850.csv",
+        "branches_v0.900.csv",
+        "lowest.csv",
+        "summary.csv",
+        "limits.csv",
+        "phase.png",
+        "phase.svg",
+    ] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let summary = std::fs::read_to_string(dir.join("summary.csv")).unwrap();
+    let want = format!("0.900000,L_pear,{:.6},", l_pear_at(0.9).unwrap().da);
+    assert!(summary.lines().any(|l| l.starts_with(&want)), "{summary}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
