@@ -22,6 +22,8 @@
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations)                  505 s, measured
 #   axisym_c0        axisym --c0=-1,...,3 --nodes 481                ~7 min (438 s wall recorded)
+#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     49 s, measured
+#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121               61 s, measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
@@ -38,7 +40,7 @@ cd "$(dirname "$0")/.."
 VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
-ALL=(convergence stability precision pear3d budding axisym_c0 diagram diagram_fine diagram_c0
+ALL=(convergence stability precision pear3d budding axisym_c0 axisym_bc axisym_ade diagram diagram_fine diagram_c0
      diagram_c0_fine budding3d deflation3d dumbbell3d pearling3d)
 
 # Run the program, echoing the command.
@@ -101,6 +103,20 @@ group_budding() {
     study budding budding.json
     for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
 }
+# seq_list FROM STEP COUNT: the comma-separated list FROM, FROM + STEP, … (COUNT values).
+seq_list() {
+    awk -v a="$1" -v d="$2" -v n="$3" 'BEGIN { for (i = 0; i < n; i++) printf "%s%.2f", (i ? "," : ""), a + d * i }'
+}
+group_axisym_bc() {
+    vesicle axisym --bc --da="$(seq_list 0.70 0.01 71)" --v-min 0.6 --v-max 0.98 --dv 0.02 \
+        --nodes 121 --out "$out" --force
+    same_names "$out" axisym_bc
+}
+group_axisym_ade() {
+    vesicle axisym --ade 1.4 --da0="$(seq_list 0.80 0.02 56)" --v-min 0.6 --v-max 0.98 --dv 0.02 \
+        --nodes 121 --out "$out" --force
+    same_names "$out" axisym_ade
+}
 group_axisym_c0() {
     vesicle axisym --c0=-1,-0.5,0,0.5,1,1.5,2,2.5,3 --nodes 481 --out "$out" --force
     same_names "$out" axisym_c0
@@ -150,6 +166,8 @@ group_pearling3d() {
 # The manual's figures: docs/src/figures/NAME from runs/results/PATH.
 FIGURES=(
     axisym_c0_phase.png=axisym_c0/phase.png
+    axisym_bc_phase.png=axisym_bc/phase.png
+    axisym_ade_phase.png=axisym_ade/phase.png
     budding_neck_r0.png=budding/budding_neck_r0.png
     budding_skewness.png=budding/budding_skewness.png
     convergence_eps.png=convergence/convergence_eps.png

@@ -21,6 +21,20 @@ fn branch(py: Python<'_>, name: &str) -> PyResult<Branch> {
         })
 }
 
+/// A branch of the ADE and BC models (the pear included).
+fn branch_with_pear(py: Python<'_>, name: &str) -> PyResult<Branch> {
+    Branch::WITH_PEAR
+        .into_iter()
+        .find(|b| b.name() == name)
+        .ok_or_else(|| {
+            let e = Error::config(
+                "branch",
+                format!("unknown branch {name:?}: expected prolate, oblate, stomatocyte or pear"),
+            );
+            crate::errors::to_py(py, e, None)
+        })
+}
+
 /// A solution as a dict: scalars and the contour as arrays.
 fn solution<'py>(py: Python<'py>, s: &Solution) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -29,6 +43,10 @@ fn solution<'py>(py: Python<'py>, s: &Solution) -> PyResult<Bound<'py, PyDict>> 
     d.set_item("c0", s.c0)?;
     d.set_item("e", s.e)?;
     d.set_item("mean_curvature", s.mean_curvature)?;
+    d.set_item("da", s.da())?;
+    d.set_item("model", s.model.name())?;
+    d.set_item("w", s.w)?;
+    d.set_item("c0_eff", s.c0_eff)?;
     d.set_item("sigma", s.sigma)?;
     d.set_item("pressure", s.pressure)?;
     d.set_item("length", s.length())?;
@@ -59,19 +77,45 @@ fn options(py: Python<'_>, nodes: usize, c0: f64) -> PyResult<Options> {
 }
 
 /// The stationary shape of `branch` at reduced volume `v` and reduced spontaneous curvature
-/// `c0` (see vesicle.axisym.solve).
+/// `c0` (see vesicle.axisym.solve): SC, or ADE with `ade = (alpha, da0)`, or the bilayer couple
+/// with `bc = da`.
 #[pyfunction]
-#[pyo3(signature = (branch_name, v, nodes=241, c0=0.0))]
+#[pyo3(signature = (branch_name, v, nodes=241, c0=0.0, ade=None, bc=None))]
 pub fn axisym_solve<'py>(
     py: Python<'py>,
     branch_name: &str,
     v: f64,
     nodes: usize,
     c0: f64,
+    ade: Option<(f64, f64)>,
+    bc: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let b = branch(py, branch_name)?;
     let opts = options(py, nodes, c0)?;
-    let s = check(py, py.detach(|| axisym::solve(b, v, &opts)))?;
+    let s = match (ade, bc) {
+        (Some(_), Some(_)) => {
+            let e = Error::config("ade", "give ade or bc, not both");
+            return Err(crate::errors::to_py(py, e, None));
+        }
+        (Some((alpha, da0)), None) => {
+            let b = branch_with_pear(py, branch_name)?;
+            check(
+                py,
+                py.detach(|| axisym::ade_solution(b, v, alpha, da0, &opts)),
+            )?
+        }
+        (None, Some(da)) => {
+            if c0 != 0.0 {
+                let e = Error::config("c0", "the bilayer couple takes no c0");
+                return Err(crate::errors::to_py(py, e, None));
+            }
+            let b = branch_with_pear(py, branch_name)?;
+            check(py, py.detach(|| axisym::bc_solution(b, v, da, &opts)))?
+        }
+        (None, None) => {
+            let b = branch(py, branch_name)?;
+            check(py, py.detach(|| axisym::solve(b, v, &opts)))?
+        }
+    };
     solution(py, &s)
 }
 

@@ -10,7 +10,8 @@ equation, P = 6 de/dv and σ = P v / 2 + c̄0 J − c̄0²/2 (J the reduced inte
 curvature, ``mean_curvature``; at c̄0 = 0, σ = P v / 2).
 
 Branches: "prolate" and "oblate" (up–down symmetric, from the sphere) and "stomatocyte" (an
-invaginated cup, ending at a limit point near v ≈ 0.66 at c̄0 = 0).
+invaginated cup, ending at a limit point near v ≈ 0.66 at c̄0 = 0); with ``ade`` or ``bc``
+also "pear".
 """
 
 from __future__ import annotations
@@ -22,22 +23,39 @@ from ._vesicle import axisym_follow, axisym_solve
 BRANCHES = ("prolate", "oblate", "stomatocyte")
 
 
-def solve(branch: str, v: float, nodes: int = 241, c0: float = 0.0) -> dict[str, Any]:
+def solve(
+    branch: str,
+    v: float,
+    nodes: int = 241,
+    c0: float = 0.0,
+    ade: tuple[float, float] | dict[str, float] | None = None,
+    bc: float | None = None,
+) -> dict[str, Any]:
     """The stationary shape of ``branch`` at reduced volume ``v`` and reduced spontaneous
     curvature ``c0`` (c̄0 = c0 R0; 0 by default), followed from the branch's start (it does not
     stop at the oblate's self-contact below v ≈ 0.503 at c̄0 = 0: see ``self_intersecting``).
 
+    ``ade=(alpha, da0)`` (or ``{"alpha": α, "da0": Δa0}``) solves the area-difference-elasticity
+    model, w = e + πα(Δa − Δa0)², instead: the lowest stable ADE shape of the branch at this v
+    (Newton on the ADE functional, started from the branch's bilayer-couple path; branches
+    "prolate", "oblate", "stomatocyte", "pear"). ``bc=da`` solves the bilayer couple, Δa held
+    at ``da`` (c0 must be 0). Such a shape is a stationary SC shape at ``c0_eff``.
+
     Returns a dict: ``branch``, ``v``, ``c0``, ``e``, ``mean_curvature`` (J = ∮2H dA / (8π R0)),
-    ``sigma``, ``pressure``, ``length`` (contour length L), ``self_intersecting``, ``residual``
-    (Newton's final KKT residual), and NumPy arrays ``s``, ``r``, ``z``, ``psi`` (the contour at
-    ``nodes`` Chebyshev–Lobatto samples, pole to pole), ``modes`` and ``coefficients`` (the
-    a_k).
+    ``da`` (the reduced area difference, = J), ``model`` ("sc", "ade" or "bc"), ``w`` (the
+    model's energy: e, or w for ADE), ``c0_eff``, ``sigma``, ``pressure``, ``length`` (contour
+    length L), ``self_intersecting``, ``residual`` (Newton's final KKT residual), and NumPy
+    arrays ``s``, ``r``, ``z``, ``psi`` (the contour at ``nodes`` Chebyshev–Lobatto samples,
+    pole to pole), ``modes`` and ``coefficients`` (the a_k).
 
     Raises InvalidInput (field ``v``) if v is not in (0, 1] or the branch does not reach it,
     (field ``nodes``) for fewer than 9 nodes, (field ``c0``) for a c0 that is not finite,
-    (field ``branch``) for an unknown branch.
+    (field ``branch``) for an unknown branch, (``alpha``, ``da0``, ``da``) for an ADE or BC
+    shape that does not exist or an α that is not positive.
     """
-    return axisym_solve(branch, v, nodes, c0)
+    if isinstance(ade, dict):
+        ade = (float(ade["alpha"]), float(ade["da0"]))
+    return axisym_solve(branch, v, nodes, c0, ade, bc)
 
 
 def follow(branch: str, vs: Sequence[float], nodes: int = 241, c0: float = 0.0) -> dict[str, Any]:

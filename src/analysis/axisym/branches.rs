@@ -38,7 +38,9 @@ impl Tracker {
         };
         Tracker {
             branch,
-            basis: Basis::new(opts.nodes - 1, modes).with_c0(opts.c0),
+            basis: Basis::new(opts.nodes - 1, modes)
+                .with_c0(opts.c0)
+                .with_model(opts.model),
             set: NewtonSettings {
                 tol: opts.tol,
                 max_iter: opts.max_iter,
@@ -384,9 +386,10 @@ pub fn branch_end(branch: Branch, opts: &Options) -> Option<f64> {
     follow(branch, &vs, opts).end
 }
 
-/// Reduced volumes where the energies of two branches cross ([`crate::analysis::curves::crossings`] of
-/// their `(v, e)`: local cubics, bisection at each sign change on the shared range).
+/// Reduced volumes where the energies (`w`: `e` for SC) of two branches cross
+/// ([`crate::analysis::curves::crossings`] of their `(v, w)`: local cubics, bisection at each
+/// sign change on the shared range).
 pub fn crossings(a: &[Solution], b: &[Solution]) -> Vec<f64> {
-    let points = |c: &[Solution]| c.iter().map(|s| (s.v, s.e)).collect::<Vec<_>>();
+    let points = |c: &[Solution]| c.iter().map(|s| (s.v, s.w)).collect::<Vec<_>>();
     crate::analysis::curves::crossings(&points(a), &points(b))
 }

@@ -26,6 +26,7 @@
 //! nodes contribute.
 
 use super::quadrature;
+use super::Model;
 use std::f64::consts::PI;
 
 /// Nodes, weights and mode tables of one discretisation (`m + 1` nodes, the listed modes),
@@ -34,6 +35,9 @@ use std::f64::consts::PI;
 pub(crate) struct Basis {
     /// Reduced spontaneous curvature `c̄0 = c0 R0`.
     pub c0: f64,
+    /// The energy model: spontaneous curvature, ADE (the energy is `w`), or the bilayer couple
+    /// (the constraint `J = Δa` and its gradient).
+    pub model: Model,
     /// Mode numbers `k` of the coefficients, in order.
     pub modes: Vec<usize>,
     /// Nodes `t_j` on `[0, 1]`.
@@ -59,8 +63,10 @@ pub(crate) struct Basis {
 /// Values and gradients of the functional at one coefficient vector.
 #[derive(Clone, Debug)]
 pub(crate) struct Eval {
-    /// Reduced energy `e = e_0 − c̄0 J + c̄0²/4`.
+    /// The model's reduced energy: `e` (SC, BC) or `w = e + πα(J − Δa0)²` (ADE).
     pub e: f64,
+    /// Reduced bending energy `e = e_0 − c̄0 J + c̄0²/4` (equal to `e` but for ADE).
+    pub e_bend: f64,
     /// Reduced integrated mean curvature `J = ∮2H dA / (8π R0)` (1 on the sphere).
     pub j: f64,
     /// Closure defect `G = ρ(1)`.
@@ -75,6 +81,8 @@ pub(crate) struct Eval {
     pub grad_g: Vec<f64>,
     /// `∂v/∂a`.
     pub grad_v: Vec<f64>,
+    /// `∂J/∂a`, computed for the bilayer couple only (its constraint's gradient).
+    pub grad_j: Option<Vec<f64>>,
 }
 
 /// The shape's samples at the nodes.
@@ -119,6 +127,7 @@ impl Basis {
         }
         Basis {
             c0: 0.0,
+            model: Model::Sc,
             modes,
             t,
             w,
@@ -135,6 +144,12 @@ impl Basis {
     /// The same basis with reduced spontaneous curvature `c0`.
     pub fn with_c0(mut self, c0: f64) -> Self {
         self.c0 = c0;
+        self
+    }
+
+    /// The same basis with the energy model `model`.
+    pub fn with_model(mut self, model: Model) -> Self {
+        self.model = model;
         self
     }
 
@@ -200,21 +215,47 @@ impl Basis {
         let m: f64 = (1..n - 1).map(|j| w[j] * (dpsi[j] * rho[j] + s[j])).sum();
         let j_mean = 0.25 * length * m;
         let c0 = self.c0;
-        if c0 != 0.0 {
-            let f = -c0 * 0.25 * length;
-            e += -c0 * j_mean + 0.25 * c0 * c0;
+        // The energy depends on J through −c̄0 J (+ πα(J − Δa0)² for ADE): its derivative in J
+        // is −c̄0,eff, so the ADE term enters the gradient as c̄0 → c̄0,eff = c̄0 + 2πα(Δa0 − J).
+        let e_bend = e - c0 * j_mean + 0.25 * c0 * c0;
+        let (e_model, c_eff) = match self.model {
+            Model::Ade { alpha, da0 } => (
+                e_bend + PI * alpha * (j_mean - da0).powi(2),
+                c0 + 2.0 * PI * alpha * (da0 - j_mean),
+            ),
+            Model::Sc | Model::Bc { .. } => (e_bend, c0),
+        };
+        e = e_model;
+        if c_eff != 0.0 {
+            let f = -c_eff * 0.25 * length;
             for j in 1..n - 1 {
                 e_psi[j] += f * w[j] * c[j];
                 e_dpsi[j] += f * w[j] * rho[j];
                 e_rho[j] += f * w[j] * (dpsi[j] - 0.5 * m / ia);
             }
         }
+        let grad_j = matches!(self.model, Model::Bc { .. }).then(|| {
+            let f = 0.25 * length;
+            let j_psi: Vec<f64> = (0..n).map(|j| f * w[j] * c[j]).collect();
+            let mut j_dpsi = vec![0.0; n];
+            let mut j_rho = vec![0.0; n];
+            for j in 1..n - 1 {
+                j_dpsi[j] = f * w[j] * rho[j];
+                j_rho[j] = f * w[j] * (dpsi[j] - 0.5 * m / ia);
+            }
+            let mut j_psi = j_psi;
+            j_psi[0] = 0.0;
+            j_psi[n - 1] = 0.0;
+            let back = mat_t_vec(&self.qt, &j_rho);
+            self.chain(&j_psi, Some(&j_dpsi), Some(&back), &s)
+        });
         let (back_e, back_v) = mat_t_vec2(&self.qt, &e_rho, &v_rho);
         let grad_e = self.chain(&e_psi, Some(&e_dpsi), Some(&back_e), &s);
         let grad_g = self.chain(&g_psi, None, None, &s);
         let grad_v = self.chain(&v_psi, None, Some(&back_v), &s);
         Some(Eval {
             e,
+            e_bend,
             j: j_mean,
             g,
             v,
@@ -222,6 +263,7 @@ impl Basis {
             grad_e,
             grad_g,
             grad_v,
+            grad_j,
         })
     }
 
@@ -316,4 +358,27 @@ fn mat_t_vec(a: &[f64], x: &[f64]) -> Vec<f64> {
         }
     }
     y
+}
+
+#[cfg(test)]
+mod grad_j_tests {
+    use super::*;
+
+    /// `∂J/∂a` of the bilayer couple matches central differences of `J`.
+    #[test]
+    fn grad_j_matches_differences() {
+        let basis = Basis::new(60, (1..=12).collect()).with_model(Model::Bc { da: 1.0 });
+        let a: Vec<f64> = (0..12).map(|k| 0.05 / (1.0 + k as f64)).collect();
+        let ev = basis.eval(&a).expect("admissible");
+        let gj = ev.grad_j.clone().expect("computed for BC");
+        for k in 0..12 {
+            let mut ap = a.clone();
+            ap[k] += 1e-6;
+            let jp = basis.eval(&ap).unwrap().j;
+            ap[k] -= 2e-6;
+            let jm = basis.eval(&ap).unwrap().j;
+            let fd = (jp - jm) / 2e-6;
+            assert!((fd - gj[k]).abs() < 1e-7, "k = {k}: {fd} vs {}", gj[k]);
+        }
+    }
 }

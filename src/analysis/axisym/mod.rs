@@ -37,16 +37,25 @@
 
 use std::f64::consts::PI;
 
+pub mod ade;
+pub mod ade_phase;
+pub mod bc;
 pub mod branches;
 pub mod diagram;
 pub(crate) mod eigen;
 pub(crate) mod functional;
+pub mod limits;
+pub mod model;
 pub mod pear;
 pub mod phase;
 pub mod quadrature;
 pub(crate) mod solver;
 
+pub use ade::{ade_image, ade_solution, AdePoint};
+pub use bc::{bc_curve, bc_solution, BcCurve};
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
+pub use limits::{l_pear_at, l_sto_at, limit_line, Limit, LimitShape};
+pub use model::{ade_c0_eff, ade_da0, Model};
 pub use pear::{
     follow_pear, l_pear, l_pear_radii, pear_at, pear_bifurcation, prolate_updown, Bifurcation,
     PearBranch, PearEnd,
@@ -116,6 +125,8 @@ pub struct Options {
     /// The pear branch is followed until its narrowest neck (in units of `R0`) falls below
     /// this; closer to the limit shape the neck is not resolved by the modes.
     pub neck_min: f64,
+    /// The energy model ([`Model::Sc`] by default; ADE and BC solves set it themselves).
+    pub model: Model,
 }
 
 impl Default for Options {
@@ -143,12 +154,19 @@ impl Options {
             dv_min: 1e-4,
             c0: 0.0,
             neck_min: NECK_MIN,
+            model: Model::Sc,
         }
     }
 
     /// The same options at reduced spontaneous curvature `c0`.
     pub fn with_c0(mut self, c0: f64) -> Self {
         self.c0 = c0;
+        self
+    }
+
+    /// The same options with the energy model `model`.
+    pub fn with_model(mut self, model: Model) -> Self {
+        self.model = model;
         self
     }
 }
@@ -167,9 +185,21 @@ pub struct Solution {
     pub c0: f64,
     /// Reduced bending energy `e = ∮(2H − c̄0)² dA / (16π)`.
     pub e: f64,
-    /// Reduced integrated mean curvature `J = ∮2H dA / (8π R0)` (1 on the sphere).
+    /// Reduced integrated mean curvature `J = ∮2H dA / (8π R0)` (1 on the sphere): the reduced
+    /// area difference `Δa` of the ADE and BC models.
     pub mean_curvature: f64,
-    /// Tension `σ R0²/κ` (`σ = P v/2 + c̄0 J − c̄0²/2`; see the module docs).
+    /// The energy model the shape is stationary for.
+    pub model: Model,
+    /// The model's energy: `w = e + πα(Δa − Δa0)²` for ADE, `e` for SC and BC. Branches are
+    /// compared by it.
+    pub w: f64,
+    /// The effective spontaneous curvature: the shape is a stationary SC shape at this `c̄0`
+    /// (`c̄0` for SC, `c̄0 + 2πα(Δa0 − Δa)` for ADE, `c̄0 − λ_Δa` for BC; [`model`]).
+    pub c0_eff: f64,
+    /// Multiplier `λ_Δa` of the bilayer-couple constraint `Δa − Δa_target` (0 otherwise).
+    pub lambda_da: f64,
+    /// Tension `σ R0²/κ` of the shape equation of the equivalent SC problem,
+    /// `σ = P v/2 + c̄0,eff J − c̄0,eff²/2` (see the module docs).
     pub sigma: f64,
     /// Pressure difference `P R0³/κ = 6 de/dv` (inside minus outside).
     pub pressure: f64,
@@ -196,6 +226,11 @@ pub struct Solution {
 }
 
 impl Solution {
+    /// The reduced area difference `Δa = ∮2H dA / (8π R0)` ([`Solution::mean_curvature`]).
+    pub fn da(&self) -> f64 {
+        self.mean_curvature
+    }
+
     /// Contour length `L` (at `R0 = 1`).
     pub fn length(&self) -> f64 {
         *self.s.last().expect("contour has samples")
@@ -295,13 +330,23 @@ pub(crate) fn solution(
     let z = functional::mat_vec(&basis.q, &sin);
     let pressure = -6.0 * c.lambda_v;
     let c0 = basis.c0;
+    let j = c.eval.j;
+    let c0_eff = match basis.model {
+        Model::Sc => c0,
+        Model::Ade { alpha, da0 } => ade_c0_eff(c0, alpha, j, da0),
+        Model::Bc { .. } => c0 - c.lambda_j,
+    };
     Solution {
         branch,
         v: c.eval.v,
         c0,
-        e: c.eval.e,
-        mean_curvature: c.eval.j,
-        sigma: 0.5 * pressure * c.eval.v + c0 * c.eval.j - 0.5 * c0 * c0,
+        e: c.eval.e_bend,
+        mean_curvature: j,
+        model: basis.model,
+        w: c.eval.e,
+        c0_eff,
+        lambda_da: c.lambda_j,
+        sigma: 0.5 * pressure * c.eval.v + c0_eff * j - 0.5 * c0_eff * c0_eff,
         pressure,
         lambda_v: c.lambda_v,
         lambda_closure: c.lambda_g,

@@ -118,8 +118,10 @@ pub struct PearBranch {
 }
 
 /// The full basis (every `k ≤ K`) of `opts`, at its `c̄0`.
-fn full_basis(opts: &Options) -> Basis {
-    Basis::new(opts.nodes - 1, (1..=opts.modes).collect()).with_c0(opts.c0)
+pub(super) fn full_basis(opts: &Options) -> Basis {
+    Basis::new(opts.nodes - 1, (1..=opts.modes).collect())
+        .with_c0(opts.c0)
+        .with_model(opts.model)
 }
 
 /// The coefficients of a prolate (even modes) in the full basis.
@@ -141,7 +143,7 @@ fn lagrangian_grad(ev: &Eval, lv: f64, lg: f64) -> Vec<f64> {
 /// The smallest eigenvalue `μ` of the odd block of `∇²ℒ` on `∇G⊥`, and its eigenvector in the
 /// full basis (unit, zero on the even modes), at the prolate `a` (full basis) with multiplier
 /// `lv`. `None` if a perturbed shape is not admissible.
-fn odd_stability(full: &Basis, a: &[f64], lv: f64) -> Option<(f64, Vec<f64>)> {
+pub(super) fn odd_stability(full: &Basis, a: &[f64], lv: f64) -> Option<(f64, Vec<f64>)> {
     let odd: Vec<usize> = (0..a.len()).step_by(2).collect();
     let n = odd.len();
     // Odd block of the central-difference Hessian, symmetrised.
@@ -358,6 +360,7 @@ fn newton_amplitude(
                 a,
                 lambda_v: lv,
                 lambda_g: lg,
+                lambda_j: 0.0,
                 eval: ev,
                 iterations: iter,
                 residual,

@@ -59,7 +59,7 @@ fn pear_pieces(pear: &PearBranch) -> Vec<Vec<(f64, f64)>> {
             }
             dir = d;
         }
-        cur.push((s.v, s.e));
+        cur.push((s.v, s.w));
     }
     pieces.push(cur);
     pieces
@@ -79,7 +79,7 @@ fn energies_at(v: f64, curves: &[Vec<Solution>], pieces: &[Vec<(f64, f64)>]) -> 
     let mut out: Vec<(Branch, f64)> = Branch::ALL
         .iter()
         .zip(curves)
-        .filter_map(|(b, c)| c.iter().find(|s| (s.v - v).abs() < 1e-9).map(|s| (*b, s.e)))
+        .filter_map(|(b, c)| c.iter().find(|s| (s.v - v).abs() < 1e-9).map(|s| (*b, s.w)))
         .collect();
     for p in pieces {
         if v >= p[0].0 && v <= p[p.len() - 1].0 {
@@ -104,7 +104,7 @@ fn points_near(
             .unwrap_or_default(),
         b => {
             let i = Branch::ALL.iter().position(|x| *x == b).expect("listed");
-            curves[i].iter().map(|s| (s.v, s.e)).collect()
+            curves[i].iter().map(|s| (s.v, s.w)).collect()
         }
     }
 }

@@ -10,11 +10,15 @@
 //! [ ∇Gᵀ   0   0  ] [ δλ_G ]     [ G      ]
 //! ```
 //!
+//! For the bilayer couple ([`super::Model::Bc`]) the constraint `J − Δa = 0` joins them, with
+//! its multiplier `λ_J`, as a further row and column.
+//!
 //! The gradients are exact; `∇²ℒ` is the central difference of `∇ℒ` (step `1e-5`: truncation
 //! `≈ 1e-10`, round-off `≈ 1e-11` relative), which leaves Newton's convergence quadratic down to
 //! that level and linear with a factor `≈ 1e-10` below it.
 
 use super::functional::{Basis, Eval};
+use super::Model;
 
 /// Settings of the Newton iteration.
 #[derive(Clone, Copy, Debug)]
@@ -36,6 +40,8 @@ pub(crate) struct Converged {
     pub lambda_v: f64,
     /// Multiplier of the closure `G` (0 for up–down symmetric shapes).
     pub lambda_g: f64,
+    /// Multiplier of the bilayer-couple constraint `J − Δa` (0 for the other models).
+    pub lambda_j: f64,
     /// The functional at `a`.
     pub eval: Eval,
     /// Newton iterations taken.
@@ -54,17 +60,46 @@ const FD_STEP: f64 = 1e-5;
 /// Residual reduction per Newton step below which the Hessian is kept for the next step.
 const REBUILD: f64 = 0.05;
 
+/// The active constraints at `ev` as `(value, gradient)`: `v − v0`; the closure `G` if
+/// `closure`; `J − Δa` for the bilayer couple. Multipliers are listed in the same order.
+pub(crate) fn constraints<'a>(
+    basis: &Basis,
+    ev: &'a Eval,
+    v0: f64,
+    closure: bool,
+) -> Vec<(f64, &'a [f64])> {
+    let mut c = vec![(ev.v - v0, ev.grad_v.as_slice())];
+    if closure {
+        c.push((ev.g, ev.grad_g.as_slice()));
+    }
+    if let (Model::Bc { da }, Some(gj)) = (basis.model, &ev.grad_j) {
+        c.push((ev.j - da, gj.as_slice()));
+    }
+    c
+}
+
+/// The multipliers `λ` (in [`constraints`] order) as `(λ_v, λ_G, λ_J)`.
+fn split(basis: &Basis, lam: &[f64], closure: bool) -> (f64, f64, f64) {
+    let lg = if closure { lam[1] } else { 0.0 };
+    let lj = if matches!(basis.model, Model::Bc { .. }) {
+        lam[lam.len() - 1]
+    } else {
+        0.0
+    };
+    (lam[0], lg, lj)
+}
+
 /// Central-difference Hessian of `ℒ` at `a` (row-major `n × n`, symmetrised); `None` if a
 /// perturbed shape is not admissible.
-fn fd_hessian(basis: &Basis, a: &[f64], lv: f64, lg: f64, closure: bool) -> Option<Vec<f64>> {
+pub(crate) fn fd_hessian(basis: &Basis, a: &[f64], lam: &[f64], closure: bool) -> Option<Vec<f64>> {
     let n = a.len();
     let mut hess = vec![0.0; n * n];
     let mut ap = a.to_vec();
     for k in 0..n {
         ap[k] = a[k] + FD_STEP;
-        let gp = lagrangian_grad(&basis.eval(&ap)?, lv, lg, closure);
+        let gp = lagrangian_grad(basis, &basis.eval(&ap)?, lam, closure);
         ap[k] = a[k] - FD_STEP;
-        let gm = lagrangian_grad(&basis.eval(&ap)?, lv, lg, closure);
+        let gm = lagrangian_grad(basis, &basis.eval(&ap)?, lam, closure);
         ap[k] = a[k];
         for i in 0..n {
             let h = 0.25 * (gp[i] - gm[i]) / FD_STEP;
@@ -75,17 +110,53 @@ fn fd_hessian(basis: &Basis, a: &[f64], lv: f64, lg: f64, closure: bool) -> Opti
     Some(hess)
 }
 
-/// `∇ℒ = ∇e + λ_v ∇v + λ_G ∇G`.
-fn lagrangian_grad(ev: &Eval, lv: f64, lg: f64, closure: bool) -> Vec<f64> {
-    (0..ev.grad_e.len())
-        .map(|k| {
-            let mut g = ev.grad_e[k] + lv * ev.grad_v[k];
-            if closure {
-                g += lg * ev.grad_g[k];
-            }
-            g
-        })
-        .collect()
+/// `∇ℒ = ∇e + Σ λ_i ∇c_i` over the [`constraints`].
+pub(crate) fn lagrangian_grad(basis: &Basis, ev: &Eval, lam: &[f64], closure: bool) -> Vec<f64> {
+    let mut g = ev.grad_e.clone();
+    for ((_, grad), l) in constraints(basis, ev, 0.0, closure).iter().zip(lam) {
+        for (g, c) in g.iter_mut().zip(grad.iter()) {
+            *g += l * c;
+        }
+    }
+    g
+}
+
+/// The KKT matrix `[[H, Cᵀ], [C, 0]]` (row-major, `n + nc` square) of the Hessian `h` and the
+/// constraint gradients `rows`, with `mu` added to the diagonal of `H`.
+pub(crate) fn kkt_matrix(h: &[f64], rows: &[&[f64]], n: usize, mu: f64) -> Vec<f64> {
+    let dim = n + rows.len();
+    let mut kkt = vec![0.0; dim * dim];
+    for i in 0..n {
+        kkt[i * dim..i * dim + n].copy_from_slice(&h[i * n..(i + 1) * n]);
+        kkt[i * dim + i] += mu;
+        for (r, row) in rows.iter().enumerate() {
+            kkt[i * dim + n + r] = row[i];
+            kkt[(n + r) * dim + i] = row[i];
+        }
+    }
+    kkt
+}
+
+/// The [`Converged`] state of `a` with multipliers `lam`.
+fn converged(
+    basis: &Basis,
+    a: Vec<f64>,
+    lam: &[f64],
+    closure: bool,
+    ev: Eval,
+    it: usize,
+    res: f64,
+) -> Converged {
+    let (lv, lg, lj) = split(basis, lam, closure);
+    Converged {
+        a,
+        lambda_v: lv,
+        lambda_g: lg,
+        lambda_j: lj,
+        eval: ev,
+        iterations: it,
+        residual: res,
+    }
 }
 
 /// Newton from `a0` to the stationary point of `e` at `v = v0` (and `G = 0` if `closure`).
@@ -99,35 +170,25 @@ pub(crate) fn newton(
     set: &NewtonSettings,
 ) -> Option<Converged> {
     let n = a0.len();
-    let nc = if closure { 2 } else { 1 };
     let mut a = a0.to_vec();
     let mut ev = basis.eval(&a)?;
-    // Initial multipliers: least squares ∇e + λ_v ∇v + λ_G ∇G ≈ 0.
-    let (mut lv, mut lg) = initial_multipliers(&ev, closure);
+    // Initial multipliers: least squares ∇e + Σ λ_i ∇c_i ≈ 0.
+    let mut lam = initial_multipliers(basis, &ev, closure);
     let mut first = None;
     let mut hess: Option<Vec<f64>> = None;
     let mut last_residual = f64::INFINITY;
     for iter in 0..=set.max_iter {
-        let grad = lagrangian_grad(&ev, lv, lg, closure);
+        let grad = lagrangian_grad(basis, &ev, &lam, closure);
+        let cons = constraints(basis, &ev, v0, closure);
         let mut rhs: Vec<f64> = grad.iter().map(|g| -g).collect();
-        rhs.push(-(ev.v - v0));
-        if closure {
-            rhs.push(-ev.g);
-        }
+        rhs.extend(cons.iter().map(|(c, _)| -c));
         let residual = rhs.iter().fold(0.0f64, |m, r| m.max(r.abs()));
         if !residual.is_finite() || residual > DIVERGED * first.unwrap_or(residual) {
             return None;
         }
         first.get_or_insert(residual);
         if residual < set.tol {
-            return Some(Converged {
-                a,
-                lambda_v: lv,
-                lambda_g: if closure { lg } else { 0.0 },
-                eval: ev,
-                iterations: iter,
-                residual,
-            });
+            return Some(converged(basis, a, &lam, closure, ev, iter, residual));
         }
         if iter == set.max_iter {
             return None;
@@ -135,23 +196,13 @@ pub(crate) fn newton(
         // KKT matrix with the finite-difference Hessian of ℒ, rebuilt only when the last step
         // reduced the residual by less than REBUILD (a chord method otherwise).
         if hess.is_none() || residual > REBUILD * last_residual {
-            hess = Some(fd_hessian(basis, &a, lv, lg, closure)?);
+            hess = Some(fd_hessian(basis, &a, &lam, closure)?);
         }
         last_residual = residual;
         let h = hess.as_ref().expect("built above");
-        let dim = n + nc;
-        let mut kkt = vec![0.0; dim * dim];
-        for i in 0..n {
-            kkt[i * dim..i * dim + n].copy_from_slice(&h[i * n..(i + 1) * n]);
-        }
-        for i in 0..n {
-            kkt[i * dim + n] = ev.grad_v[i];
-            kkt[n * dim + i] = ev.grad_v[i];
-            if closure {
-                kkt[i * dim + n + 1] = ev.grad_g[i];
-                kkt[(n + 1) * dim + i] = ev.grad_g[i];
-            }
-        }
+        let rows: Vec<&[f64]> = cons.iter().map(|(_, g)| *g).collect();
+        let dim = n + rows.len();
+        let mut kkt = kkt_matrix(h, &rows, n, 0.0);
         let mut dx = lu_solve(&mut kkt, &mut rhs.clone(), dim)?;
         let big = dx[..n].iter().fold(0.0f64, |m, d| m.max(d.abs()));
         if big > set.max_step {
@@ -173,30 +224,30 @@ pub(crate) fn newton(
         let (trial, e) = next?;
         a = trial;
         ev = e;
-        lv += scale * dx[n];
-        if closure {
-            lg += scale * dx[n + 1];
+        for (l, d) in lam.iter_mut().zip(&dx[n..]) {
+            *l += scale * d;
         }
     }
     None
 }
 
-/// Least-squares multipliers for `∇e + λ_v ∇v + λ_G ∇G ≈ 0` (zero where the constraint
-/// gradients vanish, as at the sphere).
-fn initial_multipliers(ev: &Eval, closure: bool) -> (f64, f64) {
+/// Least-squares multipliers for `∇e + Σ λ_i ∇c_i ≈ 0` over the [`constraints`] (zero where
+/// the normal equations are singular, as at the sphere where `∇v = 0`).
+pub(crate) fn initial_multipliers(basis: &Basis, ev: &Eval, closure: bool) -> Vec<f64> {
     let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
-    let (gv, gg, ge) = (&ev.grad_v, &ev.grad_g, &ev.grad_e);
-    if !closure {
-        let d = dot(gv, gv);
-        return if d > 1e-300 {
-            (-dot(ge, gv) / d, 0.0)
-        } else {
-            (0.0, 0.0)
-        };
+    let rows: Vec<&[f64]> = constraints(basis, ev, 0.0, closure)
+        .iter()
+        .map(|(_, g)| *g)
+        .collect();
+    let nc = rows.len();
+    let mut m: Vec<f64> = (0..nc * nc)
+        .map(|ij| dot(rows[ij / nc], rows[ij % nc]))
+        .collect();
+    let mut r: Vec<f64> = rows.iter().map(|g| -dot(&ev.grad_e, g)).collect();
+    if nc == 1 {
+        return vec![if m[0] > 1e-300 { r[0] / m[0] } else { 0.0 }];
     }
-    let mut m = [dot(gv, gv), dot(gv, gg), dot(gg, gv), dot(gg, gg)];
-    let mut r = [-dot(ge, gv), -dot(ge, gg)];
-    lu_solve(&mut m, &mut r, 2).map_or((0.0, 0.0), |x| (x[0], x[1]))
+    lu_solve(&mut m, &mut r, nc).unwrap_or_else(|| vec![0.0; nc])
 }
 
 /// Solve `A x = b` (row-major `dim × dim`) by Gaussian elimination with partial pivoting;
@@ -241,24 +292,19 @@ fn project(basis: &Basis, a: &[f64], v0: f64, closure: bool) -> Option<(Vec<f64>
     let mut a = a.to_vec();
     for _ in 0..30 {
         let ev = basis.eval(&a)?;
-        let mut rows = vec![ev.grad_v.clone()];
-        let mut c = vec![ev.v - v0];
-        if closure {
-            rows.push(ev.grad_g.clone());
-            c.push(ev.g);
-        }
-        if c.iter().all(|c| c.abs() < 1e-13) {
+        let cons = constraints(basis, &ev, v0, closure);
+        if cons.iter().all(|(c, _)| c.abs() < 1e-13) {
             return Some((a, ev));
         }
-        let nc = rows.len();
+        let nc = cons.len();
         let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(a, b)| a * b).sum::<f64>();
         let mut m: Vec<f64> = (0..nc * nc)
-            .map(|ij| dot(&rows[ij / nc], &rows[ij % nc]))
+            .map(|ij| dot(cons[ij / nc].1, cons[ij % nc].1))
             .collect();
-        let mut rhs: Vec<f64> = c.iter().map(|c| -c).collect();
+        let mut rhs: Vec<f64> = cons.iter().map(|(c, _)| -c).collect();
         let y = lu_solve(&mut m, &mut rhs, nc)?;
         for (i, ai) in a.iter_mut().enumerate() {
-            *ai += (0..nc).map(|r| y[r] * rows[r][i]).sum::<f64>();
+            *ai += (0..nc).map(|r| y[r] * cons[r].1[i]).sum::<f64>();
         }
     }
     None
@@ -283,31 +329,20 @@ pub(crate) fn minimise(
     set: &NewtonSettings,
 ) -> Option<Converged> {
     let n = a0.len();
-    let nc = if closure { 2 } else { 1 };
     let (mut a, mut ev) = project(basis, a0, v0, closure)?;
     let mut mu = 1.0;
     for _ in 0..300 {
-        let (lv, lg) = initial_multipliers(&ev, closure);
-        let grad = lagrangian_grad(&ev, lv, lg, closure);
+        let lam = initial_multipliers(basis, &ev, closure);
+        let grad = lagrangian_grad(basis, &ev, &lam, closure);
         if grad.iter().all(|g| g.abs() < 1e-6) {
             return newton(basis, &a, v0, closure, set);
         }
-        let hess = fd_hessian(basis, &a, lv, lg, closure)?;
+        let hess = fd_hessian(basis, &a, &lam, closure)?;
         loop {
-            let dim = n + nc;
-            let mut kkt = vec![0.0; dim * dim];
-            for i in 0..n {
-                for k in 0..n {
-                    kkt[i * dim + k] = hess[i * n + k];
-                }
-                kkt[i * dim + i] += mu;
-                kkt[i * dim + n] = ev.grad_v[i];
-                kkt[n * dim + i] = ev.grad_v[i];
-                if closure {
-                    kkt[i * dim + n + 1] = ev.grad_g[i];
-                    kkt[(n + 1) * dim + i] = ev.grad_g[i];
-                }
-            }
+            let cons = constraints(basis, &ev, v0, closure);
+            let rows: Vec<&[f64]> = cons.iter().map(|(_, g)| *g).collect();
+            let dim = n + rows.len();
+            let mut kkt = kkt_matrix(&hess, &rows, n, mu);
             let mut rhs: Vec<f64> = grad.iter().map(|g| -g).collect();
             rhs.resize(dim, 0.0);
             let step = lu_solve(&mut kkt, &mut rhs, dim).map(|mut d| {

@@ -1,8 +1,10 @@
 //! `vesicle axisym`: the three branches of the c0 = 0 shape diagram of the axisymmetric
 //! reference ([`crate::analysis::axisym::diagram`]) on a grid of reduced volumes, written as CSV
 //! (energies, contours), a PNG chart, and the transition volumes where the branches cross;
-//! with `--c0 LIST`, the (v, c̄0) diagram ([`phase`]).
+//! with `--c0 LIST`, the (v, c̄0) diagram ([`phase`]); with `--bc --da LIST` or
+//! `--ade ALPHA --da0 LIST`, the bilayer-couple or ADE diagram ([`ade`]).
 
+pub mod ade;
 pub mod phase;
 
 use crate::analysis::axisym::diagram::{Diagram, Transitions};
@@ -39,6 +41,25 @@ pub struct AxisymArgs {
     /// instead of the c0 = 0 diagram.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub c0: Option<Vec<f64>>,
+    /// Area-difference elasticity with α = κ̄/κ = ALPHA: the (v, Δa0) diagram over --da0
+    /// (`branches_v*.csv`, `lowest.csv`, `summary.csv`, `limits.csv`, `phase.png`); with
+    /// `--c0 X` (one value) at that reduced spontaneous curvature, else c0 = 0.
+    #[arg(long, conflicts_with = "bc", requires = "da0")]
+    pub ade: Option<f64>,
+    /// Preferred reduced area differences Δa0 of --ade, comma separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        requires = "ade"
+    )]
+    pub da0: Option<Vec<f64>>,
+    /// The bilayer-couple model: the (v, Δa) diagram over --da (files as for --ade).
+    #[arg(long, requires = "da")]
+    pub bc: bool,
+    /// Reduced area differences Δa of --bc, comma separated.
+    #[arg(long, value_delimiter = ',', requires = "bc")]
+    pub da: Option<Vec<f64>>,
 }
 
 /// The grid `v_min, v_min + dv, …` up to `v_max` (inclusive within dv/1000), rounded to 1e-9.
@@ -89,6 +110,20 @@ fn check(args: &AxisymArgs) -> Result<()> {
 /// written); `Error::Io`/`Error::Output` if writing fails.
 pub fn run(args: &AxisymArgs) -> Result<()> {
     check(args)?;
+    if let (Some(alpha), Some(list)) = (args.ade, &args.da0) {
+        let c0 = match args.c0.as_deref() {
+            None => 0.0,
+            Some([c]) => *c,
+            Some(_) => return Err(Error::config("--c0", "give one value with --ade")),
+        };
+        return ade::run(args, ade::Which::Ade { alpha, c0 }, list, &grid(args));
+    }
+    if let (true, Some(list)) = (args.bc, &args.da) {
+        if args.c0.is_some() {
+            return Err(Error::config("--c0", "the bilayer couple takes no c0"));
+        }
+        return ade::run(args, ade::Which::Bc, list, &grid(args));
+    }
     if let Some(list) = &args.c0 {
         return phase::run(args, list, &grid(args));
     }

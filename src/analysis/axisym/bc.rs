@@ -1,0 +1,563 @@
+//! The bilayer-couple (BC) model: stationary shapes at fixed reduced volume `v` and area
+//! difference `Δa` ([`super::Model::Bc`], the constraint `J = Δa` in the Newton system), each
+//! branch followed in `Δa` at fixed `v` ([`bc_curve`]).
+//!
+//! * Prolate, oblate, stomatocyte: the branch's SC shape at `v` (at `c̄0`, or at more negative
+//!   `c̄0` for a stomatocyte that does not reach `v` there) is the BC shape at its own `Δa`
+//!   (multiplier 0); from there the continuation steps in `Δa` both ways, with the secant
+//!   predictor of the last two shapes and step halving, until the window or a limit point.
+//! * Pear: the up–down test function of the prolate ([`super::prolate_updown`]'s `μ`, the
+//!   smallest eigenvalue of the odd Hessian block of the BC Lagrangian, which is that of the
+//!   SC Lagrangian at `c̄0,eff`) is scanned along the prolate curve; at its first zero `Δa_b`
+//!   (refined by the secant method) the pear leaves the prolate. Just above it the prolate
+//!   plus a small multiple of the unstable eigenvector descends ([`super::solver`]'s
+//!   constrained minimisation, every mode, closure held) to the pear, which is then followed
+//!   up in `Δa` until its neck falls below [`super::Options::neck_min`].
+//!
+//! The BC energy is `e` (at [`super::Options::c0`], usually 0: at fixed `Δa`, `c̄0` only adds
+//! the constant `−c̄0 Δa + c̄0²/4`).
+
+use super::functional::Basis;
+use super::pear::{full_basis, odd_stability};
+use super::solver::{
+    constraints, fd_hessian, kkt_matrix, lagrangian_grad, lu_solve, minimise, newton, Converged,
+    NewtonSettings,
+};
+use super::{solution, solve, Branch, Model, Options, Solution};
+use crate::error::{Error, Result};
+
+/// [`bc_solution`] starts Newton from the curve's shape nearest in `Δa` if it is this close.
+const NEAR: f64 = 0.02;
+
+/// Amplitudes of the unstable eigenvector added to the prolate to start the pear, in order.
+const PEAR_KICKS: [f64; 3] = [0.05, 0.2, 0.5];
+
+/// A branch of the BC model followed in `Δa` at fixed `v`.
+#[derive(Clone, Debug)]
+pub struct BcCurve {
+    /// The branch.
+    pub branch: Branch,
+    /// The reduced volume.
+    pub v: f64,
+    /// The shapes in the order of the continuation path ([`Solution::model`] is
+    /// [`Model::Bc`]); `Δa` need not be monotone along it (the path may fold).
+    pub shapes: Vec<Solution>,
+    /// For the pear: the prolate where the pear leaves it (the prolate's up–down test
+    /// function vanishes there); `None` otherwise or if not found.
+    pub bifurcation: Option<Solution>,
+}
+
+/// A branch being followed in `Δa`: the basis (whose model carries the current target) and the
+/// last (at most two) solutions.
+struct Walker {
+    branch: Branch,
+    basis: Basis,
+    closure: bool,
+    set: NewtonSettings,
+    v: f64,
+    last: Vec<Converged>,
+}
+
+impl Walker {
+    fn new(branch: Branch, v: f64, basis: Basis, closure: bool, opts: &Options) -> Self {
+        Walker {
+            branch,
+            basis,
+            closure,
+            set: NewtonSettings {
+                tol: opts.tol,
+                max_iter: opts.max_iter,
+                max_step: 0.5,
+            },
+            v,
+            last: Vec::new(),
+        }
+    }
+
+    fn current(&self) -> &Converged {
+        self.last.last().expect("walker started")
+    }
+
+    fn push(&mut self, c: Converged) {
+        if self.last.len() == 2 {
+            self.last.remove(0);
+        }
+        self.last.push(c);
+    }
+
+    /// Newton at `Δa = da` from `a0` (the basis's model becomes `Bc { da }`).
+    fn solve_at(&mut self, da: f64, a0: &[f64]) -> Option<Converged> {
+        self.basis.model = Model::Bc { da };
+        newton(&self.basis, a0, self.v, self.closure, &self.set)
+    }
+
+    fn solution(&self) -> Solution {
+        solution(self.branch, &self.basis, self.current())
+    }
+}
+
+/// The modes of `branch` (even only for the up–down symmetric branches).
+fn basis_of(branch: Branch, opts: &Options) -> Basis {
+    if branch.up_down_symmetric() {
+        Basis::new(opts.nodes - 1, (2..=opts.modes).step_by(2).collect())
+            .with_c0(opts.c0)
+            .with_model(opts.model)
+    } else {
+        full_basis(opts)
+    }
+}
+
+/// The SC shape of `branch` at `v` that starts the BC curve: at `opts.c0`, or for a
+/// stomatocyte (oblate) that does not reach `v` there, at `c̄0` lowered (raised) in steps.
+fn sc_start(branch: Branch, v: f64, opts: &Options) -> Option<Solution> {
+    let sc = opts.with_model(Model::Sc);
+    let shifts: &[f64] = match branch {
+        Branch::Stomatocyte => &[0.0, -1.0, -2.0, -3.0, -4.0],
+        Branch::Oblate => &[0.0, -1.0, 1.0],
+        _ => &[0.0],
+    };
+    shifts
+        .iter()
+        .find_map(|d| solve(branch, v, &sc.with_c0(opts.c0 + d)).ok())
+        .filter(|s| branch.up_down_symmetric() || s.asymmetry() > super::phase::ASYMMETRIC)
+}
+
+/// A walker of `branch` (not the pear) started at its SC shape at `v`.
+fn start(branch: Branch, v: f64, opts: &Options) -> Option<Walker> {
+    let s = sc_start(branch, v, opts)?;
+    let mut w = Walker::new(
+        branch,
+        v,
+        basis_of(branch, opts),
+        !branch.up_down_symmetric(),
+        opts,
+    );
+    // The SC shape at another c̄0 is the BC shape at its Δa (the multiplier absorbs the
+    // difference); the basis keeps opts.c0.
+    let c = w.solve_at(s.da(), &s.coefficients)?;
+    w.push(c);
+    Some(w)
+}
+
+/// First arclength step (Euclidean norm of the coefficient change).
+const H0: f64 = 0.01;
+/// Largest arclength step.
+const H_MAX: f64 = 0.05;
+/// Arclength step below which the continuation counts as ended.
+const H_MIN: f64 = 1e-4;
+/// Most arclength steps in one direction.
+const MAX_STEPS: usize = 200;
+/// The continuation stops where `|c̄0,eff|` exceeds this (the shape is then close to a limit
+/// shape or a sphere-like end the modes do not resolve).
+const C_MAX: f64 = 150.0;
+
+/// Newton for a BC shape with `Δa` free on the hyperplane `d·(a − p) = 0`: the BC KKT system
+/// with the row of `J − Δa` replaced by the arclength condition (the column of `∇J`, and so
+/// `λ_J = c̄0 − c̄0,eff`, stays). `lam` starts the multipliers (`λ_v`, `λ_G`, `λ_J`).
+fn newton_arc(
+    basis: &Basis,
+    p: &[f64],
+    d: &[f64],
+    v0: f64,
+    closure: bool,
+    lam: &[f64],
+    set: &NewtonSettings,
+) -> Option<Converged> {
+    let n = p.len();
+    let mut a = p.to_vec();
+    let mut lam = lam.to_vec();
+    for iter in 0..=set.max_iter {
+        let ev = basis.eval(&a)?;
+        let grad = lagrangian_grad(basis, &ev, &lam, closure);
+        let cons = constraints(basis, &ev, v0, closure);
+        let nc = cons.len();
+        let mut rhs: Vec<f64> = grad.iter().map(|g| -g).collect();
+        rhs.extend(cons.iter().map(|(c, _)| -c));
+        let arc: f64 = d
+            .iter()
+            .zip(a.iter().zip(p))
+            .map(|(d, (x, y))| d * (x - y))
+            .sum();
+        rhs[n + nc - 1] = -arc;
+        let residual = rhs.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+        if !residual.is_finite() {
+            return None;
+        }
+        if residual < set.tol {
+            let lg = if closure { lam[1] } else { 0.0 };
+            return Some(Converged {
+                a,
+                lambda_v: lam[0],
+                lambda_g: lg,
+                lambda_j: lam[nc - 1],
+                eval: ev,
+                iterations: iter,
+                residual,
+            });
+        }
+        if iter == set.max_iter {
+            return None;
+        }
+        let h = fd_hessian(basis, &a, &lam, closure)?;
+        let rows: Vec<&[f64]> = cons.iter().map(|(_, g)| *g).collect();
+        let dim = n + nc;
+        let mut kkt = kkt_matrix(&h, &rows, n, 0.0);
+        let last = n + nc - 1;
+        kkt[last * dim..(last + 1) * dim].fill(0.0);
+        kkt[last * dim..last * dim + n].copy_from_slice(d);
+        let dx = lu_solve(&mut kkt, &mut rhs, dim)?;
+        let big = dx[..n].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let f = if big > set.max_step {
+            set.max_step / big
+        } else {
+            1.0
+        };
+        for (x, dxi) in a.iter_mut().zip(&dx) {
+            *x += f * dxi;
+        }
+        for (l, dl) in lam.iter_mut().zip(&dx[n..]) {
+            *l += f * dl;
+        }
+    }
+    None
+}
+
+/// The multipliers of a converged state in [`constraints`] order.
+fn multipliers(c: &Converged, closure: bool) -> Vec<f64> {
+    let mut l = vec![c.lambda_v];
+    if closure {
+        l.push(c.lambda_g);
+    }
+    l.push(c.lambda_j);
+    l
+}
+
+/// Pseudo-arclength continuation in the coefficients from `prev` to `cur` onwards (the
+/// direction of `cur − prev`), at fixed `v`, with `Δa` free: the predictor `p = a + h d`
+/// (`d` the unit secant), the corrector [`newton_arc`]. Steps grow by 1.5 after a success (at
+/// most `H_MAX`) and halve after a failure. Returns the shapes after `cur`, in path order,
+/// until `stop` holds (that shape included), `|c̄0,eff| > C_MAX`, the step falls below
+/// `H_MIN` or `MAX_STEPS` are taken.
+fn arc_follow(
+    w: &mut Walker,
+    mut prev: Converged,
+    mut cur: Converged,
+    mut stop: impl FnMut(&Solution) -> bool,
+) -> Vec<Solution> {
+    let mut out = Vec::new();
+    let mut h = H0;
+    let closure = w.closure;
+    for _ in 0..MAX_STEPS {
+        let diff: Vec<f64> = cur.a.iter().zip(&prev.a).map(|(x, y)| x - y).collect();
+        let norm = diff.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm == 0.0 {
+            break;
+        }
+        let d: Vec<f64> = diff.iter().map(|x| x / norm).collect();
+        let next = loop {
+            let p: Vec<f64> = cur.a.iter().zip(&d).map(|(x, d)| x + h * d).collect();
+            let f = h / norm;
+            let lam: Vec<f64> = multipliers(&cur, closure)
+                .iter()
+                .zip(multipliers(&prev, closure))
+                .map(|(c, q)| c + f * (c - q))
+                .collect();
+            let solved = newton_arc(&w.basis, &p, &d, w.v, closure, &lam, &w.set).filter(|c| {
+                c.a.iter()
+                    .zip(&p)
+                    .all(|(a, q)| (a - q).abs() <= 0.5 * h.max(0.02))
+            });
+            match solved {
+                Some(c) => {
+                    h = (1.5 * h).min(H_MAX);
+                    break Some(c);
+                }
+                None => {
+                    h *= 0.5;
+                    if h < H_MIN {
+                        break None;
+                    }
+                }
+            }
+        };
+        let Some(next) = next else {
+            break;
+        };
+        w.basis.model = Model::Bc { da: next.eval.j };
+        let s = solution(w.branch, &w.basis, &next);
+        let done = stop(&s) || s.c0_eff.abs() > C_MAX;
+        out.push(s);
+        if done {
+            break;
+        }
+        prev = cur;
+        cur = next;
+    }
+    out
+}
+
+/// The branch at `v` from the BC shape `first` both ways along the path (towards larger and
+/// smaller `Δa` at the start, judged by `second`, which lies on one side), as one list in
+/// path order, `first` included; `stop(shape, up)` as in [`bc_curve_until`].
+fn both_ways(
+    w: &mut Walker,
+    first: Converged,
+    second: Converged,
+    mut stop: impl FnMut(&Solution, bool) -> bool,
+) -> Vec<Solution> {
+    w.basis.model = Model::Bc { da: first.eval.j };
+    let s0 = solution(w.branch, &w.basis, &first);
+    let fwd_up = second.eval.j >= first.eval.j;
+    let ahead = arc_follow(w, first.clone(), second.clone(), |s| stop(s, fwd_up));
+    // Backwards: from `second` through `first` and on.
+    let behind = arc_follow(w, second, first, |s| stop(s, !fwd_up));
+    let mut all: Vec<Solution> = behind.into_iter().rev().collect();
+    all.push(s0);
+    all.extend(ahead);
+    all
+}
+
+/// Follow `branch` at reduced volume `v` by pseudo-arclength in the coefficients with `Δa`
+/// free, from its SC shape at `v` both ways (the pear from its bifurcation off the prolate),
+/// keeping the shapes with `Δa` in `[lo, hi]`, in path order. `stop(shape, up)` ends the
+/// walk in the direction of increasing (`up`) or decreasing `Δa` after `shape` (e.g. when the
+/// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05),
+/// where the oblate first touches itself, at a neck below [`Options::neck_min`], or where
+/// `|c̄0,eff| > 150`. A branch without a start shape gives an empty curve.
+pub fn bc_curve_until(
+    branch: Branch,
+    v: f64,
+    (lo, hi): (f64, f64),
+    opts: &Options,
+    mut stop: impl FnMut(&Solution, bool) -> bool,
+) -> BcCurve {
+    let neck_min = opts.neck_min;
+    let mut ends = move |s: &Solution, up: bool| {
+        stop(s, up)
+            || s.da() < lo - 0.05
+            || s.da() > hi + 0.05
+            || s.neck().is_some_and(|r| r < neck_min)
+            || (s.branch == Branch::Oblate && s.self_intersecting())
+            || (s.branch == Branch::Pear && s.asymmetry() < 1e-4)
+    };
+    let (shapes, bifurcation) = if branch == Branch::Pear {
+        pear_path(v, opts, &mut ends)
+    } else {
+        let shapes = match start_pair(branch, v, opts) {
+            Some((mut w, first, second)) => both_ways(&mut w, first, second, &mut ends),
+            None => Vec::new(),
+        };
+        (shapes, None)
+    };
+    let shapes: Vec<Solution> = shapes
+        .into_iter()
+        .filter(|s| s.da() >= lo && s.da() <= hi)
+        .filter(|s| !(s.branch == Branch::Oblate && s.self_intersecting()))
+        .collect();
+    BcCurve {
+        branch,
+        v,
+        shapes,
+        bifurcation,
+    }
+}
+
+/// The walker of `branch` at `v`, its SC shape as a BC state, and a second BC state: the SC
+/// shape at `c̄0` raised by 0.1, solved from the first.
+fn start_pair(branch: Branch, v: f64, opts: &Options) -> Option<(Walker, Converged, Converged)> {
+    let mut w = start(branch, v, opts)?;
+    let first = w.current().clone();
+    let c1 = opts.c0 - first.lambda_j + 0.1;
+    let sc = w.basis.clone().with_model(Model::Sc).with_c0(c1);
+    let a2 = newton(&sc, &first.a, v, w.closure, &w.set)?.a;
+    let j2 = w.basis.eval(&a2)?.j;
+    let second = w.solve_at(j2, &a2)?;
+    Some((w, first, second))
+}
+
+/// [`bc_curve_until`] without a stop condition.
+pub fn bc_curve(branch: Branch, v: f64, window: (f64, f64), opts: &Options) -> BcCurve {
+    bc_curve_until(branch, v, window, opts, |_, _| false)
+}
+
+/// The up–down test function `μ` of a prolate BC shape (see [`super::prolate_updown`]) and its
+/// eigenvector (full basis): the odd block of the Hessian of the BC Lagrangian is that of the
+/// SC Lagrangian at `c̄0,eff`.
+fn updown(s: &Solution, opts: &Options) -> Option<(f64, Vec<f64>)> {
+    let full = full_basis(&opts.with_model(Model::Sc).with_c0(s.c0_eff));
+    odd_stability(&full, &to_full(s, full.modes.len()), s.lambda_v)
+}
+
+/// The coefficients of `s` in the full basis of `len` modes.
+fn to_full(s: &Solution, len: usize) -> Vec<f64> {
+    let mut a = vec![0.0; len];
+    for (k, ak) in s.modes.iter().zip(&s.coefficients) {
+        a[k - 1] = *ak;
+    }
+    a
+}
+
+/// The pear at `v`: the prolate's path scanned for the first sign change of `μ` from its SC
+/// shape towards larger `Δa`, refined by the secant method in `Δa` (BC solves), then the
+/// prolate just past it kicked along the unstable eigenvector and descended to the pear, which
+/// is followed both ways. Returns the path and the bifurcation `Δa`.
+fn pear_path(
+    v: f64,
+    opts: &Options,
+    ends: &mut impl FnMut(&Solution, bool) -> bool,
+) -> (Vec<Solution>, Option<Solution>) {
+    let none = (Vec::new(), None);
+    let Some((mut w, first, second)) = start_pair(Branch::Prolate, v, opts) else {
+        return none;
+    };
+    w.basis.model = Model::Bc { da: first.eval.j };
+    let s0 = solution(Branch::Prolate, &w.basis, &first);
+    let Some((mu0, _)) = updown(&s0, opts) else {
+        return none;
+    };
+    // Walk the prolate towards larger Δa until μ changes sign.
+    let mut bracket: Option<(Solution, f64, Solution, f64)> = None;
+    let mut last = (s0, mu0);
+    let (p, q) = if second.eval.j >= first.eval.j {
+        (first, second)
+    } else {
+        (second, first)
+    };
+    let mut pending = None;
+    arc_follow(&mut w, p, q, |s| {
+        if pending.is_some() {
+            return true;
+        }
+        match updown(s, opts) {
+            Some((mu, _)) if (mu > 0.0) != (last.1 > 0.0) => {
+                pending = Some((last.clone(), (s.clone(), mu)));
+                true
+            }
+            Some((mu, _)) => {
+                last = (s.clone(), mu);
+                s.neck().is_some_and(|r| r < opts.neck_min)
+            }
+            None => true,
+        }
+    });
+    if let Some(((sa, ma), (sb, mb))) = pending {
+        bracket = Some((sa, ma, sb, mb));
+    }
+    let Some((sa, mut fa, sb, mut fb)) = bracket else {
+        return none;
+    };
+    // Secant (Illinois) on μ(Δa) with BC solves from the nearer bracketing shape.
+    let (mut xa, mut xb) = (sa.da(), sb.da());
+    let (mut ca, mut cb) = (sa.coefficients.clone(), sb.coefficients.clone());
+    // Prolates on the unstable side (μ < 0), nearest the bifurcation last.
+    let mut unstable: Vec<Solution> = [(&sa, fa), (&sb, fb)]
+        .iter()
+        .filter(|(_, f)| *f < 0.0)
+        .map(|(s, _)| (*s).clone())
+        .collect();
+    let mut side = 0i8;
+    let mut best = sb.clone();
+    for _ in 0..40 {
+        if (xb - xa).abs() < 1e-10 {
+            break;
+        }
+        let x = xb - fb * (xb - xa) / (fb - fa);
+        let t = (x - xa) / (xb - xa);
+        let a0: Vec<f64> = ca.iter().zip(&cb).map(|(a, b)| a + t * (b - a)).collect();
+        let Some(c) = w.solve_at(x, &a0) else {
+            break;
+        };
+        let s = solution(Branch::Prolate, &w.basis, &c);
+        let Some((f, _)) = updown(&s, opts) else {
+            break;
+        };
+        if f < 0.0 {
+            unstable.push(s.clone());
+        }
+        if (f > 0.0) == (fb > 0.0) {
+            fa = if side == 1 { 0.5 * fa } else { fa };
+            side = 1;
+        } else {
+            xa = xb;
+            fa = fb;
+            ca = cb.clone();
+            side = -1;
+        }
+        xb = x;
+        fb = f;
+        cb = s.coefficients.clone();
+        best = s;
+    }
+    let da_b = best.da();
+    let bif = Some(best.clone());
+    // Prolates past the bifurcation on the unstable side (μ < 0), kicked along φ and
+    // descended at their Δa.
+    let mut found = None;
+    'tries: for prol in unstable.iter().rev() {
+        let Some((_, phi)) = updown(prol, opts) else {
+            continue;
+        };
+        let full = full_basis(&opts.with_model(Model::Bc { da: prol.da() }));
+        let a0 = to_full(prol, full.modes.len());
+        let pw = Walker::new(Branch::Pear, v, full, true, opts);
+        for kick in PEAR_KICKS {
+            let a: Vec<f64> = a0.iter().zip(&phi).map(|(a, p)| a + kick * p).collect();
+            let asym = |c: &Converged| c.a.iter().step_by(2).map(|x| x * x).sum::<f64>().sqrt();
+            if let Some(c) = minimise(&pw.basis, &a, v, true, &pw.set).filter(|c| asym(c) > 1e-3) {
+                found = Some((pw, c));
+                break 'tries;
+            }
+        }
+    }
+    let Some((mut pw, c1)) = found else {
+        return (Vec::new(), bif);
+    };
+    // A second pear state a little further from the bifurcation.
+    let da1 = c1.eval.j;
+    let step = if da1 >= da_b { 1e-5 } else { -1e-5 };
+    let Some(c2) = pw.solve_at(da1 + step, &c1.a) else {
+        return (Vec::new(), bif);
+    };
+    (both_ways(&mut pw, c1, c2, |s, up| ends(s, up)), bif)
+}
+
+/// The BC shape of `branch` at reduced volume `v` and area difference `da`, followed in `Δa`
+/// from the branch's SC shape at `v` (the pear from its bifurcation off the prolate).
+///
+/// # Errors
+/// `Error::Config` (field `v`) if `v ∉ (0, 1)`; (field `da`) if the branch does not reach `da`
+/// at this `v` (beyond a limit point or a closing neck, or no start shape).
+pub fn bc_solution(branch: Branch, v: f64, da: f64, opts: &Options) -> Result<Solution> {
+    if !(v > 0.0 && v < 1.0) {
+        return Err(Error::config("v", format!("need 0 < v < 1, got {v}")));
+    }
+    if !da.is_finite() {
+        return Err(Error::config("da", format!("must be finite, got {da}")));
+    }
+    let curve = bc_curve(branch, v, (da - 0.5, da + 0.5), opts);
+    let near = curve
+        .shapes
+        .iter()
+        .min_by(|a, b| (a.da() - da).abs().total_cmp(&(b.da() - da).abs()))
+        .filter(|s| (s.da() - da).abs() <= NEAR)
+        .ok_or_else(|| {
+            Error::config(
+                "da",
+                format!(
+                    "the {} branch at v = {v} does not reach Δa = {da}",
+                    branch.name()
+                ),
+            )
+        })?;
+    let basis = if branch.up_down_symmetric() {
+        basis_of(branch, opts)
+    } else {
+        full_basis(opts)
+    };
+    let mut w = Walker::new(branch, v, basis, !branch.up_down_symmetric(), opts);
+    let c = w
+        .solve_at(da, &near.coefficients)
+        .ok_or_else(|| Error::config("da", format!("Newton failed at Δa = {da}, v = {v}")))?;
+    w.push(c);
+    Ok(w.solution())
+}
