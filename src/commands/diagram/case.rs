@@ -3,7 +3,7 @@
 //! and measured. Every case runs on one thread, so its numbers do not depend on how a sweep
 //! is spread over processes.
 
-use super::spec::{Case, DiagramSpec};
+use super::spec::{Case, DiagramSpec, SliceAt};
 use crate::analysis::axisym::{self, Branch};
 use crate::driver::simulation::{Simulation, StopRules};
 use crate::error::{Error, Result};
@@ -25,6 +25,18 @@ pub struct CaseResult {
     /// Reduced spontaneous curvature c̄0 of the sharp start (the scene's c0 is c̄0/`r0`).
     #[serde(default)]
     pub c0: f64,
+    /// ADE's α (an ADE diagram's case).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha: Option<f64>,
+    /// ADE's Δa0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub da0: Option<f64>,
+    /// Δa of the phase field (M/M₁, the record's), with ADE.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub da: Option<f64>,
+    /// e alone (the record's `bending_energy`), with ADE; `e` is then w.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending_energy: Option<f64>,
     /// R0/ε.
     pub r0: f64,
     /// Full-box grid.
@@ -35,7 +47,8 @@ pub struct CaseResult {
     pub v: f64,
     /// Diffuse reduced volume from ∫(1 + φ)/2 and the diffuse area.
     pub v_diffuse: f64,
-    /// Reduced bending energy e = ∮(2H − c0)² dA / 16π of the phase field (the record's).
+    /// Reduced bending energy e = ∮(2H − c0)² dA / 16π of the phase field (the record's);
+    /// with ADE, w = e + πα(Δa − Δa0)².
     pub e: f64,
     /// σ (the area multiplier), in units of the scene (ε = 1).
     pub sigma: f64,
@@ -50,6 +63,14 @@ pub struct CaseResult {
 }
 
 impl CaseResult {
+    /// The slice the case belongs to.
+    pub fn slice(&self) -> SliceAt {
+        SliceAt {
+            c0: self.c0,
+            ade: self.alpha.zip(self.da0),
+        }
+    }
+
     /// Whether the relaxation met its tolerance.
     pub fn converged(&self) -> bool {
         self.stopped == "stationary"
@@ -106,10 +127,10 @@ pub fn computed_points(branch: Branch, n: [usize; 3]) -> usize {
 /// The scene of `case` (contour file `contour.csv` beside it); it sets `c0` = c̄0/`r0` where
 /// c̄0 ≠ 0.
 pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json::Value {
-    let at_c0 = if case.c0 == 0.0 {
+    let at_c0 = if case.c0 == 0.0 && case.ade.is_none() {
         String::new()
     } else {
-        format!(", c0 R0 = {}", case.c0)
+        format!(", {}", case.slice().describe())
     };
     let mut scene = json!({
         "description": format!(
@@ -132,6 +153,9 @@ pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json:
     });
     if case.c0 != 0.0 {
         scene["c0"] = json!(case.scene_c0());
+    }
+    if let Some((alpha, da0)) = case.ade {
+        scene["ade"] = json!({"alpha": alpha, "da0": da0});
     }
     scene
 }
@@ -188,6 +212,10 @@ pub fn run_case(
         branch: case.branch.name().to_string(),
         v_target: case.v,
         c0: case.c0,
+        alpha: case.ade.map(|a| a.0),
+        da0: case.ade.map(|a| a.1),
+        da: last.couple.map(|c| c.da),
+        bending_energy: last.couple.map(|c| c.bending_energy),
         r0: case.r0,
         n,
         points: problem.grid.len(),
@@ -220,10 +248,15 @@ fn write_thumbnail(full: &ndarray::Array3<f64>, h: f64, case: &Case, path: &Path
         cut: (case.branch == Branch::Stomatocyte).then_some(1),
         ..View::default()
     };
-    let title = if case.c0 == 0.0 {
+    let title = if case.c0 == 0.0 && case.ade.is_none() {
         format!("{} v = {}", case.branch.name(), case.v)
     } else {
-        format!("{} v = {}, c0 R0 = {}", case.branch.name(), case.v, case.c0)
+        format!(
+            "{} v = {}, {}",
+            case.branch.name(),
+            case.v,
+            case.slice().describe()
+        )
     };
     let bounds = Bounds::of_grid([s[0], s[1], s[2]], h);
     shade::render(&mesh, &bounds, &view, &title)?.write_png(path)?;

@@ -4,6 +4,7 @@
 //! dotted and lighter) and `thumbnails.png` (the cases' shape pictures side by side).
 
 use super::reference::Reference;
+use super::spec::SliceAt;
 use crate::analysis::axisym::Branch;
 use crate::error::Result;
 use crate::output::{ensure_font, write_rgb_png, OutputError, RgbImage, FONT_FAMILY};
@@ -34,14 +35,14 @@ pub struct Transition {
     pub ground: bool,
 }
 
-/// Write the diagram chart at reduced spontaneous curvature `c0`: `extrapolated` and `finest` are per branch of [`Branch::ALL`],
-/// `(v, e)` points; `transitions` the reference transitions and the phase-field crossings.
+/// Write the diagram chart of the slice `at`: `extrapolated` and `finest` are per branch of
+/// [`Branch::ALL`], `(v, e)` points (w with ADE); `transitions` the reference transitions and the phase-field crossings.
 ///
 /// # Errors
 /// `Error::Output` if drawing or writing fails.
 pub fn write_chart(
     path: &Path,
-    c0: f64,
+    at: SliceAt,
     reference: &Reference,
     extrapolated: &[Vec<(f64, f64)>],
     finest: &[Vec<(f64, f64)>],
@@ -66,7 +67,7 @@ pub fn write_chart(
         let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
         draw(
             &root,
-            c0,
+            at,
             (v_lo..v_hi, e_range),
             reference,
             extrapolated,
@@ -88,7 +89,7 @@ type DrawResult = std::result::Result<
 
 fn draw(
     root: &Area,
-    c0: f64,
+    at: SliceAt,
     (vs, es): (std::ops::Range<f64>, std::ops::Range<f64>),
     reference: &Reference,
     extrapolated: &[Vec<(f64, f64)>],
@@ -96,7 +97,15 @@ fn draw(
     transitions: &[Transition],
 ) -> DrawResult {
     root.fill(&WHITE)?;
-    let (caption, energy) = if c0 == 0.0 {
+    let (caption, energy) = if at.ade.is_some() {
+        (
+            format!(
+                "ADE diagram at {}: phase field (L-BFGS) against the axisymmetric reference",
+                at.describe()
+            ),
+            "reduced energy w = e + πα(Δa − Δa0)²",
+        )
+    } else if at.c0 == 0.0 {
         (
             "Shape diagram at c0 = 0: phase field (L-BFGS) against the axisymmetric reference"
                 .to_string(),
@@ -105,8 +114,9 @@ fn draw(
     } else {
         (
             format!(
-                "Shape diagram at c0 R0 = {c0}: phase field (L-BFGS) against the axisymmetric \
-                 reference"
+                "Shape diagram at c0 R0 = {}: phase field (L-BFGS) against the axisymmetric \
+                 reference",
+                at.c0
             ),
             "reduced bending energy e = ∮(2H − c0)² dA / 16π",
         )

@@ -19,6 +19,7 @@
 //! coarser one); the point is then fitted from the rest at the shared orders.
 
 use super::case::CaseResult;
+use super::spec::SliceAt;
 use crate::analysis::curves::{common_order, power_fit};
 
 /// Largest relative change of e from one resolution to the next finer one that counts as
@@ -39,9 +40,15 @@ pub struct Point {
     pub dropped: Vec<CaseResult>,
     /// Extrapolated reduced volume `v∞`.
     pub v: f64,
-    /// Extrapolated reduced energy `e∞`.
+    /// Extrapolated reduced energy `e∞` (w with ADE).
     pub e: f64,
+    /// Extrapolated Δa∞ at order [`DA_ORDER`] (ADE; NaN otherwise).
+    pub da: f64,
 }
+
+/// The order in ε/R0 Δa is extrapolated at: the profile's curvature correction, (ε/R)² (the
+/// spheres of tests/ade.rs give 1.8).
+pub const DA_ORDER: f64 = 2.0;
 
 impl Point {
     /// The finest-resolution case.
@@ -76,17 +83,17 @@ fn split(mut cases: Vec<CaseResult>) -> (Vec<CaseResult>, Vec<CaseResult>) {
     (dropped, cases)
 }
 
-/// Group `results` into points (c̄0, branch and target v; cases in increasing R0) and leave
+/// Group `results` into points (slice, branch and target v; cases in increasing R0) and leave
 /// out the pre-asymptotic resolutions; `v` and `e` are not yet extrapolated (NaN).
 fn group(results: &[CaseResult]) -> Vec<Point> {
-    let mut groups: Vec<(f64, String, f64, Vec<CaseResult>)> = Vec::new();
+    let mut groups: Vec<(SliceAt, String, f64, Vec<CaseResult>)> = Vec::new();
     for r in results {
         match groups
             .iter_mut()
-            .find(|g| g.0 == r.c0 && g.1 == r.branch && g.2 == r.v_target)
+            .find(|g| g.0 == r.slice() && g.1 == r.branch && g.2 == r.v_target)
         {
             Some(g) => g.3.push(r.clone()),
-            None => groups.push((r.c0, r.branch.clone(), r.v_target, vec![r.clone()])),
+            None => groups.push((r.slice(), r.branch.clone(), r.v_target, vec![r.clone()])),
         }
     }
     groups
@@ -101,6 +108,7 @@ fn group(results: &[CaseResult]) -> Vec<Point> {
                 dropped,
                 v: f64::NAN,
                 e: f64::NAN,
+                da: f64::NAN,
             }
         })
         .collect()
@@ -133,7 +141,12 @@ pub fn extrapolate(results: &[CaseResult], orders: Orders) -> Vec<Point> {
                 power_fit(order, &x, &y).0
             }
         };
-        (p.v, p.e) = (at(|c| c.v, orders.v), at(|c| c.e, orders.e));
+        let da = if p.cases.iter().all(|c| c.da.is_some()) {
+            at(|c| c.da.unwrap_or(f64::NAN), DA_ORDER)
+        } else {
+            f64::NAN
+        };
+        (p.v, p.e, p.da) = (at(|c| c.v, orders.v), at(|c| c.e, orders.e), da);
     }
     points
 }

@@ -9,7 +9,7 @@ use super::chart;
 use super::extrapolate::{self, Orders, Point};
 use super::reference::{self, Reference};
 use super::report::{self, Kind};
-use super::spec::{c0_tag, Case, DiagramSpec};
+use super::spec::{Case, DiagramSpec, SliceAt};
 use super::summary;
 use crate::analysis::axisym::Branch;
 use crate::error::{Error, Result};
@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 /// What one slice (one c̄0) of a merged diagram found.
 #[derive(Clone, Debug)]
 pub struct Slice {
-    /// Reduced spontaneous curvature c̄0.
-    pub c0: f64,
+    /// Where the slice sits (c̄0, and α, Δa0 with ADE).
+    pub at: SliceAt,
     /// Where its files went.
     pub dir: PathBuf,
     /// Its points, extrapolated.
@@ -64,32 +64,36 @@ pub fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Res
             "the orders in ε/R0 need three or more resolutions with distinct values",
         ));
     };
-    let thumbnails = |c0: f64| -> Vec<PathBuf> {
+    let thumbnails = |at: SliceAt| -> Vec<PathBuf> {
         cases
             .iter()
-            .filter(|c| c.c0 == c0)
+            .filter(|c| c.slice() == at)
             .map(|c| out.join("cases").join(c.folder()).join("thumbnail.png"))
             .filter(|p| p.exists())
             .collect()
     };
-    let c0s = spec.c0_sorted();
-    if let [c0] = c0s.as_slice() {
-        let slice = merge_slice(*c0, &results, orders, &thumbnails(*c0), out)?;
+    let ats = spec.slices();
+    if let [at] = ats.as_slice() {
+        let slice = merge_slice(*at, &results, orders, &thumbnails(*at), out)?;
         print!("{}", slice.table);
         println!("-> {}", out.display());
         return Ok(());
     }
     let mut slices = Vec::new();
-    for c0 in c0s {
-        let dir = out.join(format!("c0_{}", c0_tag(c0)));
+    for at in ats {
+        let dir = out.join(at.folder());
         std::fs::create_dir_all(&dir).map_err(|source| Error::Io {
             path: dir.clone(),
             source,
         })?;
-        let mine: Vec<CaseResult> = results.iter().filter(|r| r.c0 == c0).cloned().collect();
-        slices.push(merge_slice(c0, &mine, orders, &thumbnails(c0), &dir)?);
+        let mine: Vec<CaseResult> = results
+            .iter()
+            .filter(|r| r.slice() == at)
+            .cloned()
+            .collect();
+        slices.push(merge_slice(at, &mine, orders, &thumbnails(at), &dir)?);
     }
-    let all_thumbnails: Vec<PathBuf> = slices.iter().flat_map(|s| thumbnails(s.c0)).collect();
+    let all_thumbnails: Vec<PathBuf> = slices.iter().flat_map(|s| thumbnails(s.at)).collect();
     chart::write_montage(&out.join("thumbnails.png"), &all_thumbnails, 4)?;
     let table = summary::write(out, &slices)?;
     print!("{table}");
@@ -97,14 +101,14 @@ pub fn merge(spec: &DiagramSpec, cases: &[Case], out: &Path, force: bool) -> Res
     Ok(())
 }
 
-/// Merge the cases `results` of one c̄0, extrapolated at the diagram's `orders`, into `dir`: `diagram.csv`, `cases.csv`,
+/// Merge the cases `results` of one slice `at`, extrapolated at the diagram's `orders`, into `dir`: `diagram.csv`, `cases.csv`,
 /// `transitions.csv`, `reference.csv`, `table.txt`, `diagram.png`, `errors.png` and
 /// `thumbnails.png` (of the pictures `thumbnails`).
 ///
 /// # Errors
 /// I/O and drawing errors.
 pub fn merge_slice(
-    c0: f64,
+    at: SliceAt,
     results: &[CaseResult],
     orders: Orders,
     thumbnails: &[PathBuf],
@@ -114,7 +118,7 @@ pub fn merge_slice(
     let (v_lo, v_hi) = results.iter().fold((1.0f64, 0.0f64), |(a, b), r| {
         (a.min(r.v).min(r.v_target), b.max(r.v).max(r.v_target))
     });
-    let reference = Reference::new(c0, v_lo - 0.03, v_hi + 0.03);
+    let reference = Reference::at(at, v_lo - 0.03, v_hi + 0.03);
     report::write_csv(dir, &points, results, &reference)?;
     let extrapolated = report::branch_points(&points, |p| (p.v, p.e));
     let found: Vec<(String, [f64; 3], Kind)> = report::transitions(&points, &reference)
@@ -141,18 +145,21 @@ pub fn merge_slice(
         .collect();
     chart::write_chart(
         &dir.join("diagram.png"),
-        c0,
+        at,
         &reference,
         &extrapolated,
         &report::branch_points(&points, |p| (p.finest().v, p.finest().e)),
         &drawn,
     )?;
-    report::write_error_chart(dir, c0, &points, &reference)?;
+    report::write_error_chart(dir, at, &points, &reference)?;
     chart::write_montage(&dir.join("thumbnails.png"), thumbnails, 4)?;
-    let table = report::table(&points, results, orders, &reference);
+    let mut table = report::table(&points, results, orders, &reference);
+    if at.ade.is_some() {
+        table.push_str(&report::da_table(&points, &reference));
+    }
     crate::commands::study::write_text(dir, "table.txt", &table)?;
     Ok(Slice {
-        c0,
+        at,
         dir: dir.to_path_buf(),
         points,
         results: results.to_vec(),

@@ -121,13 +121,18 @@ fn start_shape(spec: &DiagramSpec, case: &Case) -> Result<axisym::Solution> {
         Error::config(
             spec.key_of(case),
             format!(
-                "no reference shape at v = {}, c0 = {}: {why}",
-                case.v, case.c0
+                "no reference shape at v = {}, {}: {why}",
+                case.v,
+                case.slice().describe()
             ),
         )
     };
-    let shape = axisym::solve(case.branch, case.v, &Options::default().with_c0(case.c0))
-        .map_err(|e| at(e.to_string()))?;
+    let opts = Options::default().with_c0(case.c0);
+    let shape = match case.ade {
+        Some((alpha, da0)) => axisym::ade_solution(case.branch, case.v, alpha, da0, &opts),
+        None => axisym::solve(case.branch, case.v, &opts),
+    }
+    .map_err(|e| at(e.to_string()))?;
     if !case.branch.up_down_symmetric() && shape.asymmetry() < reference::ASYMMETRIC {
         return Err(at(format!(
             "the {} branch does not exist here (its continuation is up-down symmetric)",
@@ -167,7 +172,7 @@ fn check_width(spec: &DiagramSpec, case: &Case, shape: &axisym::Solution) -> Res
 /// The sharp starts of every `(branch, v, c̄0)` of `cases`, in parallel, in the order of
 /// `cases`, each checked by [`check_width`].
 fn start_shapes(spec: &DiagramSpec, cases: &[Case]) -> Result<Vec<axisym::Solution>> {
-    let same = |a: &Case, b: &Case| a.branch == b.branch && a.v == b.v && a.c0 == b.c0;
+    let same = |a: &Case, b: &Case| a.branch == b.branch && a.v == b.v && a.slice() == b.slice();
     let mut keys: Vec<&Case> = Vec::new();
     for c in cases {
         if !keys.iter().any(|k| same(k, c)) {
@@ -195,7 +200,7 @@ fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
     use std::fmt::Write as _;
     let shapes = start_shapes(spec, cases)?;
     let mut text = String::from(
-        "case  branch        v      c0R0   R0/ε  grid (full box)    computed points  thinnest (ε)\n",
+        "case  branch        v     slice   R0/ε  grid (full box)    computed points  thinnest (ε)\n",
     );
     let mut total = 0usize;
     for (c, s) in cases.iter().zip(&shapes) {
@@ -208,7 +213,7 @@ fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
             c.index,
             c.branch.name(),
             c.v,
-            c.c0,
+            c.slice().value(),
             c.r0,
             n[0],
             n[1],
@@ -236,8 +241,8 @@ fn list(spec: &DiagramSpec, cases: &[Case]) -> Result<()> {
 /// One line about a finished case.
 fn line(r: &CaseResult, done: usize, of: usize) -> String {
     format!(
-        "[{done}/{of}] case {} {} v0 = {} c0R0 = {} R0 = {}ε: v {:.5} e {:.5} ({}, {} iterations, residual {:.1e}, {:.1} s)",
-        r.index, r.branch, r.v_target, r.c0, r.r0, r.v, r.e, r.stopped, r.iterations, r.residual, r.wall_seconds
+        "[{done}/{of}] case {} {} v0 = {} {} R0 = {}ε: v {:.5} e {:.5} ({}, {} iterations, residual {:.1e}, {:.1} s)",
+        r.index, r.branch, r.v_target, r.slice().describe(), r.r0, r.v, r.e, r.stopped, r.iterations, r.residual, r.wall_seconds
     )
 }
 

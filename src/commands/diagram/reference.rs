@@ -2,6 +2,7 @@
 //! branches of [`crate::analysis::axisym`] on a fine grid of reduced volumes, interpolated, and
 //! their transition volumes.
 
+use super::spec::SliceAt;
 use crate::analysis::axisym::{self, Branch, Options};
 use crate::analysis::curves::{crossings, cubic_at};
 use rayon::prelude::*;
@@ -13,11 +14,17 @@ const DV: f64 = 0.005;
 /// stomatocyte branch counts when its odd modes exceed this (as in `vesicle axisym --c0`).
 pub use crate::analysis::axisym::phase::ASYMMETRIC;
 
-/// The reference branches, each `(v, e)` in increasing v.
+/// Grid spacing in v of an ADE reference (each point a solve of the ADE functional, about 2 s;
+/// the cubic interpolant of w(v) on it is exact to ~1e-6).
+const DV_ADE: f64 = 0.02;
+
+/// The reference branches, each `(v, e)` in increasing v (with ADE, e is w).
 #[derive(Clone, Debug)]
 pub struct Reference {
     /// Per branch of [`Branch::ALL`].
     pub curves: Vec<Vec<(f64, f64)>>,
+    /// With ADE, `(v, Δa)` per branch (empty otherwise).
+    pub da_curves: Vec<Vec<(f64, f64)>>,
 }
 
 /// A transition: where two branches' energies cross.
@@ -28,6 +35,58 @@ pub const TRANSITIONS: [(Branch, Branch); 3] = [
 ];
 
 impl Reference {
+    /// The reference of the diagram slice `at` over `[v_lo, v_hi]`: [`Reference::new`] at its
+    /// c̄0, or with ADE each branch's stationary ADE shape ([`axisym::ade_solution`]) at α,
+    /// Δa0 and c̄0 every 0.02 in v, its w and Δa (the stable shape of least w where a branch has
+    /// several; none where it has no stable one).
+    pub fn at(at: SliceAt, v_lo: f64, v_hi: f64) -> Self {
+        let Some((alpha, da0)) = at.ade else {
+            return Self::new(at.c0, v_lo, v_hi);
+        };
+        let lo = (v_lo / DV_ADE).floor().max(1.0) as usize;
+        let hi = ((v_hi / DV_ADE).ceil() as usize).min((0.99 / DV_ADE).round() as usize);
+        let opts = Options::default().with_c0(at.c0);
+        let solved: Vec<Vec<(f64, f64, f64)>> = Branch::ALL
+            .par_iter()
+            .map(|&b| {
+                (lo..=hi)
+                    .into_par_iter()
+                    .filter_map(|i| {
+                        let v = i as f64 * DV_ADE;
+                        let s = axisym::ade_solution(b, v, alpha, da0, &opts).ok()?;
+                        let keep = b.up_down_symmetric() || s.asymmetry() > ASYMMETRIC;
+                        keep.then_some((s.v, s.w, s.da()))
+                    })
+                    .collect()
+            })
+            .collect();
+        Reference {
+            curves: solved
+                .iter()
+                .map(|c| c.iter().map(|p| (p.0, p.1)).collect())
+                .collect(),
+            da_curves: solved
+                .iter()
+                .map(|c| c.iter().map(|p| (p.0, p.2)).collect())
+                .collect(),
+        }
+    }
+
+    /// Δa of `branch` at `v` (ADE references; NaN otherwise or outside the branch).
+    pub fn da(&self, branch: Branch, v: f64) -> f64 {
+        let i = Branch::ALL
+            .iter()
+            .position(|b| *b == branch)
+            .expect("listed");
+        let Some(c) = self.da_curves.get(i) else {
+            return f64::NAN;
+        };
+        match (c.first(), c.last()) {
+            (Some(lo), Some(hi)) if v >= lo.0 && v <= hi.0 && c.len() > 1 => cubic_at(c, v),
+            _ => f64::NAN,
+        }
+    }
+
     /// Follow every branch at reduced spontaneous curvature `c0` over `[v_lo, v_hi]` (clipped
     /// to (0, 1]) in steps of 0.005; a stomatocyte branch keeps only its up–down asymmetric
     /// shapes ([`ASYMMETRIC`]).
@@ -48,7 +107,10 @@ impl Reference {
                     .collect()
             })
             .collect();
-        Reference { curves }
+        Reference {
+            curves,
+            da_curves: Vec::new(),
+        }
     }
 
     /// The curve of `branch`.

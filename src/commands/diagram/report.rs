@@ -6,7 +6,7 @@
 use super::case::CaseResult;
 use super::extrapolate::{Orders, Point};
 use super::reference::{Reference, TRANSITIONS};
-use super::spec::branch_named;
+use super::spec::{branch_named, SliceAt};
 use crate::analysis::axisym::Branch;
 use crate::analysis::curves::crossings;
 use crate::error::{Error, Result};
@@ -285,7 +285,38 @@ pub fn table(
     s
 }
 
-/// `errors.png` (at reduced spontaneous curvature `c0`): the relative error `e / e_ref(v) − 1` in percent against v, per branch (in
+/// The Δa rows of an ADE slice: per point the finest resolution's Δa and the extrapolated Δa∞
+/// against the reference's Δa at the same v (the finest's v, and v∞).
+pub fn da_table(points: &[Point], reference: &Reference) -> String {
+    let mut s = format!(
+        "{:<12} {:>6} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}\n",
+        "branch", "v0", "Δa", "Δa_ref", "error", "Δa∞", "Δa_ref", "error"
+    );
+    for p in points {
+        let b = branch_named(&p.branch).expect("listed");
+        let f = p.finest();
+        let (fd, rf, rd) = (
+            f.da.unwrap_or(f64::NAN),
+            reference.da(b, f.v),
+            reference.da(b, p.v),
+        );
+        let _ = writeln!(
+            s,
+            "{:<12} {:>6.3} | {:>8.5} {:>8.5} {:>+8.3}% | {:>8.5} {:>8.5} {:>+8.3}%",
+            p.branch,
+            p.v_target,
+            fd,
+            rf,
+            100.0 * (fd / rf - 1.0),
+            p.da,
+            rd,
+            100.0 * (p.da / rd - 1.0)
+        );
+    }
+    s
+}
+
+/// `errors.png` (of the slice `at`): the relative error `e / e_ref(v) − 1` (w with ADE) in percent against v, per branch (in
 /// the diagram's colours), of the extrapolated points (solid line, filled circles) and of the
 /// finest resolution's raw points (dashed line, squares); a line breaks where the reference
 /// does not reach v.
@@ -294,20 +325,24 @@ pub fn table(
 /// `Error::Output` if drawing or writing fails.
 pub fn write_error_chart(
     out: &Path,
-    c0: f64,
+    at: SliceAt,
     points: &[Point],
     reference: &Reference,
 ) -> Result<()> {
     use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
-    let title = if c0 == 0.0 {
+    let title = if at.c0 == 0.0 && at.ade.is_none() {
         "Phase-field error against the axisymmetric reference, per branch".to_string()
     } else {
-        format!("Phase-field error against the axisymmetric reference at c0 R0 = {c0}, per branch")
+        format!(
+            "Phase-field error against the axisymmetric reference at {}, per branch",
+            at.describe()
+        )
     };
+    let energy = if at.ade.is_some() { "w" } else { "e" };
     let mut fig = Figure::new(
         title,
         Axis::linear("reduced volume v"),
-        Axis::linear("e / e_reference(v) − 1  [%]"),
+        Axis::linear(format!("{energy} / {energy}_reference(v) − 1  [%]")),
     );
     fig.legend = Corner::UpperRight;
     for (i, b) in Branch::ALL.into_iter().enumerate() {

@@ -29,6 +29,10 @@ pub struct DiagramSpec {
     /// `branches` there.
     #[serde(default)]
     pub branches_by_c0: BTreeMap<String, Branches>,
+    /// Area-difference elasticity: the diagram's slices are the preferred Δa0 at one α (and
+    /// the single c̄0 of `c0`); each case's scene holds `"ade"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ade: Option<AdeSlices>,
     /// R0/ε of each resolution (ε = 1); at least two for the extrapolation in ε/R0.
     pub r0: Vec<f64>,
     /// ε/h (the grid spacing is h = 1/eps_over_h).
@@ -56,6 +60,58 @@ pub struct DiagramSpec {
     /// every start shape must keep at the coarsest resolution, in ε.
     #[serde(default = "default_min_width")]
     pub min_width: f64,
+}
+
+/// `ade` of a diagram file: α and the Δa0 of each slice.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AdeSlices {
+    /// α = κ̄/κ.
+    pub alpha: f64,
+    /// The preferred reduced area differences Δa0, a slice each.
+    pub da0: Vec<f64>,
+}
+
+/// Where a slice of a diagram sits: its reduced spontaneous curvature and, with ADE, α and Δa0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SliceAt {
+    /// c̄0 = c0 R0.
+    pub c0: f64,
+    /// (α, Δa0) with area-difference elasticity.
+    pub ade: Option<(f64, f64)>,
+}
+
+impl SliceAt {
+    /// The value that orders and labels the slices: Δa0 with ADE, else c̄0.
+    pub fn value(&self) -> f64 {
+        self.ade.map_or(self.c0, |(_, da0)| da0)
+    }
+
+    /// The slice's parameter as the tables head it: `c0R0` or `da0`.
+    pub fn label(&self) -> &'static str {
+        if self.ade.is_some() {
+            "da0"
+        } else {
+            "c0R0"
+        }
+    }
+
+    /// The slice's folder name (`c0_0.50`, `da0_1.10`).
+    pub fn folder(&self) -> String {
+        match self.ade {
+            Some((_, da0)) => format!("da0_{}", c0_tag(da0)),
+            None => format!("c0_{}", c0_tag(self.c0)),
+        }
+    }
+
+    /// A few words for titles: `c0 R0 = 0.5`, `α = 1.4, Δa0 = 1.1` (with c̄0 when not 0).
+    pub fn describe(&self) -> String {
+        match self.ade {
+            Some((alpha, da0)) if self.c0 == 0.0 => format!("α = {alpha}, Δa0 = {da0}"),
+            Some((alpha, da0)) => format!("α = {alpha}, Δa0 = {da0}, c0 R0 = {}", self.c0),
+            None => format!("c0 R0 = {}", self.c0),
+        }
+    }
 }
 
 fn zero_c0() -> Vec<f64> {
@@ -98,6 +154,8 @@ pub struct Case {
     pub branch: Branch,
     /// Reduced spontaneous curvature c̄0 = c0 R0.
     pub c0: f64,
+    /// (α, Δa0) of an ADE diagram.
+    pub ade: Option<(f64, f64)>,
     /// Target reduced volume (the axisymmetric start's).
     pub v: f64,
     /// R0/ε.
@@ -108,11 +166,14 @@ impl Case {
     /// Folder name of the case: `<index>_<branch>_v<v>_r<r0>` at c̄0 = 0 (the names of the
     /// c0 = 0 diagram), `<index>_<branch>_v<v>_c<c̄0>_r<r0>` otherwise (`c0.50`, `cm1.00`).
     pub fn folder(&self) -> String {
-        let c0 = if self.c0 == 0.0 {
+        let mut c0 = if self.c0 == 0.0 {
             String::new()
         } else {
             format!("_c{}", c0_tag(self.c0))
         };
+        if let Some((_, da0)) = self.ade {
+            c0 += &format!("_a{}", c0_tag(da0));
+        }
         format!(
             "{:03}_{}_v{:.4}{c0}_r{}",
             self.index,
@@ -125,6 +186,14 @@ impl Case {
     /// c0 of the scene, in units of ε: c̄0 / (R0/ε).
     pub fn scene_c0(&self) -> f64 {
         self.c0 / self.r0
+    }
+
+    /// The slice the case belongs to.
+    pub fn slice(&self) -> SliceAt {
+        SliceAt {
+            c0: self.c0,
+            ade: self.ade,
+        }
     }
 }
 
@@ -169,6 +238,7 @@ impl DiagramSpec {
     /// `Error::Config` naming the key and the reason.
     pub fn validate(&self) -> Result<()> {
         self.validate_c0()?;
+        self.validate_ade()?;
         for c0 in &self.c0 {
             let (key, branches) = self.branches_at(*c0);
             let Some(branches) = branches else {
@@ -232,6 +302,62 @@ impl DiagramSpec {
         Ok(())
     }
 
+    /// `ade`: α > 0 finite, distinct finite Δa0 in (0, 3), one c̄0.
+    fn validate_ade(&self) -> Result<()> {
+        let Some(a) = &self.ade else {
+            return Ok(());
+        };
+        if !(a.alpha > 0.0 && a.alpha <= 1e3) {
+            return Err(Error::config(
+                "ade.alpha",
+                format!("need 0 < α ≤ 1000, got {}", a.alpha),
+            ));
+        }
+        if a.da0.is_empty() {
+            return Err(Error::config("ade.da0", "list at least one value"));
+        }
+        if let Some(d) = a.da0.iter().find(|d| !(**d > 0.0 && **d < 3.0)) {
+            return Err(Error::config(
+                "ade.da0",
+                format!("need 0 < Δa0 < 3, got {d}"),
+            ));
+        }
+        let mut sorted = a.da0.clone();
+        sorted.sort_by(f64::total_cmp);
+        if sorted.windows(2).any(|w| w[1] - w[0] < 1e-6) {
+            return Err(Error::config("ade.da0", "values must be distinct"));
+        }
+        if self.c0.len() != 1 {
+            return Err(Error::config(
+                "c0",
+                "an ade diagram takes one c0 (its slices are the values of ade.da0)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The slices in increasing order of their value: each c̄0, or (ADE) each Δa0 at the one
+    /// c̄0.
+    pub fn slices(&self) -> Vec<SliceAt> {
+        match &self.ade {
+            Some(a) => {
+                let mut da0 = a.da0.clone();
+                da0.sort_by(f64::total_cmp);
+                da0.into_iter()
+                    .map(|d| SliceAt {
+                        c0: self.c0[0],
+                        ade: Some((a.alpha, d)),
+                    })
+                    .collect()
+            }
+            None => self
+                .c0_sorted()
+                .into_iter()
+                .map(|c0| SliceAt { c0, ade: None })
+                .collect(),
+        }
+    }
+
     /// The `c0` list: distinct finite values, `branches_by_c0` keys among them.
     fn validate_c0(&self) -> Result<()> {
         if self.c0.is_empty() {
@@ -284,14 +410,14 @@ impl DiagramSpec {
         format!("{}.{}", self.branches_at(case.c0).0, case.branch.name())
     }
 
-    /// Every case, numbered: c̄0 in increasing order, in each the branches in diagram order
+    /// Every case, numbered: the slices (c̄0, or Δa0) in increasing order, in each the branches in diagram order
     /// (prolate, oblate, stomatocyte), each reduced volume in increasing order, each resolution
     /// in increasing R0.
     pub fn cases(&self) -> Vec<Case> {
         let mut r0 = self.r0.clone();
         r0.sort_by(f64::total_cmp);
         let mut out = Vec::new();
-        for c0 in self.c0_sorted() {
+        for SliceAt { c0, ade } in self.slices() {
             let Some(branches) = self.branches_at(c0).1 else {
                 continue;
             };
@@ -307,6 +433,7 @@ impl DiagramSpec {
                             index: out.len(),
                             branch,
                             c0,
+                            ade,
                             v,
                             r0: r,
                         });

@@ -26,6 +26,7 @@ const PHASE_V: (f64, f64, f64) = (0.5, 0.99, 0.01);
 /// # Errors
 /// I/O and drawing errors.
 pub fn write(out: &Path, slices: &[Slice]) -> Result<String> {
+    let column = column(slices);
     for name in ["diagram.csv", "cases.csv"] {
         let mut s = String::new();
         for (k, slice) in slices.iter().enumerate() {
@@ -37,24 +38,24 @@ pub fn write(out: &Path, slices: &[Slice]) -> Result<String> {
             for (i, line) in text.lines().enumerate() {
                 match (i, k) {
                     (0, 0) => {
-                        let _ = writeln!(s, "c0,{line}");
+                        let _ = writeln!(s, "{column},{line}");
                     }
                     (0, _) => {}
                     _ => {
-                        let _ = writeln!(s, "{},{line}", slice.c0);
+                        let _ = writeln!(s, "{},{line}", slice.at.value());
                     }
                 }
             }
         }
         crate::commands::study::write_text(out, name, &s)?;
     }
-    let mut s = String::from("c0,transition,reference,extrapolated,finest,kind\n");
+    let mut s = format!("{column},transition,reference,extrapolated,finest,kind\n");
     for slice in slices {
         for (name, [r, e, f], kind) in found(slice) {
             let _ = writeln!(
                 s,
                 "{},{name},{r:.5},{e:.5},{f:.5},{}",
-                slice.c0,
+                slice.at.value(),
                 kind.as_str()
             );
         }
@@ -88,8 +89,9 @@ fn error(slice: &Slice, branch: &str, v: f64, e: f64) -> f64 {
 /// e), the transitions, the iterations per case against R0 and the summed case times.
 fn table(slices: &[Slice]) -> String {
     let mut s = String::new();
+    let label = slices.first().map_or("c0R0", |sl| sl.at.label());
     for slice in slices {
-        let _ = writeln!(s, "=== c0 R0 = {} ===", slice.c0);
+        let _ = writeln!(s, "=== {} ===", slice.at.describe());
         s.push_str(&slice.table);
         s.push('\n');
     }
@@ -97,7 +99,7 @@ fn table(slices: &[Slice]) -> String {
     let _ = writeln!(
         s,
         "{:>6} {:<12} {:>6} | {:>8} {:>8} {:>8} {:>9} | {:>8} {:>8} {:>8} {:>9}",
-        "c0R0", "branch", "v0", "e_finest", "e_ref", "error", "Δe", "e∞", "e_ref", "error", "Δe"
+        label, "branch", "v0", "e_finest", "e_ref", "error", "Δe", "e∞", "e_ref", "error", "Δe"
     );
     for slice in slices {
         for p in &slice.points {
@@ -107,7 +109,7 @@ fn table(slices: &[Slice]) -> String {
             let _ = writeln!(
                 s,
                 "{:>6} {:<12} {:>6.3} | {:>8.5} {:>8.5} {:>+7.3}% {:>+9.5} | {:>8.5} {:>8.5} {:>+7.3}% {:>+9.5}",
-                slice.c0,
+                slice.at.value(),
                 p.branch,
                 p.v_target,
                 f.e,
@@ -125,9 +127,14 @@ fn table(slices: &[Slice]) -> String {
         slices
             .iter()
             .flat_map(|sl| {
-                sl.points
-                    .iter()
-                    .map(move |p| (get(sl, p).abs(), sl.c0, p.branch.clone(), p.v_target))
+                sl.points.iter().map(move |p| {
+                    (
+                        get(sl, p).abs(),
+                        sl.at.value(),
+                        p.branch.clone(),
+                        p.v_target,
+                    )
+                })
             })
             .fold((0.0f64, 0.0, String::new(), 0.0), |a, b| {
                 if b.0 > a.0 {
@@ -149,7 +156,7 @@ fn table(slices: &[Slice]) -> String {
     ] {
         let _ = writeln!(
             s,
-            "worst |error|, {what}: {:.3}% ({} v0 = {} at c0 R0 = {})",
+            "worst |error|, {what}: {:.3}% ({} v0 = {} at {label} = {})",
             100.0 * w.0,
             w.2,
             w.3,
@@ -159,14 +166,14 @@ fn table(slices: &[Slice]) -> String {
     let _ = writeln!(
         s,
         "{:>6} {:<24} {:>9} {:>13} {:>17} {:>17}",
-        "c0R0", "crossing", "kind", "reference", "extrapolated", "finest"
+        label, "crossing", "kind", "reference", "extrapolated", "finest"
     );
     for slice in slices {
         for (name, [r, e, f], kind) in found(slice) {
             let _ = writeln!(
                 s,
                 "{:>6} {:<24} {:>9} {:>13.4} {:>8.4} ({:+.4}) {:>8.4} ({:+.4})",
-                slice.c0,
+                slice.at.value(),
                 name,
                 match kind {
                     Kind::Transition => "lowest",
@@ -190,7 +197,7 @@ fn table(slices: &[Slice]) -> String {
     let _ = writeln!(
         s,
         "L-BFGS iterations per case, mean (max), against R0:\n{:>6} {}",
-        "c0R0",
+        label,
         heads.iter().map(|h| format!("{h:>16}")).collect::<String>()
     );
     for slice in slices {
@@ -208,7 +215,7 @@ fn table(slices: &[Slice]) -> String {
                 format!("{:>16}", format!("{mean:.0} ({max})"))
             })
             .collect();
-        let _ = writeln!(s, "{:>6} {cells}", slice.c0);
+        let _ = writeln!(s, "{:>6} {cells}", slice.at.value());
     }
     let cases: usize = slices.iter().map(|sl| sl.results.len()).sum();
     let seconds: f64 = slices
@@ -232,13 +239,16 @@ fn table(slices: &[Slice]) -> String {
 /// and the phase-field transitions as markers (extrapolated: black crosses; finest
 /// resolution: grey diamonds).
 fn phase_chart(slices: &[Slice]) -> Figure {
+    if slices.first().is_some_and(|s| s.at.ade.is_some()) {
+        return ade_phase_chart(slices);
+    }
     let (lo, hi, dv) = PHASE_V;
     let n = ((hi - lo) / dv).round() as usize;
     let vs: Vec<f64> = (0..=n).map(|i| lo + dv * i as f64).collect();
     let opts = Options::default();
     let reference: Vec<phase::Slice> = slices
         .iter()
-        .map(|s| phase::slice(s.c0, &vs, &opts))
+        .map(|s| phase::slice(s.at.c0, &vs, &opts))
         .collect();
     let mut fig = phase_figure(&reference);
     fig.title = "lowest-energy shape: axisymmetric reference, phase-field transitions".into();
@@ -269,7 +279,7 @@ fn phase_chart(slices: &[Slice]) -> Figure {
                 s.transitions
                     .iter()
                     .filter(|(_, _, kind)| *kind == Kind::Transition)
-                    .map(move |(_, t, _)| (t[which], s.c0))
+                    .map(move |(_, t, _)| (t[which], s.at.value()))
             })
             .filter(|(v, _)| v.is_finite())
             .collect()
@@ -289,14 +299,87 @@ fn phase_chart(slices: &[Slice]) -> Figure {
     fig
 }
 
-/// `errors.png`: `e / e_ref(v) − 1` in percent against c̄0, per branch, extrapolated (filled
-/// markers) and at the finest resolution (crosses).
-fn error_chart(slices: &[Slice]) -> Figure {
+/// The first column of the merged CSV files: `c0`, or `da0` for an ADE diagram.
+fn column(slices: &[Slice]) -> &'static str {
+    if slices.first().is_some_and(|s| s.at.ade.is_some()) {
+        "da0"
+    } else {
+        "c0"
+    }
+}
+
+/// `phase.png` of an ADE diagram: the transitions on the (v, Δa0) plane, the reference's
+/// (joined across Δa0, dashed) and the phase field's (extrapolated: black crosses; finest:
+/// grey diamonds).
+fn ade_phase_chart(slices: &[Slice]) -> Figure {
+    let alpha = slices.first().and_then(|s| s.at.ade).map_or(0.0, |a| a.0);
     let mut fig = Figure::new(
-        "Phase-field error of e against the axisymmetric reference, per c0 R0",
-        Axis::linear("reduced spontaneous curvature c0·R0"),
-        Axis::linear("e / e_reference(v) − 1  [%]"),
+        format!("ADE transitions at α = {alpha}: axisymmetric reference and phase field"),
+        Axis::linear("reduced volume v"),
+        Axis::linear("preferred area difference Δa0"),
     );
+    fig.legend = Corner::UpperRight;
+    let names: Vec<String> = slices
+        .iter()
+        .flat_map(|s| found(s).map(|(n, _, _)| n.clone()))
+        .fold(Vec::new(), |mut v, n| {
+            if !v.contains(&n) {
+                v.push(n);
+            }
+            v
+        });
+    for (k, name) in names.iter().enumerate() {
+        let pts = |which: usize| -> Vec<(f64, f64)> {
+            slices
+                .iter()
+                .flat_map(|s| {
+                    found(s)
+                        .filter(|(n, _, _)| n == name)
+                        .map(move |(_, t, _)| (t[which], s.at.value()))
+                })
+                .filter(|(v, _)| v.is_finite())
+                .collect()
+        };
+        fig.push(Series::new(
+            format!("{name} (reference)"),
+            pts(0),
+            colour(6 + k),
+            Mark::DashedPoints(Shape::Circle),
+        ));
+        fig.push(Series::new(
+            format!("{name}, phase field extrapolated"),
+            pts(1),
+            [0, 0, 0],
+            Mark::Points(Shape::Cross),
+        ));
+        fig.push(Series::new(
+            format!("{name}, phase field finest R0"),
+            pts(2),
+            [150, 150, 150],
+            Mark::Points(Shape::Diamond),
+        ));
+    }
+    fig
+}
+
+/// `errors.png`: `e / e_ref(v) − 1` in percent against c̄0 (or w against Δa0), per branch,
+/// extrapolated (filled markers) and at the finest resolution (crosses).
+fn error_chart(slices: &[Slice]) -> Figure {
+    let ade = slices.first().is_some_and(|s| s.at.ade.is_some());
+    let (title, x, y) = if ade {
+        (
+            "Phase-field error of w against the axisymmetric ADE reference, per Δa0",
+            "preferred area difference Δa0",
+            "w / w_reference(v) − 1  [%]",
+        )
+    } else {
+        (
+            "Phase-field error of e against the axisymmetric reference, per c0 R0",
+            "reduced spontaneous curvature c0·R0",
+            "e / e_reference(v) − 1  [%]",
+        )
+    };
+    let mut fig = Figure::new(title, Axis::linear(x), Axis::linear(y));
     fig.legend = Corner::LowerLeft;
     let shapes = [Shape::Circle, Shape::Square, Shape::Triangle];
     for (i, b) in Branch::ALL.iter().enumerate() {
@@ -313,7 +396,7 @@ fn error_chart(slices: &[Slice]) -> Figure {
                             } else {
                                 (p.v, p.e)
                             };
-                            (sl.c0, 100.0 * error(sl, &p.branch, v, e))
+                            (sl.at.value(), 100.0 * error(sl, &p.branch, v, e))
                         })
                 })
                 .collect()
