@@ -204,6 +204,22 @@ pub struct Placement {
     pub shift: f64,
     /// Keep the mirror plane across the axis (up–down symmetric branches only, no shift).
     pub z_mirror: bool,
+    /// R0/ε whose diagram grid the case uses, if not its own: a series on one box, so that
+    /// the box's size (rounded to fast transform lengths) does not jump between its cases.
+    pub grid_r0: Option<f64>,
+}
+
+impl Placement {
+    /// The case at R0 = `r0`, h = ε/`eps_over_h`, centred, on its own diagram box.
+    pub fn centred(r0: f64, eps_over_h: f64) -> Self {
+        Placement {
+            r0,
+            eps_over_h,
+            shift: 0.0,
+            z_mirror: true,
+            grid_r0: None,
+        }
+    }
 }
 
 /// What a case measured.
@@ -213,6 +229,8 @@ pub struct Relaxed {
     pub v: f64,
     /// Reduced bending energy of the phase field.
     pub e: f64,
+    /// The sharp reference's e at the reduced volume reached, `v` (the diagram's comparison).
+    pub e_ref: f64,
     /// L-BFGS iterations.
     pub iterations: usize,
     /// Final residual.
@@ -227,7 +245,11 @@ pub struct Relaxed {
 
 /// The points `start` placed as `at` computes (its reduced box), without running it.
 pub fn points(start: &Start, at: Placement, relax: &Relaxation) -> usize {
-    let n = grid_for(&start.shape, at.r0, &relax.diagram(at.eps_over_h));
+    let n = grid_for(
+        &start.shape,
+        at.grid_r0.unwrap_or(at.r0),
+        &relax.diagram(at.eps_over_h),
+    );
     let planes = if mirrored(start, at) { 3 } else { 2 };
     n.iter().product::<usize>() >> planes
 }
@@ -251,7 +273,7 @@ pub fn relax(
 ) -> Result<Relaxed> {
     let clock = Instant::now();
     let spec = relax.diagram(at.eps_over_h);
-    let n = grid_for(&start.shape, at.r0, &spec);
+    let n = grid_for(&start.shape, at.grid_r0.unwrap_or(at.r0), &spec);
     let h = 1.0 / at.eps_over_h;
     let symmetry: &[&str] = if mirrored(start, at) {
         &["x", "y", "z"]
@@ -286,13 +308,33 @@ pub fn relax(
     let last = sim.record();
     let full = problem.grid.unfold(sim.engine().phi());
     let level = crate::analysis::levelset::measure_refined(&full, 3, scene.h);
+    let v = level.reduced_volume;
     Ok(Relaxed {
-        v: level.reduced_volume,
+        v,
         e: last.reduced_energy,
+        e_ref: e_ref(start, v)?,
         iterations: last.step,
         residual: last.residual,
         converged: stopped.as_str() == "stationary",
         points: problem.grid.len(),
         wall: clock.elapsed().as_secs_f64(),
     })
+}
+
+/// The sharp reference's e at `v` on `start`'s branch (c0 = 0).
+///
+/// # Errors
+/// `Error::Config` (field `shapes`) if the branch has no shape at `v`.
+pub fn e_ref(start: &Start, v: f64) -> Result<f64> {
+    axisym::solve(start.branch, v, &Options::default())
+        .map(|s| s.e)
+        .map_err(|e| {
+            Error::config(
+                "shapes",
+                format!(
+                    "no sharp {} at the reduced volume reached, v = {v}: {e}",
+                    start.branch.name()
+                ),
+            )
+        })
 }

@@ -14,6 +14,10 @@
 //!   0 and each fraction of h in `shifts` (on the box without the mirror plane across the axis),
 //!   and their spread max − min.
 //!
+//! Every case of a (shape, h/ε) runs on one box, the largest R0's. The same two figures are
+//! given for e − e_ref(v), the error against the sharp reference at the v reached (v itself
+//! wanders a little with R0 and the lattice, and e with it along the branch).
+//!
 //! The pinning figure of a (shape, h/ε) is the larger of the two for e; the table of the
 //! program ([`crate::problem::pinning`]) holds the largest over the shapes. Writes
 //! `pinning.txt`, `cases.csv` (every case), `pinning.csv` (per shape and h/ε), `bound.csv` (per
@@ -47,7 +51,9 @@ pub struct Case {
     pub v: f64,
     /// Reduced energy.
     pub e: f64,
-    /// Residual of the quadratic fit in (ε/R0)² (R0 series; NaN in the shift series).
+    /// e − e_ref(v): the error against the sharp reference at the v reached.
+    pub de: f64,
+    /// Residual of the quadratic fit of e in (ε/R0)² (R0 series; NaN in the shift series).
     pub e_fit_residual: f64,
     /// L-BFGS iterations.
     pub iterations: usize,
@@ -71,6 +77,9 @@ impl Row for Case {
             Column::both("shift", "shift/h", Format::Plain, |r| r.shift.into()),
             Column::both("v", "v", Format::Fixed(6), |r| r.v.into()),
             Column::both("e", "e", Format::Fixed(7), |r| r.e.into()),
+            Column::both("e_minus_e_ref", "e - e_ref(v)", Format::Sci(4), |r| {
+                r.de.into()
+            }),
             Column::both("e_fit_residual", "e - fit", Format::Sci(2), |r| {
                 r.e_fit_residual.into()
             }),
@@ -104,6 +113,11 @@ pub struct Pinning {
     pub e_shift: f64,
     /// max − min of v over the shifts.
     pub v_shift: f64,
+    /// Largest |residual| of the quadratic fit of e − e_ref(v) over the R0 series (the error
+    /// at the v reached: what is left once v's own wander along the branch is taken out).
+    pub de_fit: f64,
+    /// max − min of e − e_ref(v) over the shifts.
+    pub de_shift: f64,
     /// The pinning figure: the larger of `e_fit` and `e_shift`.
     pub bound: f64,
     /// Wall seconds of the shape's cases at this h/ε.
@@ -129,6 +143,18 @@ impl Row for Pinning {
             Column::both("v_shift_spread", "v: shift spread", Format::Sci(2), |r| {
                 r.v_shift.into()
             }),
+            Column::both(
+                "de_fit_residual",
+                "e-e_ref: fit res.",
+                Format::Sci(2),
+                |r| r.de_fit.into(),
+            ),
+            Column::both(
+                "de_shift_spread",
+                "e-e_ref: shift spr.",
+                Format::Sci(2),
+                |r| r.de_shift.into(),
+            ),
             Column::both("e_pinning", "e pinning", Format::Sci(2), |r| r.bound.into()),
             Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| {
                 r.wall.into()
@@ -243,12 +269,21 @@ fn measure_one(
 ) -> Result<(Vec<Case>, Pinning)> {
     let label = start.label();
     let h_over_eps = 1.0 / eps_over_h;
+    // Every case of the shape at this h on one box (the largest R0's), so that the box's size,
+    // rounded to fast transform lengths, does not jump along the series: a box 4ε wider moves
+    // the reduced volume reached by 5e-4 and e with it along the branch.
+    let grid_r0 = r0
+        .iter()
+        .chain([&spec.shift_r0])
+        .cloned()
+        .fold(0.0, f64::max);
     let one = |series: &'static str, r0: f64, shift: f64| -> Result<Case> {
         let at = Placement {
             r0,
             eps_over_h,
             shift,
             z_mirror: series == "r0",
+            grid_r0: Some(grid_r0),
         };
         let r = shape_case::relax(start, at, &spec.relaxation, None)
             .map_err(|e| e.within(&format!("{label}, R0 = {r0}, h/eps = {h_over_eps}")))?;
@@ -274,6 +309,7 @@ fn measure_one(
             shift,
             v: r.v,
             e: r.e,
+            de: r.e - r.e_ref,
             e_fit_residual: f64::NAN,
             iterations: r.iterations,
             residual: r.residual,
@@ -297,7 +333,9 @@ fn measure_one(
             c.e_fit_residual = *r;
         }
     }
+    let de: Vec<f64> = cases.iter().map(|c| c.de).collect();
     let (e_fit, v_fit) = (worst(e_res), worst(fit::quadratic(&x, &v)));
+    let de_fit = worst(fit::quadratic(&x, &de));
     let shifts = std::iter::once(0.0).chain(spec.shifts.iter().cloned());
     let shifted = shifts
         .map(|s| one("shift", spec.shift_r0, s))
@@ -311,7 +349,7 @@ fn measure_one(
             });
         hi - lo
     };
-    let (e_shift, v_shift) = (spread(|c| c.e), spread(|c| c.v));
+    let (e_shift, v_shift, de_shift) = (spread(|c| c.e), spread(|c| c.v), spread(|c| c.de));
     cases.extend(shifted);
     let wall = cases.iter().map(|c| c.wall).sum();
     let pinning = Pinning {
@@ -321,6 +359,8 @@ fn measure_one(
         v_fit,
         e_shift,
         v_shift,
+        de_fit,
+        de_shift,
         bound: e_fit.max(e_shift),
         wall,
     };

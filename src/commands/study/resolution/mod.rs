@@ -21,7 +21,6 @@ use super::harness::{Report, Study};
 use super::levels::pareto;
 use super::shape_case::{self, Placement, Start};
 use super::table::{self, Column, Format, Row};
-use crate::analysis::axisym::{self, Options};
 use crate::analysis::curves::power_fit;
 use crate::error::{Error, Result};
 use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
@@ -204,21 +203,6 @@ impl Study for ResolutionStudy {
     }
 }
 
-/// The sharp reference's e at `v` on `start`'s branch.
-fn e_ref(start: &Start, v: f64) -> Result<f64> {
-    axisym::solve(start.branch, v, &Options::default())
-        .map(|s| s.e)
-        .map_err(|e| {
-            Error::config(
-                "shapes",
-                format!(
-                    "no sharp {} at the reduced volume reached, v = {v}: {e}",
-                    start.branch.name()
-                ),
-            )
-        })
-}
-
 /// Every route on `start`.
 fn shape_routes(start: &Start, spec: &Spec) -> Result<Vec<Route>> {
     let label = start.label();
@@ -226,7 +210,7 @@ fn shape_routes(start: &Start, spec: &Spec) -> Result<Vec<Route>> {
     let mut r0 = spec.r0.clone();
     r0.sort_by(f64::total_cmp);
     let row = |route, h_over_eps, r0: String, v, e, wall, iterations| -> Result<Route> {
-        let e_ref = e_ref(start, v)?;
+        let e_ref = shape_case::e_ref(start, v)?;
         Ok(Route {
             shape: label.clone(),
             route,
@@ -241,12 +225,7 @@ fn shape_routes(start: &Start, spec: &Spec) -> Result<Vec<Route>> {
         })
     };
     let case = |eps_over_h: f64, r0: f64, patch: Option<&serde_json::Value>| {
-        let at = Placement {
-            r0,
-            eps_over_h,
-            shift: 0.0,
-            z_mirror: true,
-        };
+        let at = Placement::centred(r0, eps_over_h);
         let r = shape_case::relax(start, at, &spec.relaxation, patch)
             .map_err(|e| e.within(&format!("{label}, R0 = {r0}, h = eps/{eps_over_h}")))?;
         if !r.converged {
@@ -274,12 +253,7 @@ fn shape_routes(start: &Start, spec: &Spec) -> Result<Vec<Route>> {
         let h = 1.0 / eps_over_h;
         let mut done = Vec::new();
         for &r in &r0 {
-            let at = Placement {
-                r0: r,
-                eps_over_h,
-                shift: 0.0,
-                z_mirror: true,
-            };
+            let at = Placement::centred(r, eps_over_h);
             if spec
                 .max_points
                 .is_some_and(|m| shape_case::points(start, at, &spec.relaxation) > m)
