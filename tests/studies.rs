@@ -546,3 +546,48 @@ fn resolution_quick_study_runs() {
     );
     charts_exist(&out, &["resolution"]);
 }
+
+/// Bad pinning and resolution files are refused with exit 2 before anything runs, naming the
+/// key: too few R0 for the fit, a shift outside (0, 1), an unknown key inside `relaxation`, an
+/// unknown branch, a start thinner than `min_width` at the smallest R0 (the stomatocyte at
+/// v = 0.55 is 0.19 R0 thick: 1.9ε at R0 = 10ε).
+#[test]
+fn bad_pinning_and_resolution_files_name_the_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    let base = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(format!("runs/studies/{name}.json")).unwrap())
+            .unwrap()
+    };
+    let refused = |name: &str, v: serde_json::Value, key: &str| {
+        let bad = tmp.path().join("bad.json");
+        std::fs::write(&bad, v.to_string()).unwrap();
+        let out = tmp.path().join("o");
+        let o = vesicle(&[
+            "study",
+            name,
+            bad.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(2), "{name} {key}: {err}");
+        assert!(err.contains(&format!("`{key}`")), "{name} {key}: {err}");
+        assert!(!out.exists());
+    };
+    let mut v = base("pinning");
+    v["r0"] = serde_json::json!([16, 17]);
+    refused("pinning", v, "r0");
+    let mut v = base("pinning");
+    v["shifts"] = serde_json::json!([0.5, 1.0]);
+    refused("pinning", v, "shifts");
+    let mut v = base("pinning");
+    v["relaxation"]["stop_residul"] = serde_json::json!(1e-7);
+    refused("pinning", v, "relaxation.stop_residul");
+    let mut v = base("resolution");
+    v["shapes"][1]["branch"] = serde_json::json!("discocyte");
+    refused("resolution", v, "shapes[1].branch");
+    let mut v = base("resolution");
+    v["shapes"][0] = serde_json::json!({"branch": "stomatocyte", "v": 0.55});
+    v["r0"] = serde_json::json!([10, 12]);
+    refused("resolution", v, "shapes[0].v");
+}

@@ -249,11 +249,12 @@ pub fn quadratic(x: &[f64], y: &[f64]) -> Option<Vec<f64>> {
         if m[col][col].abs() < 1e-12 {
             return None;
         }
-        for row in 0..3 {
+        let pivot_row = m[col];
+        for (row, r) in m.iter_mut().enumerate() {
             if row != col {
-                let f = m[row][col] / m[col][col];
-                for k in col..4 {
-                    m[row][k] -= f * m[col][k];
+                let f = r[col] / pivot_row[col];
+                for (x, p) in r.iter_mut().zip(pivot_row).skip(col) {
+                    *x -= f * p;
                 }
             }
         }
