@@ -1166,7 +1166,7 @@ fn check_prints_the_pinning_bound_of_the_scenes_spacing() {
         .find(|l| l.contains("lattice pinning"))
         .unwrap_or_else(|| panic!("no pinning note in:\n{}", stderr(&o)))
         .to_string();
-    assert!(line.contains(&format!("{:.0e}", at_eps.e)), "{line}");
+    assert!(line.contains(&format!("{:.1e}", at_eps.e)), "{line}");
     assert!(
         line.contains("recommended") && line.contains("study pinning"),
         "{line}"
@@ -1183,7 +1183,7 @@ fn check_prints_the_pinning_bound_of_the_scenes_spacing() {
     let err = stderr(&o);
     let line = err.lines().find(|l| l.contains("lattice pinning")).unwrap();
     assert!(
-        line.contains(&format!("{:.0e}", bound(0.5).value())),
+        line.contains(&format!("{:.1e}", bound(0.5).value())),
         "{line}"
     );
     assert!(!line.contains("recommended"), "{line}");

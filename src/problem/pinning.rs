@@ -21,19 +21,19 @@ pub struct Row {
 pub const TABLE: [Row; 4] = [
     Row {
         h_over_eps: 1.0 / 3.0,
-        e: 1.0e-5,
+        e: 2.5e-5,
     },
     Row {
         h_over_eps: 0.5,
-        e: 5.0e-5,
+        e: 5.5e-5,
     },
     Row {
         h_over_eps: 2.0 / 3.0,
-        e: 2.0e-4,
+        e: 8.9e-5,
     },
     Row {
         h_over_eps: 1.0,
-        e: 1.0e-3,
+        e: 3.7e-3,
     },
 ];
 
@@ -94,8 +94,8 @@ pub fn note(h_over_eps: f64) -> String {
     };
     let advice = if h_over_eps > RECOMMENDED_H_OVER_EPS + 1e-9 {
         format!(
-            "; h = ε/{:.0} is recommended for stationary energies ({:.0e})",
-            1.0 / RECOMMENDED_H_OVER_EPS,
+            "; h/ε = {:.3} or finer is recommended for stationary energies ({:.1e})",
+            RECOMMENDED_H_OVER_EPS,
             bound(RECOMMENDED_H_OVER_EPS).value()
         )
     } else {
@@ -103,7 +103,7 @@ pub fn note(h_over_eps: f64) -> String {
     };
     format!(
         "lattice pinning: at h/ε = {h_over_eps:.3} a stationary reduced energy e is pinned {how} \
-         {:.0e} (absolute; {SOURCE}){advice}",
+         {:.1e} (absolute; {SOURCE}){advice}",
         b.value()
     )
 }
