@@ -1139,3 +1139,58 @@ fn help_texts_have_examples() {
         assert!(stdout(&o).contains(sub), "--help lists {sub}");
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// The lattice pinning note
+// ---------------------------------------------------------------------------------------------
+
+/// `check` prints the pinning bound of the scene's h/ε (a note, not a refusal: exit 0). At
+/// h = ε (`runs/prolate3d.json`) it is the h = ε row of the table measured by `study pinning`
+/// (`vesicle::problem::pinning::TABLE`, read here, not copied) and recommends h = ε/2; at
+/// h = ε/2 (the same scene on 96³ points) it gives the ε/2 row and recommends nothing; an FD
+/// scene, whose own spatial error is far larger, gets no pinning note.
+#[test]
+fn check_prints_the_pinning_bound_of_the_scenes_spacing() {
+    use vesicle::problem::pinning::{bound, TABLE};
+    let at_eps = TABLE
+        .iter()
+        .find(|r| r.h_over_eps == 1.0)
+        .expect("h = eps row");
+    let o = vesicle([
+        OsStr::new("check"),
+        runs_dir().join("prolate3d.json").as_os_str(),
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let line = stderr(&o)
+        .lines()
+        .find(|l| l.contains("lattice pinning"))
+        .unwrap_or_else(|| panic!("no pinning note in:\n{}", stderr(&o)))
+        .to_string();
+    assert!(line.contains(&format!("{:.1e}", at_eps.e)), "{line}");
+    assert!(
+        line.contains("recommended") && line.contains("study pinning"),
+        "{line}"
+    );
+    let o = vesicle([
+        OsStr::new("check"),
+        runs_dir().join("prolate3d.json").as_os_str(),
+        OsStr::new("--set"),
+        OsStr::new("h=0.5"),
+        OsStr::new("--set"),
+        OsStr::new("n=[96,96,96]"),
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let err = stderr(&o);
+    let line = err.lines().find(|l| l.contains("lattice pinning")).unwrap();
+    assert!(
+        line.contains(&format!("{:.1e}", bound(0.5).value())),
+        "{line}"
+    );
+    assert!(!line.contains("recommended"), "{line}");
+    let o = vesicle([
+        OsStr::new("check"),
+        runs_dir().join("prolate3d_fd.json").as_os_str(),
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(!stderr(&o).contains("lattice pinning"), "{}", stderr(&o));
+}

@@ -453,3 +453,141 @@ fn budding_quick_study_stays_a_symmetric_prolate() {
         &["budding_neck_eps", "budding_neck_r0", "budding_skewness"],
     );
 }
+
+/// `study pinning --quick`: the prolate (v0 0.75) at R0 = 10 … 10.75ε and a half-cell shift, at
+/// h = ε and ε/2. A finer lattice pins less: the pinning figure at h = ε/2 must be at least 10×
+/// below that at h = ε (measured 1.9e-6 against 8.6e-4, a factor 460; the issue measured 2.0e-4
+/// against 4.2e-5 at R0 = 16ε with the fit alone), and at h = ε it must be above 1e-5 (the
+/// corrugation this study exists to show; measured 8.6e-4). Every case met its residual.
+#[test]
+fn pinning_quick_study_shows_less_pinning_on_a_finer_lattice() {
+    let (_tmp, out, stdout) = quick_study("pinning");
+    assert!(stdout.contains("pinning bound"), "{stdout}");
+    let rows = csv_fields(&out.join("pinning.csv"));
+    assert_eq!(
+        header(&out.join("pinning.csv")),
+        "shape,h_over_eps,e_fit_residual,e_shift_spread,v_fit_residual,v_shift_spread,de_fit_residual,de_shift_spread,e_pinning,wall_seconds"
+    );
+    let at = |h: f64| -> f64 {
+        rows.iter()
+            .find(|r| (r[1].parse::<f64>().unwrap() - h).abs() < 1e-9)
+            .unwrap_or_else(|| panic!("row h/eps = {h}"))[8]
+            .parse()
+            .unwrap()
+    };
+    let (coarse, fine) = (at(1.0), at(0.5));
+    assert!(coarse > 1e-5, "pinning at h = eps {coarse}");
+    assert!(fine * 10.0 < coarse, "h = eps/2: {fine}, h = eps: {coarse}");
+    let cases = csv_fields(&out.join("cases.csv"));
+    assert_eq!(cases.len(), 2 * (4 + 2), "four R0 and two shifts per h");
+    for c in &cases {
+        let residual: f64 = c[10].parse().unwrap();
+        assert!(residual <= 1e-6, "{c:?}");
+    }
+    charts_exist(&out, &["pinning"]);
+}
+
+/// The program's pinning table (`vesicle::problem::pinning::TABLE`, printed by `check` and
+/// `run`) is the committed study's `runs/results/pinning/bound.csv`: the same h/ε and the same
+/// bounds to the two significant digits the table keeps.
+#[test]
+fn the_pinning_table_is_the_committed_study() {
+    use vesicle::problem::pinning::TABLE;
+    let rows = csv_fields(Path::new("runs/results/pinning/bound.csv"));
+    assert_eq!(rows.len(), TABLE.len(), "{rows:?}");
+    for (row, t) in rows.iter().zip(TABLE) {
+        let (h, e): (f64, f64) = (row[0].parse().unwrap(), row[1].parse().unwrap());
+        assert!((h - t.h_over_eps).abs() < 1e-9, "{h} against {t:?}");
+        assert!((e / t.e - 1.0).abs() < 0.05, "{e} against {t:?}");
+    }
+}
+
+/// `study resolution --quick`: the prolate at R0 = 10, 12, 14ε, h = ε, by L-BFGS, extrapolated
+/// and adaptive SBDF2. Every route's error against the sharp reference is below 8% (measured
+/// 5.4%, 3.6%, 2.6% by L-BFGS at R0 = 10, 12, 14ε), the L-BFGS error falls as R0 grows (it is
+/// O((ε/R0)²), far above the pinning at h = ε), the extrapolation over 10 + 14ε is more
+/// accurate than L-BFGS at 14ε alone (its point: measured 5.9e-3 against 2.6e-2), and SBDF2
+/// reaches the same e as L-BFGS at R0 = 10ε within 1e-4 (one stationary state, two routes).
+#[test]
+fn resolution_quick_study_runs() {
+    let (_tmp, out, stdout) = quick_study("resolution");
+    assert!(stdout.contains("Pareto front"), "{stdout}");
+    let rows = csv_fields(&out.join("routes.csv"));
+    let find = |route: &str, r0: &str| -> Vec<String> {
+        rows.iter()
+            .find(|r| r[1] == route && r[3] == r0)
+            .unwrap_or_else(|| panic!("{route} {r0} in {rows:?}"))
+            .clone()
+    };
+    let num = |r: &[String], i: usize| -> f64 { r[i].parse().unwrap() };
+    for r in &rows {
+        assert!(num(r, 7) < 0.08, "{r:?}");
+    }
+    let lbfgs: Vec<f64> = ["10", "12", "14"]
+        .iter()
+        .map(|r0| num(&find("L-BFGS", r0), 7))
+        .collect();
+    assert!(lbfgs.windows(2).all(|w| w[1] < w[0]), "{lbfgs:?}");
+    assert!(
+        num(&find("extrapolated", "10+14"), 7) < lbfgs[2],
+        "{rows:?}"
+    );
+    let sbdf2 = num(&find("SBDF2 adaptive", "10"), 5);
+    assert!(
+        (sbdf2 - num(&find("L-BFGS", "10"), 5)).abs() < 1e-4,
+        "{rows:?}"
+    );
+    assert!(
+        std::fs::read_to_string(out.join("levels.csv"))
+            .unwrap()
+            .lines()
+            .count()
+            == 3
+    );
+    charts_exist(&out, &["resolution"]);
+}
+
+/// Bad pinning and resolution files are refused with exit 2 before anything runs, naming the
+/// key: too few R0 for the fit, a shift outside (0, 1), an unknown key inside `relaxation`, an
+/// unknown branch, a start thinner than `min_width` at the smallest R0 (the stomatocyte at
+/// v = 0.55 is 0.19 R0 thick: 1.9ε at R0 = 10ε).
+#[test]
+fn bad_pinning_and_resolution_files_name_the_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    let base = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(format!("runs/studies/{name}.json")).unwrap())
+            .unwrap()
+    };
+    let refused = |name: &str, v: serde_json::Value, key: &str| {
+        let bad = tmp.path().join("bad.json");
+        std::fs::write(&bad, v.to_string()).unwrap();
+        let out = tmp.path().join("o");
+        let o = vesicle(&[
+            "study",
+            name,
+            bad.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(2), "{name} {key}: {err}");
+        assert!(err.contains(&format!("`{key}`")), "{name} {key}: {err}");
+        assert!(!out.exists());
+    };
+    let mut v = base("pinning");
+    v["r0"] = serde_json::json!([16, 17]);
+    refused("pinning", v, "r0");
+    let mut v = base("pinning");
+    v["shifts"] = serde_json::json!([0.5, 1.0]);
+    refused("pinning", v, "shifts");
+    let mut v = base("pinning");
+    v["relaxation"]["stop_residul"] = serde_json::json!(1e-7);
+    refused("pinning", v, "relaxation.stop_residul");
+    let mut v = base("resolution");
+    v["shapes"][1]["branch"] = serde_json::json!("discocyte");
+    refused("resolution", v, "shapes[1].branch");
+    let mut v = base("resolution");
+    v["shapes"][0] = serde_json::json!({"branch": "stomatocyte", "v": 0.55});
+    v["r0"] = serde_json::json!([10, 12]);
+    refused("resolution", v, "shapes[0].v");
+}

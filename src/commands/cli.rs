@@ -254,6 +254,21 @@ enum Study {
         after_help = "Example:\n  vesicle study budding runs/studies/budding.json --out out/budding [--quick]"
     )]
     Budding(StudyArgs),
+    /// Lattice pinning of stationary energies: e and v of shapes started from the sharp
+    /// reference and relaxed by L-BFGS, over R0 steps of a fraction of ε and sub-cell shifts of
+    /// the centre, at several h/ε; the residual of a smooth fit in (ε/R0)² and the spread over
+    /// the shifts, per shape and h/ε, and the bound the program prints.
+    #[command(
+        after_help = "Example:\n  vesicle study pinning runs/studies/pinning.json --out out/pinning [--quick]"
+    )]
+    Pinning(StudyArgs),
+    /// Speed against accuracy for stationary shapes: e's error against the sharp axisymmetric
+    /// reference and the wall time per (h/ε, ε/R0) and route (L-BFGS at one R0, extrapolation in
+    /// ε/R0 over two or three R0, adaptive SBDF2), with the Pareto front.
+    #[command(
+        after_help = "Example:\n  vesicle study resolution runs/studies/resolution.json --out out/resolution [--quick]"
+    )]
+    Resolution(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -411,6 +426,14 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Budding(args)) => {
             args.run(crate::commands::study::budding::Budding::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Pinning(args)) => {
+            args.run(crate::commands::study::pinning::PinningStudy::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Resolution(args)) => {
+            args.run(crate::commands::study::resolution::ResolutionStudy::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Convergence(args)) => {

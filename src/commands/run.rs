@@ -425,6 +425,11 @@ pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
             scene.dt / b
         );
     }
+    // The pinning table was measured on the spectral discretisation (FD's own spatial error
+    // is far larger at these spacings: the precision study).
+    if scene.method == crate::problem::config::Method::Spectral && scene.dim >= 2 {
+        s += &format!("\n  {}", crate::problem::pinning::note(scene.h / scene.eps));
+    }
     s
 }
 

@@ -9,7 +9,9 @@ use crate::commands::study::budding::Budding;
 use crate::commands::study::convergence::Convergence;
 use crate::commands::study::file;
 use crate::commands::study::harness::{self, Report, Study};
+use crate::commands::study::pinning::PinningStudy;
 use crate::commands::study::precision::Precision;
+use crate::commands::study::resolution::ResolutionStudy;
 use crate::commands::study::stability::Stability;
 use crate::commands::study::stationary::{self, Stationary};
 use crate::error::{Error, Result};
@@ -84,6 +86,8 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         Precision::NAME => run_file::<Precision>(args),
         Stability::NAME => run_file::<Stability>(args),
         Budding::NAME => run_file::<Budding>(args),
+        PinningStudy::NAME => run_file::<PinningStudy>(args),
+        ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
         "stationary" => run_stationary(args),
         _ => Err(Error::config(
             "study",
@@ -169,6 +173,8 @@ mod tests {
             "precision",
             "stability",
             "budding",
+            "pinning",
+            "resolution",
         ] {
             assert!(
                 names.iter().any(|n| n == expected),

@@ -7,6 +7,8 @@
 //!   the sphere's phase-field error in R0/ε).
 //! * [`limit`]: e(x) = e0 + c x^p, the extrapolated limit e0: linear in (e0, c) at each p, the
 //!   p with the least residual kept (the fit of [`crate::analysis::curves`], shared with the diagram).
+//! * [`quadratic`]: y = a + b x + c x² by least squares, and its residuals (the lattice pinning
+//!   study: what a smooth law in (ε/R0)² leaves unexplained).
 //! * [`resolved`]: how many of a refinement's errors lie above its floor (round-off, or the
 //!   reference's own error): the error laws are fitted to those only.
 
@@ -214,6 +216,58 @@ pub fn limit(x: &[f64], e: &[f64]) -> Option<Limit> {
 /// Factor by which an error must fall from one refinement to the next to count as resolved.
 pub const FALL: f64 = 0.9;
 
+/// The residuals y_i − q(x_i) of the least-squares quadratic q(x) = a + b x + c x² through
+/// `(x, y)` (x centred and scaled to [−1, 1] before the normal equations are solved); `None`
+/// with fewer than three distinct x or a non-finite value.
+pub fn quadratic(x: &[f64], y: &[f64]) -> Option<Vec<f64>> {
+    if x.len() != y.len() || x.len() < 3 || x.iter().chain(y).any(|v| !v.is_finite()) {
+        return None;
+    }
+    let (lo, hi) = x
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if hi <= lo {
+        return None;
+    }
+    let t: Vec<f64> = x.iter().map(|v| (2.0 * v - lo - hi) / (hi - lo)).collect();
+    // Normal equations M k = r for k = (a, b, c) in powers of t.
+    let mut m = [[0.0f64; 4]; 3];
+    for (ti, yi) in t.iter().zip(y) {
+        let p = [1.0, *ti, ti * ti];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += p[i] * p[j];
+            }
+            m[i][3] += p[i] * yi;
+        }
+    }
+    for col in 0..3 {
+        let pivot = (col..3).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
+        m.swap(col, pivot);
+        if m[col][col].abs() < 1e-12 {
+            return None;
+        }
+        let pivot_row = m[col];
+        for (row, r) in m.iter_mut().enumerate() {
+            if row != col {
+                let f = r[col] / pivot_row[col];
+                for (x, p) in r.iter_mut().zip(pivot_row).skip(col) {
+                    *x -= f * p;
+                }
+            }
+        }
+    }
+    let k: Vec<f64> = (0..3).map(|i| m[i][3] / m[i][i]).collect();
+    Some(
+        t.iter()
+            .zip(y)
+            .map(|(ti, yi)| yi - (k[0] + k[1] * ti + k[2] * ti * ti))
+            .collect(),
+    )
+}
+
 /// The number of leading errors of `e` (ordered coarse to fine) that are above the floor: the
 /// run over which each error is finite, positive and at most [`FALL`] × the previous one. From
 /// the first that is not (the error has stopped falling: round-off, a stop tolerance, or the
@@ -289,6 +343,31 @@ mod tests {
         assert_eq!(resolved(&[3.2e-6, 1.7e-6, 3.2e-6, 3.3e-8]), 2);
         assert_eq!(resolved(&[1e-3, f64::NAN, 1e-5]), 1);
         assert_eq!(resolved(&[]), 0);
+    }
+
+    /// A quadratic law is fitted exactly (residuals below 1e-12 at x ~ 4e-3, where a fit in
+    /// raw powers would lose six digits), a zig-zag of ±1e-4 on it leaves residuals of that
+    /// size, and two distinct x give no fit.
+    #[test]
+    fn quadratic_residuals_measure_what_is_not_smooth() {
+        let x: Vec<f64> = [16.0, 16.25, 16.5, 16.75, 17.0]
+            .iter()
+            .map(|r: &f64| (1.0 / r).powi(2))
+            .collect();
+        let smooth: Vec<f64> = x.iter().map(|v| 1.5 - 3.0 * v + 40.0 * v * v).collect();
+        let r = quadratic(&x, &smooth).unwrap();
+        assert!(r.iter().all(|v| v.abs() < 1e-12), "{r:?}");
+        let zigzag: Vec<f64> = smooth
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + if i % 2 == 0 { 1e-4 } else { -1e-4 })
+            .collect();
+        let worst = quadratic(&x, &zigzag)
+            .unwrap()
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(worst > 3e-5 && worst < 2e-4, "{worst}");
+        assert!(quadratic(&[1.0, 1.0, 2.0], &[1.0, 2.0, 3.0]).is_none());
     }
 
     /// Fewer than two usable points give no fit; non-positive errors are left out.

@@ -8,6 +8,9 @@
 //!   [`levels`]: the speed-against-accuracy rows and Pareto front of `precision` and
 //!   `stationary`;
 //! * [`stationary`]: what each `stop_residual` buys per engine, on a scene file or a study file;
+//! * [`pinning`]: the lattice pinning of stationary energies against h/ε; [`resolution`]: speed
+//!   against accuracy for stationary shapes against the sharp reference (both on the shapes of
+//!   [`shape_case`]);
 //! * [`budding`]: quasi-static budding in c̄0 through stationary states beside the sharp pear
 //!   branch.
 
@@ -18,7 +21,10 @@ pub mod file;
 pub mod fit;
 pub mod harness;
 pub mod levels;
+pub mod pinning;
 pub mod precision;
+pub mod resolution;
+pub mod shape_case;
 pub mod stability;
 pub mod stationary;
 pub mod table;
