@@ -115,6 +115,7 @@ impl Relaxation {
             c0: vec![0.0],
             branches: Default::default(),
             branches_by_c0: Default::default(),
+            ade: None,
             r0: vec![],
             eps_over_h,
             margin: self.margin,
