@@ -50,7 +50,7 @@ pub(crate) mod solver;
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
 pub use pear::{
     follow_pear, l_pear, l_pear_radii, neck_limit, pear_at, pear_bifurcation, prolate_updown, symmetric_fold,
-    Bifurcation, NeckLimit, PearBranch, PearEnd,
+    Bifurcation, NeckLimit, PearBranch, PearEnd, NECK_FIT,
 };
 
 /// The branches of the diagram: the three of c0 = 0 ([`Branch::ALL`]) and the pear.
