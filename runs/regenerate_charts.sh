@@ -102,7 +102,7 @@ group_budding() {
     for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
 }
 group_axisym_c0() {
-    vesicle axisym --c0=-1,-0.5,0,0.5,1,1.5,2,2.5,3 --nodes 481 --out "$out" --force
+    vesicle axisym --c0=-1,-0.5,0,0.5,1,1.5,2,2.5,3,3.5,4 --nodes 481 --out "$out" --force
     same_names "$out" axisym_c0
 }
 diagram() {
