@@ -49,8 +49,8 @@ pub(crate) mod solver;
 
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
 pub use pear::{
-    follow_pear, l_pear, l_pear_radii, neck_limit, pear_at, pear_bifurcation, prolate_updown, symmetric_fold,
-    Bifurcation, NeckLimit, PearBranch, PearEnd, NECK_FIT,
+    follow_pear, l_pear, l_pear_radii, neck_limit, pear_at, pear_bifurcation, prolate_updown,
+    symmetric_fold, Bifurcation, NeckLimit, PearBranch, PearEnd, NECK_FIT,
 };
 
 /// The branches of the diagram: the three of c0 = 0 ([`Branch::ALL`]) and the pear.
@@ -243,7 +243,12 @@ impl Solution {
         let s = &self.s;
         (2..r.len().saturating_sub(2))
             .filter(|&i| r[i] <= r[i - 1] && r[i] < r[i + 1])
-            .map(|i| (s[i], parabola_min(s[i - 1], s[i], s[i + 1], r[i - 1], r[i], r[i + 1])))
+            .map(|i| {
+                (
+                    s[i],
+                    parabola_min(s[i - 1], s[i], s[i + 1], r[i - 1], r[i], r[i + 1]),
+                )
+            })
             .min_by(|a, b| a.1.total_cmp(&b.1))
     }
 

@@ -602,7 +602,11 @@ pub fn symmetric_fold(branch: Branch, v_start: f64, opts: &Options) -> Option<(S
 
 /// Euclidean distance of two coefficient vectors.
 fn dist(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// The extreme value of the parabola through `(x0, y0)`, `(x1, y1)`, `(x2, y2)`.
