@@ -252,7 +252,7 @@ fn stable_pear_below_the_prolate_at_c0_3() {
 
 /// The lowest state at c̄0 = 3 changes from prolate (above) to pear (below) where their
 /// energies cross: bisection on e_pear(v) − e_prolate(v) (`pear_at`, `solve`) from [0.81, 0.84]
-/// to 1e-6. Measured 0.82371, the same at K = 80 and 160 (the pear's energies agree to 1e-10
+/// to 1e-6. Measured 0.8237 (0.823681 in the K = 160 summary; the pear's energies agree to 1e-10
 /// there, the prolate's to 1e-13), so the resolved crossing lies 1.7e-3 above the 0.822 of
 /// issue #51, whose pear energy is higher (0.1863 against 0.18543 at v = 0.789: a less
 /// resolved neck, which moves the crossing down). Asserted: the crossing above 0.822 and
