@@ -21,7 +21,7 @@
 #   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations)                  505 s, measured
-#   axisym_c0        axisym --c0=-1,...,3 --nodes 481                ~7 min (438 s wall recorded)
+#   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     49 s, measured
 #   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121               61 s, measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
@@ -118,7 +118,7 @@ group_axisym_ade() {
     same_names "$out" axisym_ade
 }
 group_axisym_c0() {
-    vesicle axisym --c0=-1,-0.5,0,0.5,1,1.5,2,2.5,3 --nodes 481 --out "$out" --force
+    vesicle axisym --c0=-1,-0.5,0,0.5,1,1.5,2,2.5,3,3.5,4 --nodes 481 --out "$out" --force
     same_names "$out" axisym_c0
 }
 diagram() {

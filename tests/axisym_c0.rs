@@ -5,7 +5,15 @@
 //! --c0`.
 
 use std::process::Command;
-use vesicle::analysis::axisym::{self, phase, Branch, Options, PearEnd};
+use std::sync::OnceLock;
+use vesicle::analysis::axisym::{self, phase, Branch, Options, PearBranch, PearEnd, Solution};
+
+/// The pear branch at c̄0 = 3 (default options: 241 nodes, K = 80, neck stop 0.005 R0),
+/// followed once for the tests that read it (about 15 s).
+fn pear3() -> &'static PearBranch {
+    static BRANCH: OnceLock<PearBranch> = OnceLock::new();
+    BRANCH.get_or_init(|| axisym::follow_pear(0.5, &Options::default().with_c0(3.0)))
+}
 
 /// The sphere (v = 1) has e = (1 − c̄0/2)² for every c̄0, negative included, and integrated
 /// mean curvature J = ∮2H dA/(8πR0) = 1: Clenshaw–Curtis integrates the sphere's integrands
@@ -97,11 +105,13 @@ fn converges_in_modes_at_c0() {
 /// has the prolate's energy at its own v to 1e-6 (the branches touch at the pitchfork, the
 /// gap is O((v − v_b)²)), the prolate there is up–down symmetric and the pear not. The pitchfork
 /// is subcritical (the pear first rises in v, folds, and comes back down), and the
-/// continuation stops at the neck threshold below the fold.
+/// continuation follows it past the fold until the neck is at most 0.005 R0 (measured: 0.00496
+/// at v = 0.7699, above L_pear = 0.7458, where it would close), every shape on the way
+/// converged (residual below the tolerance) and the stop below the fold.
 #[test]
 fn pear_bifurcates_from_the_prolate_and_narrows() {
     let opts = Options::default().with_c0(3.0);
-    let pear = axisym::follow_pear(0.5, &opts);
+    let pear = pear3();
     let b = pear.bifurcation.as_ref().expect("a bifurcation at c0 = 3");
     assert!(b.v > 0.72 && b.v < 0.8, "v_b = {}", b.v);
     assert!(b.prolate.asymmetry() == 0.0);
@@ -119,8 +129,12 @@ fn pear_bifurcates_from_the_prolate_and_narrows() {
     let top = pear.shapes.iter().map(|s| s.v).fold(0.0, f64::max);
     match pear.end {
         Some(PearEnd::Neck { v, neck }) => {
-            assert!(neck < opts.neck_min && neck > 0.0);
+            assert!(neck <= 0.005 && neck > 0.0, "neck {neck}");
             assert!(v < top, "stop at {v} above the fold {top}");
+            assert!(
+                v > axisym::l_pear(3.0).unwrap(),
+                "open neck above L_pear: {v}"
+            );
         }
         ref other => panic!("pear ended with {other:?}"),
     }
@@ -128,6 +142,7 @@ fn pear_bifurcates_from_the_prolate_and_narrows() {
         top > b.v + 0.05,
         "subcritical: the pear rises in v (fold at {top})"
     );
+    assert!(pear.shapes.iter().all(|s| s.residual < opts.tol));
 }
 
 /// The budding limit `L_pear`: two spheres of radii R1 ≥ R2 (units of R0) with the area of
@@ -204,25 +219,23 @@ fn prolate_loses_updown_stability_near_3_64() {
 }
 
 /// At c̄0 = 3, v = 0.789 a stable pear lies below the prolate. The pear branch, followed past
-/// its fold (v = 0.8903) with the neck threshold lowered to 0.005 R0, comes back down in v
-/// below the prolate; solved there at v = 0.789 it is up–down asymmetric, has a neck, and its
-/// energy is below the prolate's by more than 0.05. The prolate is converged (its energy
-/// 0.2487 is the independent solver's to 1e-3). The pear's narrow neck is not resolved by
-/// K = 80 modes (measured: neck 0.043 R0 against the independent 0.0104, e = 0.190 against
-/// 0.1863; K = 120 gives 0.033 and 0.188): being a Ritz (restricted) minimum its energy can
-/// only lie above the resolved one, so it is asserted between 0.1863 − 1e-3 and 0.1863 + 0.006,
-/// and the comparison with the prolate (0.06 apart) holds a fortiori.
+/// its fold (v = 0.8903) to neck 0.005 R0, comes back down in v below the prolate; solved
+/// there at v = 0.789 it is up–down asymmetric with an open neck. With the modes clustered at
+/// the neck the pear is converged in K: K = 80 and K = 160 give e = 0.1854252747 and neck
+/// 0.010329 R0 alike (to 1e-10 and 1e-6). The independent solver of issue #51 gives neck
+/// 0.0104 and e = 0.1863 (9e-4 above this resolved Ritz minimum); the prolate's 0.2487 is
+/// matched to 1e-3. Asserted: the neck within 5e-4 of 0.0104, e within 1.5e-3 of 0.1863, and
+/// the pear below the prolate by more than 0.05.
 #[test]
 fn stable_pear_below_the_prolate_at_c0_3() {
-    let mut opts = Options::default().with_c0(3.0);
-    opts.neck_min = 0.005;
+    let opts = Options::default().with_c0(3.0);
     let v = 0.789;
-    let branch = axisym::follow_pear(0.745, &opts);
-    let pear = axisym::pear_at(v, &branch, &opts).expect("a pear after the fold at v = 0.789");
+    let pear = axisym::pear_at(v, pear3(), &opts).expect("a pear after the fold at v = 0.789");
     let prolate = axisym::solve(Branch::Prolate, v, &opts).unwrap();
     assert!((pear.v - v).abs() < 1e-10);
     assert!(pear.asymmetry() > 0.1 && !pear.self_intersecting());
-    assert!(pear.neck().is_some_and(|n| n < 0.05));
+    let neck = pear.neck().expect("a neck");
+    assert!((neck - 0.0104).abs() < 5e-4, "neck {neck}");
     assert!(
         (prolate.e - 0.2487).abs() < 1e-3,
         "prolate e = {}",
@@ -234,40 +247,84 @@ fn stable_pear_below_the_prolate_at_c0_3() {
         pear.e,
         prolate.e
     );
-    assert!(
-        pear.e > 0.1863 - 1e-3 && pear.e < 0.1863 + 0.006,
-        "pear e = {}",
-        pear.e
-    );
+    assert!((pear.e - 0.1863).abs() < 1.5e-3, "pear e = {}", pear.e);
 }
 
-/// Towards the budding limit the pear's poles become those of L_pear's two spheres: the sum of
-/// the pole curvatures ψ' (1/R at a sphere's pole) approaches the neck condition
-/// 1/R1 + 1/R2 = c̄0 = 3 as v falls towards L_pear(3) = 0.7458. Far from it (v = 0.868, just
-/// below the fold) the sum is above 4 (measured 4.22 with K = 80); near it (v = 0.76, 0.75,
-/// 0.7465) within 0.2 of 3 (measured 3.08, 3.14, 2.95: the unresolved neck, 0.042 R0 instead of
-/// closing, leaves an error of that size: K = 120 gives 3.04, 3.15, 2.95 and K = 160 3.21,
-/// 3.15, 2.95). The unit sphere has both pole curvatures 1.
+/// The lowest state at c̄0 = 3 changes from prolate (above) to pear (below) where their
+/// energies cross: bisection on e_pear(v) − e_prolate(v) (`pear_at`, `solve`) from [0.81, 0.84]
+/// to 1e-6. Measured 0.8237 (0.823681 in the K = 160 summary; the pear's energies agree to 1e-10
+/// there, the prolate's to 1e-13), so the resolved crossing lies 1.7e-3 above the 0.822 of
+/// issue #51, whose pear energy is higher (0.1863 against 0.18543 at v = 0.789: a less
+/// resolved neck, which moves the crossing down). Asserted: the crossing above 0.822 and
+/// within 3e-3 of it.
+#[test]
+fn pear_prolate_crossing_at_c0_3() {
+    let opts = Options::default().with_c0(3.0);
+    let gap = |v: f64| {
+        let pear = axisym::pear_at(v, pear3(), &opts).unwrap();
+        let prolate = axisym::solve(Branch::Prolate, v, &opts).unwrap();
+        pear.e - prolate.e
+    };
+    let (mut lo, mut hi) = (0.81, 0.84);
+    assert!(gap(lo) < 0.0 && gap(hi) > 0.0);
+    while hi - lo > 1e-6 {
+        let mid = 0.5 * (lo + hi);
+        if gap(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let x = 0.5 * (lo + hi);
+    assert!(x > 0.822 && x < 0.822 + 3e-3, "crossing at {x}");
+}
+
+/// Towards the budding limit the pear's poles become those of L_pear's two spheres and its v
+/// tends to L_pear's: `axisym::neck_limit` extrapolates the path's shapes with necks between
+/// 0.02 and 0.005 R0 to a closed neck. Against the two-sphere formula (v = 0.745776, the neck
+/// condition 1/R1 + 1/R2 = c̄0 = 3) it measures v = 0.745780 and a pole-curvature sum of
+/// 3.0012 (K = 80); asserted to 1e-4 in v (the issue's target) and 0.01 in the sum. Far from
+/// the limit (v = 0.868, just below the fold) the sum is above 4 (measured 4.12), and it falls
+/// towards 3 along the path (3.14 at the neck stop). The unit sphere has both pole
+/// curvatures 1.
 #[test]
 fn pear_pole_curvatures_approach_the_neck_condition() {
     let sphere = axisym::solve(Branch::Prolate, 1.0, &Options::default()).unwrap();
     let (a, b) = sphere.pole_curvatures();
     assert!((a - 1.0).abs() < 1e-9 && (b - 1.0).abs() < 1e-9, "{a} {b}");
-    let mut opts = Options::default().with_c0(3.0);
-    opts.neck_min = 0.005;
-    let branch = axisym::follow_pear(0.745, &opts);
-    let sum = |v: f64| {
-        let s = axisym::pear_at(v, &branch, &opts).unwrap();
+    let opts = Options::default().with_c0(3.0);
+    let branch = pear3();
+    let sum = |s: &Solution| {
         let (k0, k1) = s.pole_curvatures();
         k0 + k1
     };
-    assert!(sum(0.868) > 4.0);
-    let limit = axisym::l_pear(3.0).unwrap();
-    assert!(limit < 0.7465);
-    for v in [0.76, 0.75, 0.7465] {
-        let k = sum(v);
-        assert!((k - 3.0).abs() < 0.2, "v = {v}: ψ'(0) + ψ'(L) = {k}");
+    let far = sum(&axisym::pear_at(0.868, branch, &opts).unwrap());
+    assert!(far > 4.0, "{far}");
+    let last = sum(branch.last.as_ref().unwrap());
+    assert!(last > 3.0 && last < 3.2, "at the neck stop: {last}");
+    let lim = axisym::neck_limit(branch).expect("enough narrow necks");
+    let formula = axisym::l_pear(3.0).unwrap();
+    assert!((lim.v - formula).abs() < 1e-4, "{} vs {formula}", lim.v);
+    assert!((lim.pole_sum - 3.0).abs() < 0.01, "{}", lim.pole_sum);
+}
+
+/// The same limit at c̄0 = 4, a point of the L_pear line away from the two-equal-spheres end:
+/// the pear (bifurcation at v = 0.8070, fold 0.9469) followed to neck ≤ 0.005 R0 (measured at
+/// v = 0.8878) and extrapolated to a closed neck gives v = 0.870726 against the formula's
+/// 0.870679 (R1 = 0.9402, R2 = 0.3405) and a pole-curvature sum 3.990 against c̄0 = 4
+/// (K = 80, about 10 s). Asserted: 1e-4 in v, 0.02 in the sum.
+#[test]
+fn l_pear_from_the_closing_neck_at_c0_4() {
+    let opts = Options::default().with_c0(4.0);
+    let branch = axisym::follow_pear(0.5, &opts);
+    match branch.end {
+        Some(PearEnd::Neck { neck, .. }) => assert!(neck <= 0.005, "neck {neck}"),
+        ref other => panic!("pear ended with {other:?}"),
     }
+    let lim = axisym::neck_limit(&branch).expect("enough narrow necks");
+    let formula = axisym::l_pear(4.0).unwrap();
+    assert!((lim.v - formula).abs() < 1e-4, "{} vs {formula}", lim.v);
+    assert!((lim.pole_sum - 4.0).abs() < 0.02, "{}", lim.pole_sum);
 }
 
 /// At c̄0 = 1 the prolate keeps its up–down symmetry (the odd block of the Hessian stays

@@ -18,6 +18,9 @@
 //! `L = √(2/I_A)`; the last term is `c̄0² A/(16π) = c̄0²/4`. A sphere has `e_0 = J = 1`,
 //! `e = (1 − c̄0/2)²`.
 //!
+//! With a stretched parameter ([`super::map`]) the modes are sines in `τ`, `t = t(τ)`, and
+//! every `dt` above becomes `(dt/dτ) dτ`, `ψ_t = ψ_τ/(dt/dτ)`, `ρ = ∫ cos ψ (dt/dτ) dτ`.
+//!
 //! The integrals use Clenshaw–Curtis quadrature on Chebyshev–Lobatto nodes and `ρ` the
 //! spectral integration matrix `Q` ([`super::quadrature`]). In place of `ρ` the functional uses
 //! `ρ̃(t) = ρ(t) − t G`, which equals `ρ` on closed shapes and vanishes at both poles for any
@@ -25,6 +28,7 @@
 //! energy integrand vanishes at the poles (`ρ̃ = 0` there, `sin ψ / ρ̃` finite), so only interior
 //! nodes contribute.
 
+use super::map::NeckMap;
 use super::quadrature;
 use super::Model;
 use std::f64::consts::PI;
@@ -50,6 +54,13 @@ pub(crate) struct Basis {
     qt: Vec<f64>,
     /// `Q̃ᵀ` (row-major), so that `Q̃ x` is a sum of rows (vectorises).
     qt_trans: Vec<f64>,
+    /// The stretching `t(τ)` of the contour parameter (identity unless set by
+    /// [`Basis::with_map`]); the nodes `t` above are nodes in `τ`.
+    pub map: NeckMap,
+    /// `dt/dτ` at the nodes (1 without a map).
+    pub stretch: Vec<f64>,
+    /// The arclength fraction `t(τ_j) = s_j/L` at the nodes.
+    pub arc: Vec<f64>,
     /// `sin(kπ t_j)`, row `j`, column = mode index.
     sin_tab: Vec<f64>,
     /// `kπ cos(kπ t_j)`, row `j`, column = mode index.
@@ -129,6 +140,9 @@ impl Basis {
             c0: 0.0,
             model: Model::Sc,
             modes,
+            map: NeckMap::IDENTITY,
+            stretch: vec![1.0; n],
+            arc: t.clone(),
             t,
             w,
             q,
@@ -153,6 +167,15 @@ impl Basis {
         self
     }
 
+    /// The same basis with the contour parameter stretched by `map`: the modes are sines in
+    /// `τ`, and `ds = L (dt/dτ) dτ` ([`super::map`]).
+    pub fn with_map(mut self, map: NeckMap) -> Self {
+        self.map = map;
+        self.arc = self.t.iter().map(|tau| map.t(*tau)).collect();
+        self.stretch = self.t.iter().map(|tau| map.stretch(*tau)).collect();
+        self
+    }
+
     /// Number of nodes `m + 1`.
     pub fn len(&self) -> usize {
         self.t.len()
@@ -168,7 +191,11 @@ impl Basis {
             axpy(&mut psi, *ac, &self.sin_cols[c * n..(c + 1) * n]);
             axpy(&mut dpsi, *ac, &self.dsin_cols[c * n..(c + 1) * n]);
         }
-        let cos: Vec<f64> = psi.iter().map(|p| p.cos()).collect();
+        let cos: Vec<f64> = psi
+            .iter()
+            .zip(&self.stretch)
+            .map(|(p, m)| p.cos() * m)
+            .collect();
         let rho = mat_t_vec(&self.qt_trans, &cos);
         Samples { psi, dpsi, rho }
     }
@@ -182,37 +209,43 @@ impl Basis {
             return None;
         }
         let w = &self.w;
+        let st = &self.stretch;
+        // Weights of the integrals in t: dt = (dt/dτ) dτ.
+        let ww: Vec<f64> = w.iter().zip(st).map(|(w, m)| w * m).collect();
         let (s, c): (Vec<f64>, Vec<f64>) = psi.iter().map(|p| p.sin_cos()).unzip();
-        // Energy and its partial derivatives in ψ_j (explicit), ψ_t,j and ρ̃_j.
+        // Energy and its partial derivatives in ψ_j (explicit), ψ_τ,j and ρ̃_j; with
+        // h = ψ_τ/(dt/dτ) + sin ψ/ρ̃, e_0 = (1/8) ∫ h² ρ̃ dt.
         let mut e = 0.0;
         let mut e_psi = vec![0.0; n];
         let mut e_dpsi = vec![0.0; n];
         let mut e_rho = vec![0.0; n];
         for j in 1..n - 1 {
-            let h = dpsi[j] + s[j] / rho[j];
-            e += 0.125 * w[j] * h * h * rho[j];
-            e_psi[j] = 0.25 * w[j] * h * c[j];
+            let h = dpsi[j] / st[j] + s[j] / rho[j];
+            e += 0.125 * ww[j] * h * h * rho[j];
+            e_psi[j] = 0.25 * ww[j] * h * c[j];
             e_dpsi[j] = 0.25 * w[j] * h * rho[j];
-            e_rho[j] = 0.125 * w[j] * (h * h - 2.0 * h * s[j] / rho[j]);
+            e_rho[j] = 0.125 * ww[j] * (h * h - 2.0 * h * s[j] / rho[j]);
         }
         // Closure defect.
-        let g: f64 = (0..n).map(|j| w[j] * c[j]).sum();
-        let g_psi: Vec<f64> = (0..n).map(|j| -w[j] * s[j]).collect();
+        let g: f64 = (0..n).map(|j| ww[j] * c[j]).sum();
+        let g_psi: Vec<f64> = (0..n).map(|j| -ww[j] * s[j]).collect();
         // Reduced volume.
-        let ia: f64 = (0..n).map(|j| w[j] * rho[j]).sum();
-        let iv: f64 = (0..n).map(|j| w[j] * rho[j] * rho[j] * s[j]).sum();
+        let ia: f64 = (0..n).map(|j| ww[j] * rho[j]).sum();
+        let iv: f64 = (0..n).map(|j| ww[j] * rho[j] * rho[j] * s[j]).sum();
         let v = 0.75 * iv / (0.5 * ia).powf(1.5);
         let v_psi: Vec<f64> = (0..n)
-            .map(|j| v * w[j] * rho[j] * rho[j] * c[j] / iv)
+            .map(|j| v * ww[j] * rho[j] * rho[j] * c[j] / iv)
             .collect();
         let v_rho: Vec<f64> = (0..n)
-            .map(|j| v * (2.0 * w[j] * rho[j] * s[j] / iv - 1.5 * w[j] / ia))
+            .map(|j| v * (2.0 * ww[j] * rho[j] * s[j] / iv - 1.5 * ww[j] / ia))
             .collect();
-        // Spontaneous curvature: e += −c̄0 J + c̄0²/4, J = (L/4) M, L = √(2/I_A), so
-        // ∂J/∂ψ_j = (L/4) w_j cos ψ_j, ∂J/∂ψ_t,j = (L/4) w_j ρ̃_j,
-        // ∂J/∂ρ̃_j = (L/4) w_j (ψ_t,j − M/(2 I_A)).
+        // Spontaneous curvature: e += −c̄0 J + c̄0²/4, J = (L/4) M, L = √(2/I_A),
+        // M = ∫ (ψ_τ ρ̃ dτ + sin ψ dt), so ∂J/∂ψ_j = (L/4) ŵ_j cos ψ_j, ∂J/∂ψ_τ,j = (L/4) w_j ρ̃_j,
+        // ∂J/∂ρ̃_j = (L/4)(w_j ψ_τ,j − ŵ_j M/(2 I_A)) (ŵ = w dt/dτ).
         let length = (2.0 / ia).sqrt();
-        let m: f64 = (1..n - 1).map(|j| w[j] * (dpsi[j] * rho[j] + s[j])).sum();
+        let m: f64 = (1..n - 1)
+            .map(|j| w[j] * dpsi[j] * rho[j] + ww[j] * s[j])
+            .sum();
         let j_mean = 0.25 * length * m;
         let c0 = self.c0;
         // The energy depends on J through −c̄0 J (+ πα(J − Δa0)² for ADE): its derivative in J
@@ -229,30 +262,31 @@ impl Basis {
         if c_eff != 0.0 {
             let f = -c_eff * 0.25 * length;
             for j in 1..n - 1 {
-                e_psi[j] += f * w[j] * c[j];
+                e_psi[j] += f * ww[j] * c[j];
                 e_dpsi[j] += f * w[j] * rho[j];
-                e_rho[j] += f * w[j] * (dpsi[j] - 0.5 * m / ia);
+                e_rho[j] += f * (w[j] * dpsi[j] - 0.5 * ww[j] * m / ia);
             }
         }
+        // ∂ρ̃_i/∂ψ_j = −Q̃_ij sin ψ_j (dt/dτ)_j.
+        let s_st: Vec<f64> = s.iter().zip(st).map(|(s, m)| s * m).collect();
+        // ∂J/∂a of the bilayer couple's constraint, with the partials of J above.
         let grad_j = matches!(self.model, Model::Bc { .. }).then(|| {
             let f = 0.25 * length;
-            let j_psi: Vec<f64> = (0..n).map(|j| f * w[j] * c[j]).collect();
+            let mut j_psi = vec![0.0; n];
             let mut j_dpsi = vec![0.0; n];
             let mut j_rho = vec![0.0; n];
             for j in 1..n - 1 {
+                j_psi[j] = f * ww[j] * c[j];
                 j_dpsi[j] = f * w[j] * rho[j];
-                j_rho[j] = f * w[j] * (dpsi[j] - 0.5 * m / ia);
+                j_rho[j] = f * (w[j] * dpsi[j] - 0.5 * ww[j] * m / ia);
             }
-            let mut j_psi = j_psi;
-            j_psi[0] = 0.0;
-            j_psi[n - 1] = 0.0;
             let back = mat_t_vec(&self.qt, &j_rho);
-            self.chain(&j_psi, Some(&j_dpsi), Some(&back), &s)
+            self.chain(&j_psi, Some(&j_dpsi), Some(&back), &s_st)
         });
         let (back_e, back_v) = mat_t_vec2(&self.qt, &e_rho, &v_rho);
-        let grad_e = self.chain(&e_psi, Some(&e_dpsi), Some(&back_e), &s);
-        let grad_g = self.chain(&g_psi, None, None, &s);
-        let grad_v = self.chain(&v_psi, None, Some(&back_v), &s);
+        let grad_e = self.chain(&e_psi, Some(&e_dpsi), Some(&back_e), &s_st);
+        let grad_g = self.chain(&g_psi, None, None, &s_st);
+        let grad_v = self.chain(&v_psi, None, Some(&back_v), &s_st);
         Some(Eval {
             e,
             e_bend,
@@ -267,8 +301,9 @@ impl Basis {
         })
     }
 
-    /// Chain rule to the coefficients: `∂F/∂a_k = Σ_j (F_ψj − sin ψ_j (Q̃ᵀ F_ρ)_j) sin(kπt_j)
-    /// + Σ_j F_ψ'j kπ cos(kπt_j)`, since `∂ρ̃_i/∂ψ_j = −Q̃_ij sin ψ_j`; `back = Q̃ᵀ F_ρ`.
+    /// Chain rule to the coefficients: `∂F/∂a_k = Σ_j (F_ψj − σ_j (Q̃ᵀ F_ρ)_j) sin(kπτ_j)
+    /// + Σ_j F_ψ'j kπ cos(kπτ_j)`, since `∂ρ̃_i/∂ψ_j = −Q̃_ij σ_j` with
+    /// `σ_j = sin ψ_j (dt/dτ)_j` (the argument `sin`); `back = Q̃ᵀ F_ρ`.
     fn chain(
         &self,
         f_psi: &[f64],

@@ -26,6 +26,7 @@
 use super::branches::Tracker;
 use super::eigen::symmetric_eigen;
 use super::functional::{Basis, Eval};
+use super::map::NeckMap;
 use super::solver::{lu_solve, minimise, newton, Converged, NewtonSettings};
 use super::{solution, Branch, Options, Solution};
 use std::f64::consts::PI;
@@ -215,6 +216,94 @@ pub fn prolate_updown(v: f64, opts: &Options) -> Option<f64> {
     odd_stability(&full, &a, s.lambda_v).map(|(mu, _)| mu)
 }
 
+/// The budding limit read off the pear branch as its neck closes ([`neck_limit`]).
+#[derive(Clone, Copy, Debug)]
+pub struct NeckLimit {
+    /// The limit `v_L` of `v` as the neck radius `b → 0`.
+    pub v: f64,
+    /// The limit of the sum of the two pole curvatures ([`Solution::pole_curvatures`]); the
+    /// neck condition of `L_pear` makes it `1/R1 + 1/R2 = c̄0`.
+    pub pole_sum: f64,
+    /// The shapes fitted (necks below [`NECK_FIT`]).
+    pub points: usize,
+}
+
+/// [`neck_limit`] fits the shapes whose neck is below this (units of `R0`).
+pub const NECK_FIT: f64 = 0.02;
+
+/// The budding limit from the pear path: over the shapes past the first fold whose neck `b`
+/// is below [`NECK_FIT`], the least-squares fit
+/// `y = y_L + A b ln(1/b) + B b + C b² ln(1/b) + D b²` of `y = v` and of
+/// `y = ψ'(0) + ψ'(L)`, whose constants `y_L` are the limits as the neck closes (the
+/// logarithms are those of a catenoid neck of waist `b` between the two spheres). On the
+/// c̄0 = 3 branch (K = 80, necks 0.02 … 0.005) the residuals are below 2e-6 in `v`, `v_L` is
+/// the two-sphere formula's to 1e-6 and the pole sum 3 to 1e-5; with the first three terms
+/// only, `v_L` is off by 7e-4. `None` with fewer than eight such shapes.
+pub fn neck_limit(branch: &PearBranch) -> Option<NeckLimit> {
+    let shapes = &branch.shapes;
+    let top = (0..shapes.len().saturating_sub(1)).find(|&i| shapes[i + 1].v < shapes[i].v)?;
+    let pts: Vec<(f64, f64, f64)> = shapes[top..]
+        .iter()
+        .filter_map(|s| {
+            let b = s.neck().filter(|b| *b < NECK_FIT && *b > 0.0)?;
+            let (p0, p1) = s.pole_curvatures();
+            Some((b, s.v, p0 + p1))
+        })
+        .collect();
+    if pts.len() < 8 {
+        return None;
+    }
+    let cols: Vec<Vec<f64>> = (0..5)
+        .map(|k| {
+            pts.iter()
+                .map(|p| {
+                    let x = p.0 / NECK_FIT;
+                    let l = (1.0 / p.0).ln();
+                    [1.0, x * l, x, x * x * l, x * x][k]
+                })
+                .collect()
+        })
+        .collect();
+    let v: Vec<f64> = pts.iter().map(|p| p.1).collect();
+    let sum: Vec<f64> = pts.iter().map(|p| p.2).collect();
+    Some(NeckLimit {
+        v: least_squares(&cols, &v)?[0],
+        pole_sum: least_squares(&cols, &sum)?[0],
+        points: pts.len(),
+    })
+}
+
+/// Linear least squares `min |Σ_k c_k col_k − y|` by modified Gram–Schmidt (`col = Q R`, then
+/// `R c = Qᵀ y`). `None` if the columns are dependent to round-off.
+fn least_squares(cols: &[Vec<f64>], y: &[f64]) -> Option<Vec<f64>> {
+    let n = cols.len();
+    let mut q: Vec<Vec<f64>> = cols.to_vec();
+    let mut r = vec![0.0; n * n];
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    for k in 0..n {
+        for j in 0..k {
+            let d = dot(&q[j], &q[k]);
+            r[j * n + k] = d;
+            let qj = q[j].clone();
+            for (x, z) in q[k].iter_mut().zip(&qj) {
+                *x -= d * z;
+            }
+        }
+        let norm = dot(&q[k], &q[k]).sqrt();
+        if norm <= 1e-13 * dot(&cols[k], &cols[k]).sqrt() {
+            return None;
+        }
+        r[k * n + k] = norm;
+        q[k].iter_mut().for_each(|x| *x /= norm);
+    }
+    let mut c: Vec<f64> = q.iter().map(|qk| dot(qk, y)).collect();
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| r[k * n + j] * c[j]).sum();
+        c[k] = (c[k] - s) / r[k * n + k];
+    }
+    Some(c)
+}
+
 /// The pear of `branch` after its first fold, solved at reduced volume `v`: the piece of the
 /// path from its first local maximum of `v` down to the next turn, the state there nearest to
 /// `v` as the start of Newton at fixed `v` (closure held). On a subcritical branch this is the
@@ -235,20 +324,39 @@ pub fn pear_at(v: f64, branch: &PearBranch, opts: &Options) -> Option<Solution> 
         end += 1;
     }
     let piece = &shapes[top..=end];
-    if v > piece[0].v || v < piece[piece.len() - 1].v {
+    if piece.len() < 2 || v > piece[0].v || v < piece[piece.len() - 1].v {
         return None;
     }
-    let start = piece
-        .iter()
-        .min_by(|a, b| (a.v - v).abs().total_cmp(&(b.v - v).abs()))?;
-    let full = full_basis(opts);
+    // Starts: the linear interpolation in v between the two states around v (when they share
+    // a map), then each of the two.
+    let i = (0..piece.len() - 1)
+        .find(|&i| piece[i + 1].v <= v)
+        .unwrap_or(piece.len() - 2);
+    let (hi, lo) = (&piece[i], &piece[i + 1]);
+    let mut starts: Vec<(NeckMap, Vec<f64>)> = Vec::new();
+    if hi.map == lo.map && hi.v > lo.v {
+        let f = (v - lo.v) / (hi.v - lo.v);
+        let a = lo
+            .coefficients
+            .iter()
+            .zip(&hi.coefficients)
+            .map(|(x, y)| x + f * (y - x))
+            .collect();
+        starts.push((lo.map, a));
+    }
+    starts.push((lo.map, lo.coefficients.clone()));
+    starts.push((hi.map, hi.coefficients.clone()));
+    // Near a narrow neck the finite-difference Hessian is less accurate and Newton slower.
     let set = NewtonSettings {
         tol: opts.tol,
-        max_iter: opts.max_iter,
+        max_iter: 3 * opts.max_iter,
         max_step: 0.5,
     };
-    let c = newton(&full, &start.coefficients, v, true, &set)?;
-    Some(solution(Branch::Pear, &full, &c))
+    starts.into_iter().find_map(|(map, a)| {
+        let full = full_basis(opts).with_map(map);
+        let c = newton(&full, &a, v, true, &set)?;
+        Some(solution(Branch::Pear, &full, &c))
+    })
 }
 
 /// The bifurcation internals: the prolate tracker at `v_b`, its full-basis coefficients and
@@ -332,7 +440,8 @@ pub fn pear_bifurcation(opts: &Options) -> Option<Bifurcation> {
 }
 
 /// Newton for the stationary shape with amplitude `φ·(a − a_b) = s` and `v` free: the KKT
-/// system `∇e + λ_v ∇v + λ_G ∇G = 0`, `G = 0`, `φ·(a − a_b) − s = 0` in `(a, λ_v, λ_G)`.
+/// system `∇e + λ_v ∇v + λ_G ∇G = 0`, `G = 0`, `φ·(a − a_b) − s = 0` in `(a, λ_v, λ_G)`
+/// (without the closure row and `λ_G` on an up–down symmetric basis, `closure = false`).
 fn newton_amplitude(
     full: &Basis,
     a_b: &[f64],
@@ -341,8 +450,27 @@ fn newton_amplitude(
     start: (&[f64], f64, f64),
     set: &NewtonSettings,
 ) -> Option<Converged> {
+    newton_amplitude_with(full, a_b, phi, s, start, set, true)
+}
+
+/// [`newton_amplitude`] with or without the closure.
+fn newton_amplitude_with(
+    full: &Basis,
+    a_b: &[f64],
+    phi: &[f64],
+    s: f64,
+    start: (&[f64], f64, f64),
+    set: &NewtonSettings,
+    closure: bool,
+) -> Option<Converged> {
     let n = a_b.len();
+    let nc = usize::from(closure);
     let (mut a, mut lv, mut lg) = (start.0.to_vec(), start.1, start.2);
+    if !closure {
+        lg = 0.0;
+    }
+    let mut hess: Option<Vec<f64>> = None;
+    let mut last_residual = f64::INFINITY;
     for iter in 0..=set.max_iter {
         let ev = full.eval(&a)?;
         let grad = lagrangian_grad(&ev, lv, lg);
@@ -352,7 +480,9 @@ fn newton_amplitude(
             .map(|(p, (x, y))| p * (x - y))
             .sum();
         let mut rhs: Vec<f64> = grad.iter().map(|g| -g).collect();
-        rhs.push(-ev.g);
+        if closure {
+            rhs.push(-ev.g);
+        }
         rhs.push(-(amp - s));
         let residual = rhs.iter().fold(0.0f64, |m, r| m.max(r.abs()));
         if residual < set.tol {
@@ -369,26 +499,25 @@ fn newton_amplitude(
         if iter == set.max_iter || !residual.is_finite() {
             return None;
         }
-        let dim = n + 2;
+        // The Hessian block is rebuilt only when the last step reduced the residual by less
+        // than REBUILD (a chord method otherwise, as in the solver).
+        if hess.is_none() || residual > REBUILD * last_residual {
+            hess = Some(hessian(full, &a, lv, lg)?);
+        }
+        last_residual = residual;
+        let h = hess.as_ref().expect("built above");
+        let dim = n + 1 + nc;
         let mut jac = vec![0.0; dim * dim];
-        let mut ap = a.clone();
-        for k in 0..n {
-            ap[k] = a[k] + FD_STEP;
-            let gp = lagrangian_grad(&full.eval(&ap)?, lv, lg);
-            ap[k] = a[k] - FD_STEP;
-            let gm = lagrangian_grad(&full.eval(&ap)?, lv, lg);
-            ap[k] = a[k];
-            for i in 0..n {
-                let d = 0.25 * (gp[i] - gm[i]) / FD_STEP;
-                jac[i * dim + k] += d;
-                jac[k * dim + i] += d;
-            }
+        for i in 0..n {
+            jac[i * dim..i * dim + n].copy_from_slice(&h[i * n..(i + 1) * n]);
         }
         for i in 0..n {
             jac[i * dim + n] = ev.grad_v[i];
-            jac[i * dim + n + 1] = ev.grad_g[i];
-            jac[n * dim + i] = ev.grad_g[i];
-            jac[(n + 1) * dim + i] = phi[i];
+            if closure {
+                jac[i * dim + n + 1] = ev.grad_g[i];
+                jac[n * dim + i] = ev.grad_g[i];
+            }
+            jac[(n + nc) * dim + i] = phi[i];
         }
         let dx = lu_solve(&mut jac, &mut rhs, dim)?;
         let big = dx[..n].iter().fold(0.0f64, |m, d| m.max(d.abs()));
@@ -401,9 +530,123 @@ fn newton_amplitude(
             *x += f * d;
         }
         lv += f * dx[n];
-        lg += f * dx[n + 1];
+        if closure {
+            lg += f * dx[n + 1];
+        }
     }
     None
+}
+
+/// The fold (limit point in `v`) of an up–down symmetric `branch` below `v_start`: the branch
+/// solved at `v_start` and `v_start − 0.002`, then followed by pseudo-arclength in its even
+/// modes (as in [`follow_pear`], without the closure) until `v` turns back up; the fold is the
+/// vertex of the parabola `v(σ)` through the three states around the smallest `v` (σ the
+/// arclength). Returns the state of smallest `v` and the vertex `v`. `None` if the branch is
+/// not found at `v_start`, or if 300 steps (or a stalled step) do not reach a turn.
+pub fn symmetric_fold(branch: Branch, v_start: f64, opts: &Options) -> Option<(Solution, f64)> {
+    if !branch.up_down_symmetric() {
+        return None;
+    }
+    let mut tr = Tracker::new(branch, opts);
+    if !tr.start(v_start) || !tr.advance(v_start) {
+        return None;
+    }
+    let first = tr.current().clone();
+    if !tr.advance(v_start - 0.002) {
+        return None;
+    }
+    let mut cur = tr.current().clone();
+    let mut prev = first;
+    let basis = &tr.basis;
+    let set = tr.set;
+    let mut path: Vec<(f64, Converged)> = vec![(0.0, prev.clone())];
+    let mut sigma = dist(&cur.a, &prev.a);
+    path.push((sigma, cur.clone()));
+    let mut h = H0;
+    for _ in 0..300 {
+        let diff: Vec<f64> = cur.a.iter().zip(&prev.a).map(|(x, y)| x - y).collect();
+        let norm = diff.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let d: Vec<f64> = diff.iter().map(|x| x / norm).collect();
+        let next = loop {
+            let p: Vec<f64> = cur.a.iter().zip(&d).map(|(x, d)| x + h * d).collect();
+            let lv = cur.lambda_v + h / norm * (cur.lambda_v - prev.lambda_v);
+            let solved = newton_amplitude_with(basis, &p, &d, 0.0, (&p, lv, 0.0), &set, false)
+                .filter(|c| {
+                    c.a.iter()
+                        .zip(&p)
+                        .all(|(a, q)| (a - q).abs() <= 0.5 * h.max(0.02))
+                });
+            match solved {
+                Some(c) => break Some(c),
+                None => {
+                    h *= 0.5;
+                    if h < H_MIN {
+                        break None;
+                    }
+                }
+            }
+        };
+        let next = next?;
+        h = (1.5 * h).min(0.02);
+        sigma += dist(&next.a, &cur.a);
+        prev = std::mem::replace(&mut cur, next);
+        path.push((sigma, cur.clone()));
+        let k = path.len();
+        if path[k - 1].1.eval.v > path[k - 2].1.eval.v {
+            let (x0, c0) = &path[k - 3];
+            let (x1, c1) = &path[k - 2];
+            let (x2, c2) = &path[k - 1];
+            let vertex = parabola_vertex(*x0, *x1, *x2, c0.eval.v, c1.eval.v, c2.eval.v);
+            return Some((solution(branch, basis, c1), vertex));
+        }
+    }
+    None
+}
+
+/// Euclidean distance of two coefficient vectors.
+fn dist(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The extreme value of the parabola through `(x0, y0)`, `(x1, y1)`, `(x2, y2)`.
+fn parabola_vertex(x0: f64, x1: f64, x2: f64, y0: f64, y1: f64, y2: f64) -> f64 {
+    let d01 = (y1 - y0) / (x1 - x0);
+    let d12 = (y2 - y1) / (x2 - x1);
+    let c = (d12 - d01) / (x2 - x0);
+    if c == 0.0 {
+        return y1;
+    }
+    let b = d01 - c * (x0 + x1);
+    let x = -b / (2.0 * c);
+    y1 + b * (x - x1) + c * (x * x - x1 * x1)
+}
+
+/// Residual reduction per Newton step below which [`newton_amplitude`] keeps its Hessian.
+const REBUILD: f64 = 0.05;
+
+/// Central-difference Hessian of `ℒ = e + λ_v v + λ_G G` at `a` (row-major, symmetrised);
+/// `None` if a perturbed shape is not admissible.
+fn hessian(full: &Basis, a: &[f64], lv: f64, lg: f64) -> Option<Vec<f64>> {
+    let n = a.len();
+    let mut h = vec![0.0; n * n];
+    let mut ap = a.to_vec();
+    for k in 0..n {
+        ap[k] = a[k] + FD_STEP;
+        let gp = lagrangian_grad(&full.eval(&ap)?, lv, lg);
+        ap[k] = a[k] - FD_STEP;
+        let gm = lagrangian_grad(&full.eval(&ap)?, lv, lg);
+        ap[k] = a[k];
+        for i in 0..n {
+            let d = 0.25 * (gp[i] - gm[i]) / FD_STEP;
+            h[i * n + k] += d;
+            h[k * n + i] += d;
+        }
+    }
+    Some(h)
 }
 
 /// A point of the continuation: coefficients, `λ_v`, `λ_G`.
@@ -475,8 +718,83 @@ pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
     out
 }
 
+/// Neck radius (units of `R0`) below which [`arclength`] stretches the contour parameter at
+/// the neck ([`NeckMap::at_neck`]).
+const MAP_NECK: f64 = 0.1;
+
+/// [`arclength`] maps again when the neck has narrowed below this fraction of the neck the
+/// current map was made for.
+const REMAP_SHRINK: f64 = 0.7;
+
+/// The map for `s` if its neck calls for a new one: a neck below [`MAP_NECK`] and no map yet,
+/// or narrowed below [`REMAP_SHRINK`] of `mapped` (the neck the current map `map` was made
+/// for), or moved by more than half the kernel's half-width. Returns the new map and its neck.
+fn new_map(s: &Solution, map: &NeckMap, mapped: Option<f64>) -> Option<(NeckMap, f64)> {
+    let (s_n, b) = s.neck_at()?;
+    if b > MAP_NECK {
+        return None;
+    }
+    let l = s.length();
+    let moved = (s_n / l - map.centre).abs() > 0.5 * map.half_width();
+    let narrowed = mapped.is_none_or(|m| b < REMAP_SHRINK * m);
+    (narrowed || moved).then(|| (NeckMap::at_neck(s_n, b, l), b))
+}
+
+/// The coefficients, in the basis of `to` (modes `modes`), of the shape with coefficients
+/// `a` in the basis of `from`: `ψ` is a function of the arclength fraction `t`, so at
+/// `τ_j = j/N` of the new parameter, `ψ = π τ_old + Σ a_k sin(kπ τ_old)` with
+/// `τ_old = τ_from(t_to(τ_j))`, and `a'_k = (2/N) Σ_j (ψ_j − π τ_j) sin(kπ j/N)` (the discrete
+/// sine transform, exact for sine series below `N = 4 max k`).
+fn reproject(a: &[f64], from: &NeckMap, to: &NeckMap, modes: &[usize]) -> Vec<f64> {
+    let kmax = modes.iter().copied().max().unwrap_or(1);
+    let n = 4 * kmax;
+    let f: Vec<f64> = (1..n)
+        .map(|j| {
+            let tau = j as f64 / n as f64;
+            let old = from.tau(to.t(tau));
+            let psi: f64 = PI * old
+                + modes
+                    .iter()
+                    .zip(a)
+                    .map(|(k, ak)| ak * (*k as f64 * PI * old).sin())
+                    .sum::<f64>();
+            psi - PI * tau
+        })
+        .collect();
+    modes
+        .iter()
+        .map(|&k| {
+            2.0 / n as f64
+                * f.iter()
+                    .enumerate()
+                    .map(|(i, fj)| fj * (k as f64 * PI * (i + 1) as f64 / n as f64).sin())
+                    .sum::<f64>()
+        })
+        .collect()
+}
+
+/// Move the continuation onto `map`: the basis `full` with `map`, `prev` re-projected, `cur`
+/// re-projected and solved again at its `v` (closure held). `None` if that solve fails.
+fn remap(
+    full: &Basis,
+    map: NeckMap,
+    prev: &State,
+    cur: &Converged,
+    set: &NewtonSettings,
+) -> Option<(Basis, State, Converged)> {
+    let nb = Basis::new(full.len() - 1, full.modes.clone())
+        .with_c0(full.c0)
+        .with_map(map);
+    let a_prev = reproject(&prev.0, &full.map, &map, &full.modes);
+    let a_cur = reproject(&cur.a, &full.map, &map, &full.modes);
+    let c = newton(&nb, &a_cur, cur.eval.v, true, set)?;
+    Some((nb, (a_prev, prev.1, prev.2), c))
+}
+
 /// The pseudo-arclength continuation of [`follow_pear`] from the states `prev` (coefficients
 /// and multipliers) and `cur`, appending to `out.shapes` and setting `out.end`, `out.last`.
+/// Once the neck is narrower than [`MAP_NECK`] the modes are sines in a parameter stretched
+/// at the neck ([`NeckMap::at_neck`]), made again as the neck narrows or moves ([`new_map`]).
 fn arclength(
     full: &Basis,
     set: &NewtonSettings,
@@ -486,11 +804,22 @@ fn arclength(
     opts: &Options,
     out: &mut PearBranch,
 ) {
+    let mut basis = full.clone();
+    let mut mapped: Option<f64> = None;
     let mut h = H0;
     out.end = Some(PearEnd::Stalled { v: cur.eval.v });
     let mut steps = 0;
     loop {
-        let s = solution(Branch::Pear, full, &cur);
+        let mut s = solution(Branch::Pear, &basis, &cur);
+        if let Some((map, b)) = new_map(&s, &basis.map, mapped) {
+            if let Some((nb, p, c)) = remap(&basis, map, &prev, &cur, set) {
+                basis = nb;
+                prev = p;
+                cur = c;
+                mapped = Some(b);
+                s = solution(Branch::Pear, &basis, &cur);
+            }
+        }
         if let Some(neck) = s.neck().filter(|r| *r < opts.neck_min) {
             out.end = Some(PearEnd::Neck { v: s.v, neck });
             out.last = Some(s.clone());
@@ -517,7 +846,7 @@ fn arclength(
             let f = h / norm;
             let lv = cur.lambda_v + f * (cur.lambda_v - prev.1);
             let lg = cur.lambda_g + f * (cur.lambda_g - prev.2);
-            let solved = newton_amplitude(full, &p, &d, 0.0, (&p, lv, lg), set).filter(|c| {
+            let solved = newton_amplitude(&basis, &p, &d, 0.0, (&p, lv, lg), set).filter(|c| {
                 c.a.iter()
                     .zip(&p)
                     .all(|(a, q)| (a - q).abs() <= 0.5 * h.max(0.02))

@@ -97,9 +97,17 @@ fn points_near(
     pieces: &[Vec<(f64, f64)>],
 ) -> Vec<(f64, f64)> {
     match branch {
+        // Of the pieces that cover v, the lowest there (past a subcritical fold the pear's
+        // upper piece, from the bifurcation to the fold, covers v too).
         Branch::Pear => pieces
             .iter()
-            .find(|p| v >= p[0].0 - 0.02 && v <= p[p.len() - 1].0 + 0.02)
+            .filter(|p| v >= p[0].0 && v <= p[p.len() - 1].0)
+            .min_by(|a, b| cubic_at(a, v).total_cmp(&cubic_at(b, v)))
+            .or_else(|| {
+                pieces
+                    .iter()
+                    .find(|p| v >= p[0].0 - 0.02 && v <= p[p.len() - 1].0 + 0.02)
+            })
             .cloned()
             .unwrap_or_default(),
         b => {

@@ -154,7 +154,7 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
                 Some(b.v),
                 Some(b.e),
                 None,
-                "leaves the prolate",
+                "the prolate loses up-down stability (zero of its odd test function); the pear leaves it",
             ),
             None => row(
                 "pear bifurcation",
@@ -194,7 +194,10 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
                     Some(*v),
                     e,
                     Some(*neck),
-                    "continuation stopped at the neck threshold (not budding: the neck is open)",
+                    &format!(
+                        "continuation stopped at neck <= {} (still open; it closes at L_pear)",
+                        axisym::NECK_MIN
+                    ),
                 )
             }
             Some(PearEnd::Stalled { v }) => {
@@ -217,6 +220,22 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
             None => row("L_pear", None, None, None, "none: c0 < 2*sqrt(2)"),
         }
         .map_err(&err)?;
+        if let Some(lim) = axisym::neck_limit(&s.pear) {
+            row(
+                "L_pear (neck limit)",
+                Some(lim.v),
+                None,
+                Some(0.0),
+                &format!(
+                    "pear path extrapolated to a closed neck (fit of {} shapes with neck < {}); \
+                     pole curvatures sum -> {:.5}",
+                    lim.points,
+                    axisym::NECK_FIT,
+                    lim.pole_sum
+                ),
+            )
+            .map_err(&err)?;
+        }
         for (b, c) in Branch::ALL.iter().zip(&s.curves) {
             if let Some((v, r)) = narrowest(c) {
                 row("narrowest neck", Some(v), None, Some(r), b.name()).map_err(&err)?;
@@ -233,8 +252,9 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
 }
 
 /// The phase diagram: a marker at every `(v, c̄0)` of the grid coloured by the lowest-energy
-/// branch, the pear bifurcation line, the line where the pear's neck reaches the threshold and
-/// the budding limit L_pear of the two-sphere formula (for c̄0 ≥ 2√2).
+/// branch (the pear region among them), the prolate's stability line against up–down
+/// asymmetry (the pear bifurcation), the line where the pear's neck reaches
+/// [`axisym::NECK_MIN`] and the budding limit L_pear of the two-sphere formula (c̄0 ≥ 2√2).
 pub fn phase_figure(slices: &[Slice]) -> Figure {
     let mut fig = Figure::new(
         "lowest-energy shape, spontaneous-curvature model",
@@ -272,7 +292,7 @@ pub fn phase_figure(slices: &[Slice]) -> Figure {
         .collect();
     if !pear_line.is_empty() {
         fig.push(Series::new(
-            "pear bifurcation",
+            "prolate loses up-down stability",
             pear_line,
             colour(4),
             Mark::LinePoints(Shape::Cross),
@@ -287,7 +307,7 @@ pub fn phase_figure(slices: &[Slice]) -> Figure {
         .collect();
     if !limit_line.is_empty() {
         fig.push(Series::new(
-            "pear neck at threshold",
+            "pear neck 0.005 R0",
             limit_line,
             colour(5),
             Mark::Dashed,
@@ -337,6 +357,12 @@ fn print_slice(s: &Slice) {
     }
     if let Some(PearEnd::Neck { v, neck }) = &s.pear.end {
         println!("  pear neck {neck:.4} at v = {v:.4} (continuation stopped; the neck is open)");
+    }
+    if let Some(lim) = axisym::neck_limit(&s.pear) {
+        println!(
+            "  pear extrapolated to a closed neck: v = {:.5}, pole curvatures sum {:.4}",
+            lim.v, lim.pole_sum
+        );
     }
     match axisym::l_pear(s.c0) {
         Some(v) => println!("  L_pear (two-sphere limit, 1/R1 + 1/R2 = c0) at v = {v:.5}"),

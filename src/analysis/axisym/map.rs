@@ -1,0 +1,158 @@
+//! A stretching of the contour parameter that clusters the Ritz modes at a narrow neck.
+//!
+//! The modes are sines in a computational parameter `τ ∈ [0, 1]`; the arclength fraction
+//! `t = s/L` is a monotone function of it. [`NeckMap`] defines the node density `dτ/dt` as a
+//! background plus a pair of Poisson kernels centred on the neck at `t_n` (and its mirror image
+//! at `−t_n`, which keeps `dτ/dt` even about both poles):
+//!
+//! ```text
+//! dτ/dt = α + (1 − α) [P_β(π(t − t_n)) + P_β(π(t + t_n))] / 2,
+//! P_β(θ) = (1 − β²) / (1 − 2β cos θ + β²)          (mean 1 over a period, peak (1+β)/(1−β))
+//! τ(t)  = α t + (1 − α)/(2π) [F(π(t − t_n)) − F(−π t_n) + F(π(t + t_n)) − F(π t_n)],
+//! F(θ)  = 2 arctan(k tan(θ/2)),  k = (1 + β)/(1 − β)   (continued across θ = ±π; F' = P_β)
+//! ```
+//!
+//! so `τ(0) = 0`, `τ(1) = 1`. Since `dτ/dt` is even and 2-periodic, `t(τ) − τ` is odd about
+//! both poles, and a smooth surface of revolution keeps `ψ(τ) − πτ` odd about both poles: the
+//! sine series still converges exponentially, now with a share `(1 − α)/2` of the modes on the
+//! Lorentzian of half-width `(1 − β)/π` in `t` around the neck. `α = 1` is the identity.
+
+use std::f64::consts::PI;
+
+/// The map `t(τ)` of the module docs: neck position, kernel width and background weight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NeckMap {
+    /// Arclength fraction `t_n = s_n/L` of the neck (0 < t_n < 1).
+    pub centre: f64,
+    /// Kernel parameter `β ∈ [0, 1)`: the kernel's half-width in `t` is `(1 − β)/π`.
+    pub beta: f64,
+    /// Background weight `α ∈ (0, 1]` (1: no clustering).
+    pub alpha: f64,
+}
+
+/// Default background weight of [`NeckMap::at_neck`]: half the modes stay uniform.
+const ALPHA: f64 = 0.5;
+
+/// The kernel half-width of [`NeckMap::at_neck`] in units of the neck radius.
+const ZONE: f64 = 3.0;
+
+impl NeckMap {
+    /// The identity `t = τ`.
+    pub const IDENTITY: NeckMap = NeckMap {
+        centre: 0.5,
+        beta: 0.0,
+        alpha: 1.0,
+    };
+
+    /// A map for a neck of radius `neck` at arclength `s_n` on a contour of length `length`:
+    /// centre `t_n = s_n/L`, half-width `(1 − β)/π = ZONE·neck/L` (`ZONE` = 3 neck radii),
+    /// `α = 1/2`. The half-width is capped at 0.1 (β ≥ 1 − 0.1π).
+    pub fn at_neck(s_n: f64, neck: f64, length: f64) -> Self {
+        let hw = (ZONE * neck / length).min(0.1);
+        NeckMap {
+            centre: (s_n / length).clamp(0.01, 0.99),
+            beta: 1.0 - PI * hw,
+            alpha: ALPHA,
+        }
+    }
+
+    /// Whether this is the identity.
+    pub fn is_identity(&self) -> bool {
+        self.alpha >= 1.0
+    }
+
+    /// The kernel half-width `(1 − β)/π` in `t`.
+    pub fn half_width(&self) -> f64 {
+        (1.0 - self.beta) / PI
+    }
+
+    /// Poisson kernel `P_β(θ) = (1 − β²)/(1 − 2β cos θ + β²)`.
+    fn kernel(&self, theta: f64) -> f64 {
+        let b = self.beta;
+        (1.0 - b * b) / (1.0 - 2.0 * b * theta.cos() + b * b)
+    }
+
+    /// Antiderivative `F(θ) = 2 arctan(k tan(θ/2))` of the kernel, continued across `θ = ±π`.
+    fn kernel_integral(&self, theta: f64) -> f64 {
+        let k = (1.0 + self.beta) / (1.0 - self.beta);
+        let n = (theta / (2.0 * PI)).round();
+        let th = theta - 2.0 * PI * n;
+        2.0 * (k * (0.5 * th).tan()).atan() + 2.0 * PI * n
+    }
+
+    /// Node density `dτ/dt = α + (1 − α)[P_β(π(t − t_n)) + P_β(π(t + t_n))]/2`.
+    pub fn density(&self, t: f64) -> f64 {
+        if self.is_identity() {
+            return 1.0;
+        }
+        let c = self.centre;
+        let bump = 0.5 * (self.kernel(PI * (t - c)) + self.kernel(PI * (t + c)));
+        self.alpha + (1.0 - self.alpha) * bump
+    }
+
+    /// `τ(t) = α t + (1 − α)/(2π)[F(π(t − t_n)) − F(−π t_n) + F(π(t + t_n)) − F(π t_n)]`.
+    pub fn tau(&self, t: f64) -> f64 {
+        if self.is_identity() {
+            return t;
+        }
+        let c = self.centre;
+        let f = |x: f64| self.kernel_integral(x);
+        let bump = f(PI * (t - c)) - f(-PI * c) + f(PI * (t + c)) - f(PI * c);
+        self.alpha * t + (1.0 - self.alpha) / (2.0 * PI) * bump
+    }
+
+    /// The inverse `t(τ)` of [`NeckMap::tau`] (Newton's method safeguarded by bisection, to
+    /// 1e-15).
+    pub fn t(&self, tau: f64) -> f64 {
+        if self.is_identity() || tau <= 0.0 || tau >= 1.0 {
+            return tau.clamp(0.0, 1.0);
+        }
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        let mut t = tau;
+        for _ in 0..200 {
+            let r = self.tau(t) - tau;
+            if r.abs() < 1e-15 {
+                break;
+            }
+            if r > 0.0 {
+                hi = t;
+            } else {
+                lo = t;
+            }
+            let next = t - r / self.density(t);
+            t = if next > lo && next < hi {
+                next
+            } else {
+                0.5 * (lo + hi)
+            };
+            if hi - lo < 1e-16 {
+                break;
+            }
+        }
+        t
+    }
+
+    /// `dt/dτ` at `τ`: `1/(dτ/dt)` at `t(τ)`.
+    pub fn stretch(&self, tau: f64) -> f64 {
+        1.0 / self.density(self.t(tau))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_and_ends() {
+        let m = NeckMap::at_neck(2.9, 0.01, 4.5);
+        assert!((m.tau(0.0)).abs() < 1e-14 && (m.tau(1.0) - 1.0).abs() < 1e-14);
+        for i in 0..=20 {
+            let tau = i as f64 / 20.0;
+            assert!((m.tau(m.t(tau)) - tau).abs() < 1e-13);
+        }
+        // Derivative of τ(t) against the density (central difference).
+        let t = 0.6;
+        let d = (m.tau(t + 1e-7) - m.tau(t - 1e-7)) / 2e-7;
+        assert!((d - m.density(t)).abs() < 1e-5 * d);
+    }
+}
