@@ -1,12 +1,5 @@
 use vesicle::analysis::axisym::*;
 fn main() {
-    let opts = Options::with_nodes(121);
-    for v in [0.86, 0.96] {
-        let c = bc_curve(Branch::Pear, v, (0.9, 1.35), &opts);
-        println!(
-            "pear v {v}: bif {:?} {} shapes",
-            c.bifurcation.as_ref().map(|s| (s.da(), s.c0_eff)),
-            c.shapes.len()
-        );
-    }
+    let c = bc_curve(Branch::Pear, 0.94, (0.9, 1.35), &Options::with_nodes(121));
+    println!("{} shapes, bif {:?}", c.shapes.len(), c.bifurcation.as_ref().map(|s| (s.da(), s.c0_eff)));
 }

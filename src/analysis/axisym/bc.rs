@@ -512,9 +512,10 @@ fn pear_path(
     let Some((mut pw, c1)) = found else {
         return (Vec::new(), bif);
     };
-    // A second pear state a little further from the bifurcation.
+    // A second pear state a little further from the bifurcation (half its distance again: near
+    // v = 1 the branch is so stiff in Δa that a fixed step would leave Newton's basin).
     let da1 = c1.eval.j;
-    let step = if da1 >= da_b { 1e-5 } else { -1e-5 };
+    let step = 0.5 * (da1 - da_b);
     let Some(c2) = pw.solve_at(da1 + step, &c1.a) else {
         return (Vec::new(), bif);
     };
