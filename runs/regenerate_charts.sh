@@ -22,8 +22,8 @@
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations)                  505 s, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
-#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     49 s, measured
-#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121               61 s, measured
+#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     44 s, measured
+#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121               59 s, measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)

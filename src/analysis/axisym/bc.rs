@@ -1,18 +1,20 @@
 //! The bilayer-couple (BC) model: stationary shapes at fixed reduced volume `v` and area
 //! difference `Δa` ([`super::Model::Bc`], the constraint `J = Δa` in the Newton system), each
-//! branch followed in `Δa` at fixed `v` ([`bc_curve`]).
+//! branch followed at fixed `v` with `Δa` free ([`bc_curve`]).
 //!
-//! * Prolate, oblate, stomatocyte: the branch's SC shape at `v` (at `c̄0`, or at more negative
-//!   `c̄0` for a stomatocyte that does not reach `v` there) is the BC shape at its own `Δa`
-//!   (multiplier 0); from there the continuation steps in `Δa` both ways, with the secant
-//!   predictor of the last two shapes and step halving, until the window or a limit point.
+//! * Prolate, oblate, stomatocyte: the branch's SC shape at `v` (at `c̄0`, or for a stomatocyte
+//!   that does not reach `v` there at `c̄0` lowered in steps of 1) is the BC shape at its own
+//!   `Δa`; a second one is the SC shape at `c̄0,eff + 0.1`. From these two the branch is
+//!   followed both ways by pseudo-arclength in the coefficients (the BC Newton system with the
+//!   row of `Δa` replaced by the arclength condition): near `v = 1` the branches are so stiff
+//!   in `Δa` (at `v = 0.9` the SC prolate's `Δa` moves by 2e-5 between `c̄0 = −1` and 2) that
+//!   neither `Δa` nor `c̄0` is a usable parameter.
 //! * Pear: the up–down test function of the prolate ([`super::prolate_updown`]'s `μ`, the
 //!   smallest eigenvalue of the odd Hessian block of the BC Lagrangian, which is that of the
-//!   SC Lagrangian at `c̄0,eff`) is scanned along the prolate curve; at its first zero `Δa_b`
-//!   (refined by the secant method) the pear leaves the prolate. Just above it the prolate
-//!   plus a small multiple of the unstable eigenvector descends ([`super::solver`]'s
-//!   constrained minimisation, every mode, closure held) to the pear, which is then followed
-//!   up in `Δa` until its neck falls below [`super::Options::neck_min`].
+//!   SC Lagrangian at `c̄0,eff`) is evaluated along the prolate's path towards larger `Δa`; its
+//!   first sign change is refined by the secant method in `Δa`. The prolates past it (μ < 0),
+//!   kicked along the unstable eigenvector, descend (the solver's constrained minimisation,
+//!   every mode, closure held) to the pear, which is followed both ways by arclength.
 //!
 //! The BC energy is `e` (at [`super::Options::c0`], usually 0: at fixed `Δa`, `c̄0` only adds
 //! the constant `−c̄0 Δa + c̄0²/4`).
@@ -512,9 +514,10 @@ fn pear_path(
     let Some((mut pw, c1)) = found else {
         return (Vec::new(), bif);
     };
-    // A second pear state a little further from the bifurcation.
+    // A second pear state a little further from the bifurcation (half its distance again: near
+    // v = 1 the branch is so stiff in Δa that a fixed step would leave Newton's basin).
     let da1 = c1.eval.j;
-    let step = if da1 >= da_b { 1e-5 } else { -1e-5 };
+    let step = 0.5 * (da1 - da_b);
     let Some(c2) = pw.solve_at(da1 + step, &c1.a) else {
         return (Vec::new(), bif);
     };

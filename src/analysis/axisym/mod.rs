@@ -29,6 +29,12 @@
 //! diagram and [`phase`] the (v, c̄0) diagram, which the command `vesicle axisym` (with `--c0`)
 //! writes.
 //!
+//! **ADE and the bilayer couple.** [`Options::model`] selects the energy ([`model`]): SC, ADE
+//! (`w = e + πα(Δa − Δa0)²`, whose gradient is that of `e` at `c̄0,eff`) or BC (`Δa` held by a
+//! further Newton constraint). [`bc`] follows the BC branches in `Δa` at fixed `v`, [`ade`]
+//! maps them to ADE and solves ADE shapes ([`ade_solution`]), [`ade_phase`] builds the
+//! `(v, Δa)` and `(v, Δa0)` diagrams and [`limits`] gives the limit lines `L_pear`, `L_sto`.
+//!
 //! **Multipliers.** With `e*(v)` the branch energy at `R0 = 1`, the pressure difference and the
 //! tension of the shape equation `δE_b − P δV + σ δA = 0` (`E_b = (κ/2)∮(2H − c0)² dA =
 //! 8πκ e`) are, in units of `κ/R0³` and `κ/R0²`: `P = 6 de*/dv = −6 λ_v` (vary `V` at fixed
