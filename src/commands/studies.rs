@@ -10,7 +10,7 @@ use crate::commands::study::convergence::Convergence;
 use crate::commands::study::file;
 use crate::commands::study::harness::{self, Report, Study};
 use crate::commands::study::precision::Precision;
-use crate::commands::study::stability::Stability;
+use crate::commands::study::stability::{AdeStability, Stability};
 use crate::commands::study::stationary::{self, Stationary};
 use crate::error::{Error, Result};
 use clap::CommandFactory;
@@ -84,6 +84,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         Precision::NAME => run_file::<Precision>(args),
         Stability::NAME => run_file::<Stability>(args),
         Budding::NAME => run_file::<Budding>(args),
+        AdeStability::NAME => run_file::<AdeStability>(args),
         "stationary" => run_stationary(args),
         _ => Err(Error::config(
             "study",
@@ -169,6 +170,7 @@ mod tests {
             "precision",
             "stability",
             "budding",
+            "ade",
         ] {
             assert!(
                 names.iter().any(|n| n == expected),
