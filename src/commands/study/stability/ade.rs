@@ -5,15 +5,16 @@
 //! From one field prepared without the term (the scene's `prepare_steps` spectral SBDF1 steps),
 //! `steps` fixed steps of each spectral scheme of the file (default stabiliser, area by the
 //! exact projection) with an ADE term at each α of the file and Δa0 = Δa of the prepared field
-//! + `da0_offset` (so that c̄0,eff starts at c̄0 + 2πα·offset), λ implicit (solved with σ in the
-//! step) or lagged (λ of the current state), at each Δt of a geometric sweep. Every run is classified by the criteria of [`crate::commands::study::classify`], with
+//! plus `da0_offset` (so that c̄0,eff starts at c̄0 + 2πα·offset), λ implicit (solved with σ in the
+//! step) or lagged (λ of the current state), at each Δt of a geometric sweep. Every run is
+//! classified by the criteria of [`crate::commands::study::classify`], with
 //! F_eff = F_sc + σⁿA + F_ade: the functional the step decreases at fixed multipliers. The
-//! energy guard is off (`allow_unstable`), so a run that rises goes on and is classified by its
-//! series.
+//! energy guard is off (`allow_unstable`), so a run that rises goes on and is classified by
+//! its series.
 //!
 //! The lagged λ = κ_λ(Mⁿ − M0) is an explicit term whose stiffness κ_λ grows with α: the
-//! frontier of the lagged runs falls as α grows, while the implicit λ's denominator
-//! 1 − κ_λ⟨m̂, R̂⟩ ≥ 1 keeps it bounded at every α and Δt.
+//! frontier of the lagged runs falls as α grows, while the implicit λ's denominator is
+//! 1 − κ_λ⟨m̂, R̂⟩ ≥ 1 at every α and Δt (docs/src/theory/ade.md).
 //!
 //! Writes `ade.txt`, `stability_ade.csv` (every run), `frontier_ade.csv` (the largest stable Δt
 //! per scheme, multiplier and α) and the chart `stability_ade` (PNG and SVG).
@@ -151,8 +152,10 @@ fn check(spec: &Spec, base: &Scene) -> Result<()> {
             "need at least one value, each finite and > 0 (the chart's axis is logarithmic)",
         ));
     }
-    if !(spec.dt_min > 0.0 && spec.dt_max >= spec.dt_min && spec.per_decade > 0.0)
-        || !spec.dt_max.is_finite()
+    if !(spec.dt_min > 0.0
+        && spec.dt_max >= spec.dt_min
+        && spec.dt_max.is_finite()
+        && spec.per_decade > 0.0)
     {
         return Err(Error::config(
             "dt_min",
