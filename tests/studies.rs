@@ -591,3 +591,121 @@ fn bad_pinning_and_resolution_files_name_the_key() {
     v["r0"] = serde_json::json!([10, 12]);
     refused("resolution", v, "shapes[0].v");
 }
+
+/// `study ade --quick` (runs/studies/stability_ade.json: the 3D prolate, Δa0 the start's Δa,
+/// 40 fixed steps, α in {1, 1e4}, Δt in {1, 10, 100, 1000}): every (scheme, multiplier, α, Δt)
+/// is a classified row. The lagged λ = κ_λ(Mⁿ − M0) is an explicit term whose stiffness
+/// κ_λ ∝ α, so at the largest α it fails where the implicit λ does not: the implicit λ solves
+/// M^{n+1} with σ, its denominator 1 − κ_λ⟨m̂, R̂⟩ ≥ 1 at every α and Δt
+/// (docs/src/theory/ade.md, "The engines"). So SBDF1 (whose default S is stable at every Δt
+/// without the term: docs/src/theory/spectral.md) with the implicit λ is stable at every point
+/// of the sweep, and with the lagged λ not at the largest α·Δt; at the largest α and the
+/// smallest Δt SBDF2 too is stable with the implicit λ and not with the lagged one, while both
+/// multipliers are stable there at the smallest α (the failure comes with α).
+#[test]
+fn ade_quick_study_lagged_multiplier_fails_where_the_implicit_one_holds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ade");
+    let file = "runs/studies/stability_ade.json";
+    let o = vesicle(&[
+        "study",
+        "ade",
+        file,
+        "--quick",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("largest stable dt against alpha"),
+        "{stdout}"
+    );
+    // The sweep's axes, from the file's quick block.
+    let study: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    let quick = &study["quick"];
+    let alphas: Vec<f64> = serde_json::from_value(quick["alpha"].clone()).unwrap();
+    let (dt_min, dt_max) = (
+        quick["dt_min"].as_f64().unwrap(),
+        quick["dt_max"].as_f64().unwrap(),
+    );
+    let per_decade = quick["per_decade"].as_f64().unwrap();
+    let dts: Vec<f64> = (0..=((dt_max / dt_min).log10() * per_decade).round() as i32)
+        .map(|i| dt_min * 10f64.powf(i as f64 / per_decade))
+        .collect();
+    let (a_min, a_max) = (alphas[0], *alphas.last().unwrap());
+    assert_eq!(
+        header(&out.join("stability_ade.csv")),
+        "scheme,multiplier,alpha,dt,class,steps,max_abs_phi,max_area_error,da_end,max_abs_c0_eff"
+    );
+    let rows = csv_fields(&out.join("stability_ade.csv"));
+    assert_eq!(rows.len(), 2 * 2 * alphas.len() * dts.len());
+    let classes = ["stable", "energy rising", "constraint lost", "blown up"];
+    assert!(rows.iter().all(|r| classes.contains(&r[4].as_str())));
+    let class = |scheme: &str, multiplier: &str, alpha: f64, dt: f64| -> String {
+        rows.iter()
+            .find(|r| {
+                r[0] == scheme
+                    && r[1] == multiplier
+                    && r[2].parse::<f64>().unwrap() == alpha
+                    && (r[3].parse::<f64>().unwrap() / dt - 1.0).abs() < 1e-9
+            })
+            .unwrap_or_else(|| panic!("{scheme} {multiplier} alpha {alpha} dt {dt}"))[4]
+            .clone()
+    };
+    for &alpha in &alphas {
+        for &dt in &dts {
+            assert_eq!(
+                class("sbdf1", "implicit", alpha, dt),
+                "stable",
+                "SBDF1, implicit, alpha {alpha}, dt {dt}"
+            );
+        }
+    }
+    assert_ne!(class("sbdf1", "lagged", a_max, dt_max), "stable");
+    assert_eq!(class("sbdf2", "implicit", a_max, dt_min), "stable");
+    assert_ne!(class("sbdf2", "lagged", a_max, dt_min), "stable");
+    for scheme in ["sbdf1", "sbdf2"] {
+        assert_eq!(class(scheme, "lagged", a_min, dt_min), "stable", "{scheme}");
+    }
+    let frontier = csv_fields(&out.join("frontier_ade.csv"));
+    assert_eq!(frontier.len(), 2 * 2 * alphas.len());
+    charts_exist(&out, &["stability_ade"]);
+}
+
+/// The ADE study's file is strict: an unknown key, a scene with its own `ade` block (the study
+/// sets it) or an empty α list is refused with exit 2 naming the key, before anything is
+/// written.
+#[test]
+fn ade_study_file_is_strict() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("runs/studies/stability_ade.json").unwrap();
+    let base: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let out = tmp.path().join("o");
+    let mut cases = Vec::new();
+    let mut v = base.clone();
+    v["alpha_max"] = serde_json::json!(1);
+    cases.push((v, "alpha_max"));
+    let mut v = base.clone();
+    v["scene"]["ade"] = serde_json::json!({"alpha": 1.0, "da0": 1.0});
+    cases.push((v, "scene.ade"));
+    let mut v = base.clone();
+    v["alpha"] = serde_json::json!([]);
+    cases.push((v, "alpha"));
+    for (i, (v, key)) in cases.into_iter().enumerate() {
+        let bad = tmp.path().join(format!("bad{i}.json"));
+        std::fs::write(&bad, v.to_string()).unwrap();
+        let o = vesicle(&[
+            "study",
+            "ade",
+            bad.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{key}: {err}");
+        assert!(err.contains(key), "{key}: {err}");
+        assert!(!out.exists());
+    }
+}

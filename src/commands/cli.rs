@@ -269,6 +269,13 @@ enum Study {
         after_help = "Example:\n  vesicle study resolution runs/studies/resolution.json --out out/resolution [--quick]"
     )]
     Resolution(StudyArgs),
+    /// The ADE multiplier's stability map: fixed Δt against α for SBDF1 and SBDF2 with λ
+    /// implicit (solved with σ) and lagged, on a 3D scene with an `ade` block; every run
+    /// classified, the largest stable Δt per scheme, multiplier and α.
+    #[command(
+        after_help = "Example:\n  vesicle study ade runs/studies/stability_ade.json --out runs/results/stability/ade [--quick]"
+    )]
+    Ade(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -422,6 +429,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Stability(args)) => {
             args.run(crate::commands::study::stability::Stability::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Ade(args)) => {
+            args.run(crate::commands::study::stability::AdeStability::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Budding(args)) => {

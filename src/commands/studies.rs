@@ -12,7 +12,7 @@ use crate::commands::study::harness::{self, Report, Study};
 use crate::commands::study::pinning::PinningStudy;
 use crate::commands::study::precision::Precision;
 use crate::commands::study::resolution::ResolutionStudy;
-use crate::commands::study::stability::Stability;
+use crate::commands::study::stability::{AdeStability, Stability};
 use crate::commands::study::stationary::{self, Stationary};
 use crate::error::{Error, Result};
 use clap::CommandFactory;
@@ -88,6 +88,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         Budding::NAME => run_file::<Budding>(args),
         PinningStudy::NAME => run_file::<PinningStudy>(args),
         ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
+        AdeStability::NAME => run_file::<AdeStability>(args),
         "stationary" => run_stationary(args),
         _ => Err(Error::config(
             "study",
@@ -175,6 +176,7 @@ mod tests {
             "budding",
             "pinning",
             "resolution",
+            "ade",
         ] {
             assert!(
                 names.iter().any(|n| n == expected),

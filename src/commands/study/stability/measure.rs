@@ -116,7 +116,7 @@ pub const METHODS: [FixedMethod; 5] = [
 ];
 
 /// Geometric sweep with `per_decade` values per decade from `lo` to `hi`.
-fn sweep(lo: f64, hi: f64, per_decade: f64) -> Vec<f64> {
+pub(super) fn sweep(lo: f64, hi: f64, per_decade: f64) -> Vec<f64> {
     let count = ((hi / lo).log10() * per_decade).round() as i32;
     (0..=count)
         .map(|i| lo * 10f64.powf(i as f64 / per_decade))
@@ -343,7 +343,7 @@ fn fixed_run(
 
 /// What ended a run: `None` if it ran to its end, the cause of a failed step, or the error of
 /// anything else (a failed device, a file), which ends the study.
-fn failure_cause<T>(ran: Result<T>) -> Result<Option<Cause>> {
+pub(super) fn failure_cause<T>(ran: Result<T>) -> Result<Option<Cause>> {
     match ran {
         Ok(_) => Ok(None),
         Err(Error::Blowup { cause, .. }) => Ok(Some(cause)),

@@ -17,6 +17,8 @@
 //!   expected while σ moves, so they are not counted).
 //! * **Spontaneous curvature** (optional `c0` block): at h = ε, the fixed-Δt sweep of spectral
 //!   SBDF1 and/or SBDF2 with the default S at each εc0 of the file, c0 uniform ([`c0`]).
+//! * **The ADE multiplier** (its own study, `vesicle study ade`, [`ade`]): on a 3D scene with
+//!   an ADE term, the fixed-Δt sweep of SBDF1 and SBDF2 at each α with λ implicit and lagged.
 //!
 //! The runs are [`measure`]d from the study file's keys ([`spec`]). The [`report`] gives the
 //! largest stable Δt per method and h (the last stable Δt below the first failure), the
@@ -25,11 +27,13 @@
 //! and the charts `stability_map`, `stability_alpha` (PNG and SVG); with a `c0` block also
 //! `stability_c0.csv` and the chart `stability_c0`.
 
+pub mod ade;
 pub mod c0;
 pub mod measure;
 pub mod report;
 pub mod spec;
 
+pub use ade::{AdeRun, AdeStability};
 pub use c0::C0Run;
 pub use measure::{FixedMethod, Run, METHODS};
 pub use spec::{AdaptiveSweep, AlphaSweep, C0Sweep, Spec};
