@@ -5,33 +5,39 @@ use ndarray::{Array3, Ix2};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vesicle::driver::record::{Record, COLUMNS};
+use vesicle::driver::record::Record;
 
-/// A record as a dict keyed by the timeseries.csv column names (`step` and `rejected` ints).
+/// A record as a dict keyed by the timeseries.csv column names (`step` and `rejected` ints;
+/// with ADE or the bilayer couple also `bending_energy`, `da`, `w`, `c0_eff`, `lambda`).
 pub fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (name, v) in COLUMNS.iter().zip(r.values()) {
-        match *name {
+    for name in r.names() {
+        match name {
             "step" => d.set_item(name, r.step)?,
             "rejected" => d.set_item(name, r.rejected)?,
-            _ => d.set_item(name, v)?,
+            _ => d.set_item(name, r.get(name))?,
         }
     }
     Ok(d)
 }
 
-/// The time series as a dict of 1-D arrays, one per column (`step` and `rejected` int64).
+/// The time series as a dict of 1-D arrays, one per column of its first row (`step` and
+/// `rejected` int64).
 pub fn history_dict<'py>(py: Python<'py>, rows: &[Record]) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (i, name) in COLUMNS.iter().enumerate() {
-        match *name {
+    let names = rows
+        .first()
+        .map_or_else(|| vesicle::driver::record::COLUMNS.to_vec(), Record::names);
+    for name in names {
+        let col = |r: &Record| r.get(name).unwrap_or(f64::NAN);
+        match name {
             "step" | "rejected" => {
-                let ints: Vec<i64> = rows.iter().map(|r| r.values()[i] as i64).collect();
+                let ints: Vec<i64> = rows.iter().map(|r| col(r) as i64).collect();
                 d.set_item(name, PyArray1::from_vec(py, ints))?;
             }
             _ => {
-                let col: Vec<f64> = rows.iter().map(|r| r.values()[i]).collect();
-                d.set_item(name, PyArray1::from_vec(py, col))?;
+                let values: Vec<f64> = rows.iter().map(col).collect();
+                d.set_item(name, PyArray1::from_vec(py, values))?;
             }
         }
     }

@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 use vesicle::driver::observers::Recorder;
-use vesicle::driver::record::{Record, COLUMNS};
+use vesicle::driver::record::Record;
 use vesicle::driver::simulation::{Flow, Now, Observer, Simulation, StopRules};
 use vesicle::error::Result;
 use vesicle::problem::grid::Grid;
@@ -65,11 +65,11 @@ impl StepView {
     /// The value of column `name` as a Python int (step, rejected) or float.
     fn value<'py>(&self, py: Python<'py>, name: &str) -> Option<Bound<'py, PyAny>> {
         let r = &self.record;
-        let i = COLUMNS.iter().position(|c| *c == name)?;
+        let v = r.get(name)?;
         Some(match name {
             "step" => r.step.into_pyobject(py).ok()?.into_any(),
             "rejected" => r.rejected.into_pyobject(py).ok()?.into_any(),
-            _ => r.values()[i].into_pyobject(py).ok()?.into_any(),
+            _ => v.into_pyobject(py).ok()?.into_any(),
         })
     }
 }
@@ -90,32 +90,39 @@ impl StepView {
     }
 
     fn __contains__(&self, key: &str) -> bool {
-        COLUMNS.contains(&key)
+        self.record.names().contains(&key)
     }
 
     fn __len__(&self) -> usize {
-        COLUMNS.len()
+        self.record.names().len()
     }
 
     fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        PyList::new(py, COLUMNS)?.try_iter().map(Bound::into_any)
+        PyList::new(py, self.record.names())?
+            .try_iter()
+            .map(Bound::into_any)
     }
 
     /// The column names (those of timeseries.csv).
     fn keys(&self) -> Vec<&'static str> {
-        COLUMNS.to_vec()
+        self.record.names()
     }
 
     /// The values, in the order of keys().
     fn values<'py>(&self, py: Python<'py>) -> Vec<Bound<'py, PyAny>> {
-        COLUMNS.iter().filter_map(|c| self.value(py, c)).collect()
+        self.record
+            .names()
+            .iter()
+            .filter_map(|c| self.value(py, c))
+            .collect()
     }
 
     /// (name, value) pairs, in the order of keys().
     fn items<'py>(&self, py: Python<'py>) -> Vec<(&'static str, Bound<'py, PyAny>)> {
-        COLUMNS
-            .iter()
-            .filter_map(|c| Some((*c, self.value(py, c)?)))
+        self.record
+            .names()
+            .into_iter()
+            .filter_map(|c| Some((c, self.value(py, c)?)))
             .collect()
     }
 

@@ -96,6 +96,25 @@ impl Record {
         ]
     }
 
+    /// The names of this record's columns: [`COLUMNS`], then [`COUPLE_COLUMNS`] when it has
+    /// them (the header its `timeseries.csv` is written with).
+    pub fn names(&self) -> Vec<&'static str> {
+        let mut names = COLUMNS.to_vec();
+        if self.couple.is_some() {
+            names.extend(COUPLE_COLUMNS);
+        }
+        names
+    }
+
+    /// The value of the column `name` of [`Record::names`], if the record has it.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        if let Some(i) = COLUMNS.iter().position(|c| *c == name) {
+            return Some(self.values()[i]);
+        }
+        let i = COUPLE_COLUMNS.iter().position(|c| *c == name)?;
+        self.couple.map(|c| c.values()[i])
+    }
+
     /// A record of the state `engine` holds at `step`, time `t`, reached by a step `dt`, in a
     /// scene of dimension `dim`, width `eps` (`rate` NaN, counters 0).
     pub fn of(step: usize, t: f64, dt: f64, engine: &dyn Engine, dim: usize, eps: f64) -> Self {

@@ -118,7 +118,11 @@ pub fn merge_slice(
     let (v_lo, v_hi) = results.iter().fold((1.0f64, 0.0f64), |(a, b), r| {
         (a.min(r.v).min(r.v_target), b.max(r.v).max(r.v_target))
     });
-    let reference = Reference::at(at, v_lo - 0.03, v_hi + 0.03);
+    let listed: Vec<Branch> = Branch::ALL
+        .into_iter()
+        .filter(|b| results.iter().any(|r| r.branch == b.name()))
+        .collect();
+    let reference = Reference::at(at, v_lo - 0.03, v_hi + 0.03, &listed);
     report::write_csv(dir, &points, results, &reference)?;
     let extrapolated = report::branch_points(&points, |p| (p.v, p.e));
     let found: Vec<(String, [f64; 3], Kind)> = report::transitions(&points, &reference)

@@ -36,10 +36,11 @@ pub const TRANSITIONS: [(Branch, Branch); 3] = [
 
 impl Reference {
     /// The reference of the diagram slice `at` over `[v_lo, v_hi]`: [`Reference::new`] at its
-    /// c̄0, or with ADE each branch's stationary ADE shape ([`axisym::ade_solution`]) at α,
-    /// Δa0 and c̄0 every 0.02 in v, its w and Δa (the stable shape of least w where a branch has
-    /// several; none where it has no stable one).
-    pub fn at(at: SliceAt, v_lo: f64, v_hi: f64) -> Self {
+    /// c̄0, or with ADE the stationary ADE shape ([`axisym::ade_solution`]) of each branch of
+    /// `listed` (the others are left empty: each ADE point is a solve of its own) at α, Δa0 and
+    /// c̄0 every 0.02 in v, its w and Δa (the stable shape of least w where a branch has several;
+    /// none where it has no stable one).
+    pub fn at(at: SliceAt, v_lo: f64, v_hi: f64, listed: &[Branch]) -> Self {
         let Some((alpha, da0)) = at.ade else {
             return Self::new(at.c0, v_lo, v_hi);
         };
@@ -49,6 +50,9 @@ impl Reference {
         let solved: Vec<Vec<(f64, f64, f64)>> = Branch::ALL
             .par_iter()
             .map(|&b| {
+                if !listed.contains(&b) {
+                    return Vec::new();
+                }
                 (lo..=hi)
                     .into_par_iter()
                     .filter_map(|i| {
