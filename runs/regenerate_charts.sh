@@ -18,6 +18,9 @@
 # else estimated from the committed results' own record:
 #   convergence      study convergence                                            74 s, measured
 #   stability        study stability (the Δt × h map, α, the c0 axis)              22 s, measured
+#   stability_ade    study ade (the ADE multiplier, implicit against lagged)       29 s, measured
+#   pinning          study pinning (lattice pinning against h/ε)       ~17 min (1 007 s, loaded)
+#   resolution       study resolution (error against wall time)         ~6 min (342 s, loaded)
 #   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations)                  505 s, measured
@@ -28,6 +31,7 @@
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
 #   diagram_c0_fine  diagram diagram_c0_fine.json, 165 cases      ~17-35 min (cases: 1 968 s)
+#   diagram_ade      diagram diagram_ade.json, 60 cases (h = ε/2, R0 24-40ε)     DIAGRAM_ADE_TIME
 #   budding3d        run budding3d.json (200 000 steps), measure, render    ~14 min (820 s recorded)
 #   deflation3d      run deflation3d.json (215 000 steps), measure, render     280 s, measured
 #   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
@@ -40,8 +44,9 @@ cd "$(dirname "$0")/.."
 VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
-ALL=(convergence stability precision pear3d budding axisym_c0 axisym_bc axisym_ade diagram diagram_fine diagram_c0
-     diagram_c0_fine budding3d deflation3d dumbbell3d pearling3d)
+ALL=(convergence stability stability_ade pinning resolution precision pear3d budding axisym_c0 axisym_bc
+     axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade budding3d deflation3d
+     dumbbell3d pearling3d)
 
 # Run the program, echoing the command.
 vesicle() {
@@ -84,6 +89,9 @@ frame() {
 
 group_convergence() { study convergence convergence.json; same_names "$out" convergence; }
 group_stability() { study stability stability.json; same_names "$out" stability; }
+group_stability_ade() { study ade stability_ade.json; same_names "$out" stability_ade; }
+group_pinning() { study pinning pinning.json; same_names "$out" pinning; }
+group_resolution() { study resolution resolution.json; same_names "$out" resolution; }
 group_precision() {
     study precision precision.json
     keep "$out/precision_transient.png" precision/precision_transient.png
@@ -129,6 +137,7 @@ group_diagram() { diagram diagram; }
 group_diagram_fine() { diagram diagram_fine; }
 group_diagram_c0() { diagram diagram_c0; }
 group_diagram_c0_fine() { diagram diagram_c0_fine; }
+group_diagram_ade() { diagram diagram_ade; }
 group_budding3d() {
     scene budding3d
     vesicle measure "$out" --force
@@ -187,6 +196,11 @@ FIGURES=(
     stability_alpha.png=stability/stability_alpha.png
     stability_c0.png=stability/stability_c0.png
     stability_map.png=stability/stability_map.png
+    stability_ade.png=stability_ade/stability_ade.png
+    pinning.png=pinning/pinning.png
+    resolution.png=resolution/resolution.png
+    diagram_ade_phase.png=diagram_ade/phase.png
+    diagram_ade_errors.png=diagram_ade/errors.png
     budding3d_010000.png=scenes/budding3d_010000.png
     budding3d_110000.png=scenes/budding3d_110000.png
     budding3d_200000.png=scenes/budding3d_200000.png

@@ -273,7 +273,7 @@ enum Study {
     /// implicit (solved with σ) and lagged, on a 3D scene with an `ade` block; every run
     /// classified, the largest stable Δt per scheme, multiplier and α.
     #[command(
-        after_help = "Example:\n  vesicle study ade runs/studies/stability_ade.json --out runs/results/stability/ade [--quick]"
+        after_help = "Example:\n  vesicle study ade runs/studies/stability_ade.json --out runs/results/stability_ade [--quick]"
     )]
     Ade(StudyArgs),
 }

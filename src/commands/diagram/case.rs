@@ -3,7 +3,7 @@
 //! and measured. Every case runs on one thread, so its numbers do not depend on how a sweep
 //! is spread over processes.
 
-use super::spec::{Case, DiagramSpec, SliceAt};
+use super::spec::{Case, Couple, DiagramSpec, SliceAt};
 use crate::analysis::axisym::{self, Branch};
 use crate::driver::simulation::{Simulation, StopRules};
 use crate::error::{Error, Result};
@@ -31,6 +31,9 @@ pub struct CaseResult {
     /// ADE's Δa0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub da0: Option<f64>,
+    /// The Δa the bilayer couple holds (a bilayer-couple diagram's case).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bc_da: Option<f64>,
     /// Δa of the phase field (M/M₁, the record's), with ADE.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub da: Option<f64>,
@@ -65,9 +68,13 @@ pub struct CaseResult {
 impl CaseResult {
     /// The slice the case belongs to.
     pub fn slice(&self) -> SliceAt {
+        let ade = self
+            .alpha
+            .zip(self.da0)
+            .map(|(alpha, da0)| Couple::Ade { alpha, da0 });
         SliceAt {
             c0: self.c0,
-            ade: self.alpha.zip(self.da0),
+            couple: ade.or(self.bc_da.map(|da| Couple::Bc { da })),
         }
     }
 
@@ -127,7 +134,7 @@ pub fn computed_points(branch: Branch, n: [usize; 3]) -> usize {
 /// The scene of `case` (contour file `contour.csv` beside it); it sets `c0` = c̄0/`r0` where
 /// c̄0 ≠ 0.
 pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json::Value {
-    let at_c0 = if case.c0 == 0.0 && case.ade.is_none() {
+    let at_c0 = if case.c0 == 0.0 && case.couple.is_none() {
         String::new()
     } else {
         format!(", {}", case.slice().describe())
@@ -154,8 +161,25 @@ pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json:
     if case.c0 != 0.0 {
         scene["c0"] = json!(case.scene_c0());
     }
-    if let Some((alpha, da0)) = case.ade {
-        scene["ade"] = json!({"alpha": alpha, "da0": da0});
+    if let Some(couple) = case.couple {
+        let (key, value) = couple.scene_entry();
+        scene[key] = value;
+    }
+    if let Some(Couple::Bc { .. }) = case.couple {
+        // The bilayer couple is held by the conserved flow's step only.
+        scene["dynamics"] = json!("conserved");
+        scene["scheme"] = json!("sbdf2");
+        scene["adaptive"] = json!({"dt_max": 50.0});
+        scene["description"] = json!(format!(
+            "diagram case {}: {} branch at v = {}, {}, R0 = {} eps, relaxed by the conserved flow \
+             (SBDF2, adaptive) to residual {:e}",
+            case.index,
+            case.branch.name(),
+            case.v,
+            case.slice().describe(),
+            case.r0,
+            spec.stop_residual
+        ));
     }
     scene
 }
@@ -212,8 +236,18 @@ pub fn run_case(
         branch: case.branch.name().to_string(),
         v_target: case.v,
         c0: case.c0,
-        alpha: case.ade.map(|a| a.0),
-        da0: case.ade.map(|a| a.1),
+        alpha: match case.couple {
+            Some(Couple::Ade { alpha, .. }) => Some(alpha),
+            _ => None,
+        },
+        da0: match case.couple {
+            Some(Couple::Ade { da0, .. }) => Some(da0),
+            _ => None,
+        },
+        bc_da: match case.couple {
+            Some(Couple::Bc { da }) => Some(da),
+            _ => None,
+        },
         da: last.couple.map(|c| c.da),
         bending_energy: last.couple.map(|c| c.bending_energy),
         r0: case.r0,
@@ -248,7 +282,7 @@ fn write_thumbnail(full: &ndarray::Array3<f64>, h: f64, case: &Case, path: &Path
         cut: (case.branch == Branch::Stomatocyte).then_some(1),
         ..View::default()
     };
-    let title = if case.c0 == 0.0 && case.ade.is_none() {
+    let title = if case.c0 == 0.0 && case.couple.is_none() {
         format!("{} v = {}", case.branch.name(), case.v)
     } else {
         format!(

@@ -97,7 +97,7 @@ fn draw(
     transitions: &[Transition],
 ) -> DrawResult {
     root.fill(&WHITE)?;
-    let (caption, energy) = if at.ade.is_some() {
+    let (caption, energy) = if at.couple.is_some() {
         (
             format!(
                 "ADE diagram at {}: phase field (L-BFGS) against the axisymmetric reference",

@@ -158,7 +158,7 @@ pub fn merge_slice(
     report::write_error_chart(dir, at, &points, &reference)?;
     chart::write_montage(&dir.join("thumbnails.png"), thumbnails, 4)?;
     let mut table = report::table(&points, results, orders, &reference);
-    if at.ade.is_some() {
+    if at.couple.is_some() {
         table.push_str(&report::da_table(&points, &reference));
     }
     crate::commands::study::write_text(dir, "table.txt", &table)?;

@@ -30,7 +30,7 @@ use crate::analysis::axisym::{self, Options};
 use crate::error::{Error, Result};
 use case::{run_case, CaseResult};
 use rayon::prelude::*;
-use spec::{Case, DiagramSpec};
+use spec::{Case, Couple, DiagramSpec};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -128,8 +128,11 @@ fn start_shape(spec: &DiagramSpec, case: &Case) -> Result<axisym::Solution> {
         )
     };
     let opts = Options::default().with_c0(case.c0);
-    let shape = match case.ade {
-        Some((alpha, da0)) => axisym::ade_solution(case.branch, case.v, alpha, da0, &opts),
+    let shape = match case.couple {
+        Some(Couple::Ade { alpha, da0 }) => {
+            axisym::ade_solution(case.branch, case.v, alpha, da0, &opts)
+        }
+        Some(Couple::Bc { da }) => axisym::bc_solution(case.branch, case.v, da, &opts),
         None => axisym::solve(case.branch, case.v, &opts),
     }
     .map_err(|e| at(e.to_string()))?;

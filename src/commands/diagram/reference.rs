@@ -2,7 +2,7 @@
 //! branches of [`crate::analysis::axisym`] on a fine grid of reduced volumes, interpolated, and
 //! their transition volumes.
 
-use super::spec::SliceAt;
+use super::spec::{Couple, SliceAt};
 use crate::analysis::axisym::{self, Branch, Options};
 use crate::analysis::curves::{crossings, cubic_at};
 use rayon::prelude::*;
@@ -17,6 +17,10 @@ pub use crate::analysis::axisym::phase::ASYMMETRIC;
 /// Grid spacing in v of an ADE reference (each point a solve of the ADE functional, about 2 s;
 /// the cubic interpolant of w(v) on it is exact to ~1e-6).
 const DV_ADE: f64 = 0.02;
+
+/// Grid spacing in v of a bilayer-couple reference: a branch at fixed Δa spans a narrow range
+/// of v (the prolate ends where c̄0,eff → ∞, 0.02 in v from where it starts at Δa = 1.2).
+const DV_BC: f64 = 0.005;
 
 /// The reference branches, each `(v, e)` in increasing v (with ADE, e is w).
 #[derive(Clone, Debug)]
@@ -37,15 +41,20 @@ pub const TRANSITIONS: [(Branch, Branch); 3] = [
 impl Reference {
     /// The reference of the diagram slice `at` over `[v_lo, v_hi]`: [`Reference::new`] at its
     /// c̄0, or with ADE the stationary ADE shape ([`axisym::ade_solution`]) of each branch of
-    /// `listed` (the others are left empty: each ADE point is a solve of its own) at α, Δa0 and
-    /// c̄0 every 0.02 in v, its w and Δa (the stable shape of least w where a branch has several;
-    /// none where it has no stable one).
+    /// `listed` (the others are left empty: each point is a solve of its own) at α, Δa0 and c̄0
+    /// every 0.02 in v, its w and Δa (the stable shape of least w where a branch has several;
+    /// none where it has no stable one); with the bilayer couple its shape at Δa
+    /// ([`axisym::bc_solution`]) and e, every 0.005 in v.
     pub fn at(at: SliceAt, v_lo: f64, v_hi: f64, listed: &[Branch]) -> Self {
-        let Some((alpha, da0)) = at.ade else {
+        let Some(couple) = at.couple else {
             return Self::new(at.c0, v_lo, v_hi);
         };
-        let lo = (v_lo / DV_ADE).floor().max(1.0) as usize;
-        let hi = ((v_hi / DV_ADE).ceil() as usize).min((0.99 / DV_ADE).round() as usize);
+        let dv = match couple {
+            Couple::Ade { .. } => DV_ADE,
+            Couple::Bc { .. } => DV_BC,
+        };
+        let lo = (v_lo / dv).floor().max(1.0) as usize;
+        let hi = ((v_hi / dv).ceil() as usize).min((0.99 / dv).round() as usize);
         let opts = Options::default().with_c0(at.c0);
         let solved: Vec<Vec<(f64, f64, f64)>> = Branch::ALL
             .par_iter()
@@ -56,10 +65,19 @@ impl Reference {
                 (lo..=hi)
                     .into_par_iter()
                     .filter_map(|i| {
-                        let v = i as f64 * DV_ADE;
-                        let s = axisym::ade_solution(b, v, alpha, da0, &opts).ok()?;
+                        let v = i as f64 * dv;
+                        let s = match couple {
+                            Couple::Ade { alpha, da0 } => {
+                                axisym::ade_solution(b, v, alpha, da0, &opts).ok()?
+                            }
+                            Couple::Bc { da } => axisym::bc_solution(b, v, da, &opts).ok()?,
+                        };
                         let keep = b.up_down_symmetric() || s.asymmetry() > ASYMMETRIC;
-                        keep.then_some((s.v, s.w, s.da()))
+                        let energy = match couple {
+                            Couple::Ade { .. } => s.w,
+                            Couple::Bc { .. } => s.e,
+                        };
+                        keep.then_some((s.v, energy, s.da()))
                     })
                     .collect()
             })

@@ -330,7 +330,7 @@ pub fn write_error_chart(
     reference: &Reference,
 ) -> Result<()> {
     use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
-    let title = if at.c0 == 0.0 && at.ade.is_none() {
+    let title = if at.c0 == 0.0 && at.couple.is_none() {
         "Phase-field error against the axisymmetric reference, per branch".to_string()
     } else {
         format!(
@@ -338,7 +338,7 @@ pub fn write_error_chart(
             at.describe()
         )
     };
-    let energy = if at.ade.is_some() { "w" } else { "e" };
+    let energy = if at.couple.is_some() { "w" } else { "e" };
     let mut fig = Figure::new(
         title,
         Axis::linear("reduced volume v"),

@@ -33,6 +33,10 @@ pub struct DiagramSpec {
     /// the single c̄0 of `c0`); each case's scene holds `"ade"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ade: Option<AdeSlices>,
+    /// The bilayer couple: the slices are the Δa held (the single c̄0 of `c0`); each case runs
+    /// the spectral conserved flow (SBDF2, adaptive), which holds Δa (L-BFGS does not).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bilayer_couple: Option<BcSlices>,
     /// R0/ε of each resolution (ε = 1); at least two for the extrapolation in ε/R0.
     pub r0: Vec<f64>,
     /// ε/h (the grid spacing is h = 1/eps_over_h).
@@ -62,6 +66,14 @@ pub struct DiagramSpec {
     pub min_width: f64,
 }
 
+/// `bilayer_couple` of a diagram file: the Δa of each slice.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BcSlices {
+    /// The reduced area differences Δa held, a slice each.
+    pub da: Vec<f64>,
+}
+
 /// `ade` of a diagram file: α and the Δa0 of each slice.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -72,44 +84,91 @@ pub struct AdeSlices {
     pub da0: Vec<f64>,
 }
 
-/// Where a slice of a diagram sits: its reduced spontaneous curvature and, with ADE, α and Δa0.
+/// The area-difference term of a slice: ADE at α and Δa0, or the bilayer couple at Δa.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Couple {
+    /// Area-difference elasticity.
+    Ade {
+        /// α = κ̄/κ.
+        alpha: f64,
+        /// Δa0.
+        da0: f64,
+    },
+    /// The bilayer couple.
+    Bc {
+        /// The Δa held.
+        da: f64,
+    },
+}
+
+impl Couple {
+    /// The scene's key and its object (`"ade": {...}` or `"bilayer_couple": {...}`).
+    pub fn scene_entry(&self) -> (&'static str, serde_json::Value) {
+        match *self {
+            Couple::Ade { alpha, da0 } => ("ade", serde_json::json!({"alpha": alpha, "da0": da0})),
+            Couple::Bc { da } => ("bilayer_couple", serde_json::json!({"da": da})),
+        }
+    }
+}
+
+/// Where a slice of a diagram sits: its reduced spontaneous curvature and, with an
+/// area-difference term, its α and Δa0 or its Δa.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliceAt {
     /// c̄0 = c0 R0.
     pub c0: f64,
-    /// (α, Δa0) with area-difference elasticity.
-    pub ade: Option<(f64, f64)>,
+    /// The area-difference term, if any.
+    pub couple: Option<Couple>,
 }
 
 impl SliceAt {
-    /// The value that orders and labels the slices: Δa0 with ADE, else c̄0.
+    /// The value that orders and labels the slices: Δa0 (ADE), Δa (bilayer couple), else c̄0.
     pub fn value(&self) -> f64 {
-        self.ade.map_or(self.c0, |(_, da0)| da0)
-    }
-
-    /// The slice's parameter as the tables head it: `c0R0` or `da0`.
-    pub fn label(&self) -> &'static str {
-        if self.ade.is_some() {
-            "da0"
-        } else {
-            "c0R0"
+        match self.couple {
+            Some(Couple::Ade { da0, .. }) => da0,
+            Some(Couple::Bc { da }) => da,
+            None => self.c0,
         }
     }
 
-    /// The slice's folder name (`c0_0.50`, `da0_1.10`).
+    /// The slice's parameter as the tables head it: `c0R0`, `da0` or `da`.
+    pub fn label(&self) -> &'static str {
+        match self.couple {
+            Some(Couple::Ade { .. }) => "da0",
+            Some(Couple::Bc { .. }) => "da",
+            None => "c0R0",
+        }
+    }
+
+    /// The slice's folder name (`c0_0.50`, `da0_1.10`, `da_1.10`).
     pub fn folder(&self) -> String {
-        match self.ade {
-            Some((_, da0)) => format!("da0_{}", c0_tag(da0)),
+        match self.couple {
+            Some(Couple::Ade { da0, .. }) => format!("da0_{}", c0_tag(da0)),
+            Some(Couple::Bc { da }) => format!("da_{}", c0_tag(da)),
             None => format!("c0_{}", c0_tag(self.c0)),
         }
     }
 
-    /// A few words for titles: `c0 R0 = 0.5`, `α = 1.4, Δa0 = 1.1` (with c̄0 when not 0).
+    /// A few words for titles: `c0 R0 = 0.5`, `α = 1.4, Δa0 = 1.1`, `bilayer couple Δa = 1.1`
+    /// (with c̄0 when not 0).
     pub fn describe(&self) -> String {
-        match self.ade {
-            Some((alpha, da0)) if self.c0 == 0.0 => format!("α = {alpha}, Δa0 = {da0}"),
-            Some((alpha, da0)) => format!("α = {alpha}, Δa0 = {da0}, c0 R0 = {}", self.c0),
-            None => format!("c0 R0 = {}", self.c0),
+        let term = match self.couple {
+            Some(Couple::Ade { alpha, da0 }) => format!("α = {alpha}, Δa0 = {da0}"),
+            Some(Couple::Bc { da }) => format!("bilayer couple Δa = {da}"),
+            None => return format!("c0 R0 = {}", self.c0),
+        };
+        if self.c0 == 0.0 {
+            term
+        } else {
+            format!("{term}, c0 R0 = {}", self.c0)
+        }
+    }
+
+    /// The name of the energy the slice compares: w with ADE, else e.
+    pub fn energy_name(&self) -> &'static str {
+        match self.couple {
+            Some(Couple::Ade { .. }) => "w",
+            _ => "e",
         }
     }
 }
@@ -154,8 +213,8 @@ pub struct Case {
     pub branch: Branch,
     /// Reduced spontaneous curvature c̄0 = c0 R0.
     pub c0: f64,
-    /// (α, Δa0) of an ADE diagram.
-    pub ade: Option<(f64, f64)>,
+    /// The area-difference term of an ADE or bilayer-couple diagram.
+    pub couple: Option<Couple>,
     /// Target reduced volume (the axisymmetric start's).
     pub v: f64,
     /// R0/ε.
@@ -171,8 +230,10 @@ impl Case {
         } else {
             format!("_c{}", c0_tag(self.c0))
         };
-        if let Some((_, da0)) = self.ade {
-            c0 += &format!("_a{}", c0_tag(da0));
+        match self.couple {
+            Some(Couple::Ade { da0, .. }) => c0 += &format!("_a{}", c0_tag(da0)),
+            Some(Couple::Bc { da }) => c0 += &format!("_b{}", c0_tag(da)),
+            None => {}
         }
         format!(
             "{:03}_{}_v{:.4}{c0}_r{}",
@@ -192,7 +253,7 @@ impl Case {
     pub fn slice(&self) -> SliceAt {
         SliceAt {
             c0: self.c0,
-            ade: self.ade,
+            couple: self.couple,
         }
     }
 }
@@ -302,58 +363,81 @@ impl DiagramSpec {
         Ok(())
     }
 
-    /// `ade`: α > 0 finite, distinct finite Δa0 in (0, 3), one c̄0.
+    /// `ade`: α > 0 finite, distinct Δa0 in (0, 3); `bilayer_couple`: distinct Δa in (0, 3);
+    /// not both; one c̄0 with either.
     fn validate_ade(&self) -> Result<()> {
-        let Some(a) = &self.ade else {
-            return Ok(());
+        let (key, values) = match (&self.ade, &self.bilayer_couple) {
+            (None, None) => return Ok(()),
+            (Some(_), Some(_)) => {
+                return Err(Error::config(
+                    "bilayer_couple",
+                    "give ade or bilayer_couple, not both",
+                ))
+            }
+            (Some(a), None) => {
+                if !(a.alpha > 0.0 && a.alpha <= 1e3) {
+                    return Err(Error::config(
+                        "ade.alpha",
+                        format!("need 0 < α ≤ 1000, got {}", a.alpha),
+                    ));
+                }
+                ("ade.da0", &a.da0)
+            }
+            (None, Some(b)) => ("bilayer_couple.da", &b.da),
         };
-        if !(a.alpha > 0.0 && a.alpha <= 1e3) {
+        if values.is_empty() {
+            return Err(Error::config(key, "list at least one value"));
+        }
+        if let Some(d) = values.iter().find(|d| !(**d > 0.0 && **d < 3.0)) {
             return Err(Error::config(
-                "ade.alpha",
-                format!("need 0 < α ≤ 1000, got {}", a.alpha),
+                key,
+                format!("need values in (0, 3), got {d}"),
             ));
         }
-        if a.da0.is_empty() {
-            return Err(Error::config("ade.da0", "list at least one value"));
-        }
-        if let Some(d) = a.da0.iter().find(|d| !(**d > 0.0 && **d < 3.0)) {
-            return Err(Error::config(
-                "ade.da0",
-                format!("need 0 < Δa0 < 3, got {d}"),
-            ));
-        }
-        let mut sorted = a.da0.clone();
+        let mut sorted = values.clone();
         sorted.sort_by(f64::total_cmp);
         if sorted.windows(2).any(|w| w[1] - w[0] < 1e-6) {
-            return Err(Error::config("ade.da0", "values must be distinct"));
+            return Err(Error::config(key, "values must be distinct"));
         }
         if self.c0.len() != 1 {
             return Err(Error::config(
                 "c0",
-                "an ade diagram takes one c0 (its slices are the values of ade.da0)",
+                format!("a diagram of {key} takes one c0 (its slices are the values of {key})"),
             ));
         }
         Ok(())
     }
 
-    /// The slices in increasing order of their value: each c̄0, or (ADE) each Δa0 at the one
-    /// c̄0.
+    /// The slices in increasing order of their value: each c̄0, or each Δa0 (ADE) or Δa
+    /// (bilayer couple) at the one c̄0.
     pub fn slices(&self) -> Vec<SliceAt> {
-        match &self.ade {
-            Some(a) => {
-                let mut da0 = a.da0.clone();
-                da0.sort_by(f64::total_cmp);
-                da0.into_iter()
-                    .map(|d| SliceAt {
-                        c0: self.c0[0],
-                        ade: Some((a.alpha, d)),
+        let sorted = |v: &[f64]| {
+            let mut v = v.to_vec();
+            v.sort_by(f64::total_cmp);
+            v
+        };
+        let at = |couple| SliceAt {
+            c0: self.c0[0],
+            couple: Some(couple),
+        };
+        match (&self.ade, &self.bilayer_couple) {
+            (Some(a), _) => sorted(&a.da0)
+                .into_iter()
+                .map(|da0| {
+                    at(Couple::Ade {
+                        alpha: a.alpha,
+                        da0,
                     })
-                    .collect()
-            }
-            None => self
+                })
+                .collect(),
+            (None, Some(b)) => sorted(&b.da)
+                .into_iter()
+                .map(|da| at(Couple::Bc { da }))
+                .collect(),
+            (None, None) => self
                 .c0_sorted()
                 .into_iter()
-                .map(|c0| SliceAt { c0, ade: None })
+                .map(|c0| SliceAt { c0, couple: None })
                 .collect(),
         }
     }
@@ -417,7 +501,7 @@ impl DiagramSpec {
         let mut r0 = self.r0.clone();
         r0.sort_by(f64::total_cmp);
         let mut out = Vec::new();
-        for SliceAt { c0, ade } in self.slices() {
+        for SliceAt { c0, couple } in self.slices() {
             let Some(branches) = self.branches_at(c0).1 else {
                 continue;
             };
@@ -433,7 +517,7 @@ impl DiagramSpec {
                             index: out.len(),
                             branch,
                             c0,
-                            ade,
+                            couple,
                             v,
                             r0: r,
                         });

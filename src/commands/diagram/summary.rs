@@ -7,7 +7,7 @@
 
 use super::merge::Slice;
 use super::report::Kind;
-use super::spec::branch_named;
+use super::spec::{branch_named, Couple};
 use crate::analysis::axisym::{phase, Branch, Options};
 use crate::commands::axisym::phase::phase_figure;
 use crate::error::{Error, Result};
@@ -239,7 +239,7 @@ fn table(slices: &[Slice]) -> String {
 /// and the phase-field transitions as markers (extrapolated: black crosses; finest
 /// resolution: grey diamonds).
 fn phase_chart(slices: &[Slice]) -> Figure {
-    if slices.first().is_some_and(|s| s.at.ade.is_some()) {
+    if slices.first().is_some_and(|s| s.at.couple.is_some()) {
         return ade_phase_chart(slices);
     }
     let (lo, hi, dv) = PHASE_V;
@@ -301,23 +301,28 @@ fn phase_chart(slices: &[Slice]) -> Figure {
 
 /// The first column of the merged CSV files: `c0`, or `da0` for an ADE diagram.
 fn column(slices: &[Slice]) -> &'static str {
-    if slices.first().is_some_and(|s| s.at.ade.is_some()) {
+    if slices.first().is_some_and(|s| s.at.couple.is_some()) {
         "da0"
     } else {
         "c0"
     }
 }
 
-/// `phase.png` of an ADE diagram: the transitions on the (v, Δa0) plane, the reference's
-/// (joined across Δa0, dashed) and the phase field's (extrapolated: black crosses; finest:
+/// `phase.png` of an ADE or bilayer-couple diagram: the transitions on the (v, Δa0) or
+/// (v, Δa) plane, the reference's (joined across the slices, dashed) and the phase field's (extrapolated: black crosses; finest:
 /// grey diamonds).
 fn ade_phase_chart(slices: &[Slice]) -> Figure {
-    let alpha = slices.first().and_then(|s| s.at.ade).map_or(0.0, |a| a.0);
-    let mut fig = Figure::new(
-        format!("ADE transitions at α = {alpha}: axisymmetric reference and phase field"),
-        Axis::linear("reduced volume v"),
-        Axis::linear("preferred area difference Δa0"),
-    );
+    let (title, y) = match slices.first().and_then(|s| s.at.couple) {
+        Some(Couple::Ade { alpha, .. }) => (
+            format!("ADE transitions at α = {alpha}: axisymmetric reference and phase field"),
+            "preferred area difference Δa0",
+        ),
+        _ => (
+            "Bilayer-couple transitions: axisymmetric reference and phase field".to_string(),
+            "reduced area difference Δa",
+        ),
+    };
+    let mut fig = Figure::new(title, Axis::linear("reduced volume v"), Axis::linear(y));
     fig.legend = Corner::UpperRight;
     let names: Vec<String> = slices
         .iter()
@@ -365,19 +370,22 @@ fn ade_phase_chart(slices: &[Slice]) -> Figure {
 /// `errors.png`: `e / e_ref(v) − 1` in percent against c̄0 (or w against Δa0), per branch,
 /// extrapolated (filled markers) and at the finest resolution (crosses).
 fn error_chart(slices: &[Slice]) -> Figure {
-    let ade = slices.first().is_some_and(|s| s.at.ade.is_some());
-    let (title, x, y) = if ade {
-        (
+    let (title, x, y) = match slices.first().and_then(|s| s.at.couple) {
+        Some(Couple::Ade { .. }) => (
             "Phase-field error of w against the axisymmetric ADE reference, per Δa0",
             "preferred area difference Δa0",
             "w / w_reference(v) − 1  [%]",
-        )
-    } else {
-        (
+        ),
+        Some(Couple::Bc { .. }) => (
+            "Phase-field error of e against the axisymmetric bilayer-couple reference, per Δa",
+            "reduced area difference Δa",
+            "e / e_reference(v) − 1  [%]",
+        ),
+        None => (
             "Phase-field error of e against the axisymmetric reference, per c0 R0",
             "reduced spontaneous curvature c0·R0",
             "e / e_reference(v) − 1  [%]",
-        )
+        ),
     };
     let mut fig = Figure::new(title, Axis::linear(x), Axis::linear(y));
     fig.legend = Corner::LowerLeft;

@@ -116,6 +116,7 @@ impl Relaxation {
             branches: Default::default(),
             branches_by_c0: Default::default(),
             ade: None,
+            bilayer_couple: None,
             r0: vec![],
             eps_over_h,
             margin: self.margin,
