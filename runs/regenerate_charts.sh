@@ -31,7 +31,7 @@
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
 #   diagram_c0_fine  diagram diagram_c0_fine.json, 165 cases      ~17-35 min (cases: 1 968 s)
-#   diagram_ade      diagram diagram_ade.json, 60 cases (h = ε/2, R0 24-40ε)     DIAGRAM_ADE_TIME
+#   diagram_ade      diagram diagram_ade.json, 60 cases (h = ε/2, R0 24-40ε)     13.5 min (cases: 1 594 s), measured
 #   budding3d        run budding3d.json (200 000 steps), measure, render    ~14 min (820 s recorded)
 #   deflation3d      run deflation3d.json (215 000 steps), measure, render     280 s, measured
 #   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
