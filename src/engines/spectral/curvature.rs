@@ -7,8 +7,8 @@
 //! of m and φ² forward) per evaluation.
 
 use super::evaluator::{Evaluator, ExplicitTerm, Metric, State, Symbols};
-use super::pieces::{for_each_piece, re_dot, reals, reals_mut};
-use super::update::Update;
+use super::pieces::{for_each_piece, reals, reals_mut};
+use super::update::{Update, MAX_LEVELS};
 use crate::problem::area_difference::{curvature_density, curvature_variation_local};
 use ndarray::Array3;
 use num_complex::Complex64;
@@ -49,7 +49,7 @@ fn at(v: &[f64], at: usize, width: usize) -> &[f64] {
     &v[at..at + width]
 }
 
-/// Σ over a mode's reals of a·b: Re(a b*) (see [`re_dot`]).
+/// Σ over a mode's reals of a·b: Re(a b*) of modes given as slices.
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
@@ -177,19 +177,16 @@ pub struct CoupleInputs<'a> {
     pub levels: Vec<[&'a [f64]; 3]>,
 }
 
-/// P̂, Q̂, R̂ of `u` at one mode (the first `width` reals of each) from the inputs at real `i`.
+/// P̂, Q̂, R̂ of `u` at one mode (the first `width` reals of each) from the inputs at real `i`,
+/// with the update's own factors ([`Update::at`]): R̂ = −|k|² Σ_j n_j m̂_j.
 fn update_at(u: &Update, inputs: &CoupleInputs, i: usize, k: f64, width: usize) -> [[f64; 2]; 3] {
-    let (dt, s) = (u.dt, u.s2 * k + u.s4e2 * k * k);
-    let inv = 1.0 / (u.c.a[0] + dt * (u.e4x2 * k * k * k + s));
+    let f = u.at::<MAX_LEVELS>(k);
     let mut out = [[0.0; 2]; 3];
     for (j, [h, n, m]) in inputs.levels.iter().enumerate() {
-        let hf = (-u.c.a[j + 1] + dt * u.c.b[j] * s) * inv;
-        let nf = dt * u.c.b[j] * inv;
-        let qf = -dt * u.c_sigma * k * k * u.c.b[j] * inv;
         for c in 0..width {
-            out[0][c] += hf * h[i + c] + nf * n[i + c];
-            out[1][c] += qf * h[i + c];
-            out[2][c] += -k * nf * m[i + c];
+            out[0][c] += f.h[j] * h[i + c] + f.n[j] * n[i + c];
+            out[1][c] += f.q[j] * h[i + c];
+            out[2][c] -= k * f.n[j] * m[i + c];
         }
     }
     out
@@ -206,24 +203,14 @@ pub fn couple_sums(sym: &Symbols, u: &Update, inputs: &CoupleInputs, total: usiz
         let aw = sym.area_prefactor * k * w;
         let pairs = [(p, p), (p, q), (q, q), (p, r), (q, r), (r, r)];
         for (acc, (a, b)) in s.area.iter_mut().zip(pairs) {
-            *acc += aw * re_dot_slice(a, b);
+            *acc += aw * dot(a, b);
         }
         let (m, h) = (at(m0, i, width), at(h0, i, width));
-        let change: Vec<f64> = p.iter().zip(h).map(|(p, h)| p - h).collect();
-        s.curvature[0] += w * dot(m, &change);
+        s.curvature[0] += w * (dot(m, p) - dot(m, h));
         s.curvature[1] += w * dot(m, q);
         s.curvature[2] += w * dot(m, r);
     });
     s
-}
-
-/// Re(a b*) of modes given as slices.
-#[inline]
-fn re_dot_slice(a: &[f64], b: &[f64]) -> f64 {
-    match a.len() {
-        1 => re_dot::<1>([a[0]], [b[0]]),
-        _ => re_dot::<2>([a[0], a[1]], [b[0], b[1]]),
-    }
 }
 
 /// Add λR̂ of `u` to the written φ̂^{n+1} (`hat`) and rewrite the evaluation's inverse inputs

@@ -415,17 +415,9 @@ impl Passes for CpuPasses {
     }
 
     fn set_residual(&mut self, next: bool, sigma: f64, lambda: f64) -> Result<(), DeviceFailure> {
-        let state = if next {
-            &self.states.next
-        } else {
-            &self.states.cur
-        };
-        let residual = self.ev.residual_with(state, sigma, lambda);
-        if next {
-            self.states.next.residual = residual;
-        } else {
-            self.states.cur.residual = residual;
-        }
+        let States { cur, next: n, .. } = &mut self.states;
+        let state = if next { n } else { cur };
+        state.residual = self.ev.residual_with(state, sigma, lambda);
         Ok(())
     }
 }
