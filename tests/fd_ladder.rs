@@ -115,6 +115,7 @@ fn chemical_potential_is_derivative_of_discrete_energy() {
             method: vesicle::problem::config::AreaMethod::Lagrangian,
             alpha: 0.0,
             target: 1.0,
+            sigma: 0.0,
         });
         force_sigma(&mut e, sigma, &s);
         let mu = e.chemical_potential().clone();
@@ -137,6 +138,7 @@ fn force_sigma(e: &mut FdEngine, sigma: f64, _s: &vesicle::problem::config::Scen
         method: vesicle::problem::config::AreaMethod::Lagrangian,
         alpha: 1.0,
         target: a - sigma,
+        sigma: 0.0,
     });
     let phi = e.phi().clone();
     // One step of size 0 applies the update σ ← σ + α(A − A0) and leaves φ unchanged.

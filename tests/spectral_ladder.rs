@@ -307,6 +307,7 @@ fn relaxational_residual_is_the_same_on_reduced_and_full_boxes() {
         method: vesicle::problem::config::AreaMethod::Projection,
         alpha: 0.0,
         target: reduced.area,
+        sigma: 0.0,
     });
     eprintln!(
         "residual eighth {:e}, full box of the same state {:e}",

@@ -550,6 +550,7 @@ impl Simulation {
                     method: scene.area_method(),
                     alpha: scene.alpha(),
                     target,
+                    sigma: scene.area.sigma.unwrap_or(0.0),
                 });
                 let mut simulation = vesicle::driver::simulation::Simulation::new(
                     engine, scene.dt, scene.dim, scene.eps,

@@ -410,6 +410,9 @@ pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
     let stepper = match (scene.method, scene.dynamics) {
         (crate::problem::config::Method::Fd, _) => "explicit Euler".to_string(),
         (_, crate::problem::config::Dynamics::Relaxational) => "L-BFGS".to_string(),
+        (_, crate::problem::config::Dynamics::Stokes) => {
+            format!("{:?} + stokes flow", scene.scheme).to_lowercase()
+        }
         _ => format!("{:?}", scene.scheme).to_lowercase(),
     };
     s += &format!(

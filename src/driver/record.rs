@@ -42,6 +42,28 @@ pub struct Record {
     /// `reduced_energy` is w.
     #[serde(flatten)]
     pub couple: Option<CoupleColumns>,
+    /// With the Stokes dynamics: its columns.
+    #[serde(flatten)]
+    pub flow: Option<FlowColumns>,
+}
+
+/// The columns of a run with the Stokes dynamics (docs/src/theory/flow.md), after the others.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct FlowColumns {
+    /// max|u| over the grid.
+    pub max_speed: f64,
+    /// η∫|∇u|², the energy the fluid dissipates per unit time.
+    pub dissipation: f64,
+}
+
+/// The names of [`FlowColumns`], as the CSV header appends them.
+pub const FLOW_COLUMNS: [&str; 2] = ["max_speed", "dissipation"];
+
+impl FlowColumns {
+    /// The values in the order of [`FLOW_COLUMNS`].
+    pub fn values(&self) -> [f64; 2] {
+        [self.max_speed, self.dissipation]
+    }
 }
 
 /// The columns of a run with an area-difference term (docs/src/theory/ade.md), after the
@@ -96,14 +118,25 @@ impl Record {
         ]
     }
 
-    /// The names of this record's columns: [`COLUMNS`], then [`COUPLE_COLUMNS`] when it has
-    /// them (the header its `timeseries.csv` is written with).
+    /// The names of this record's columns: [`COLUMNS`], then [`COUPLE_COLUMNS`] and
+    /// [`FLOW_COLUMNS`] when it has them (the header its `timeseries.csv` is written with).
     pub fn names(&self) -> Vec<&'static str> {
         let mut names = COLUMNS.to_vec();
         if self.couple.is_some() {
             names.extend(COUPLE_COLUMNS);
         }
+        if self.flow.is_some() {
+            names.extend(FLOW_COLUMNS);
+        }
         names
+    }
+
+    /// The values after [`COLUMNS`]: the couple's, then the flow's, when the record has them.
+    fn extra_values(&self) -> Vec<f64> {
+        let couple = self.couple.iter().flat_map(|c| c.values());
+        couple
+            .chain(self.flow.iter().flat_map(|f| f.values()))
+            .collect()
     }
 
     /// The value of the column `name` of [`Record::names`], if the record has it.
@@ -111,8 +144,11 @@ impl Record {
         if let Some(i) = COLUMNS.iter().position(|c| *c == name) {
             return Some(self.values()[i]);
         }
-        let i = COUPLE_COLUMNS.iter().position(|c| *c == name)?;
-        self.couple.map(|c| c.values()[i])
+        if let Some(i) = COUPLE_COLUMNS.iter().position(|c| *c == name) {
+            return self.couple.map(|c| c.values()[i]);
+        }
+        let i = FLOW_COLUMNS.iter().position(|c| *c == name)?;
+        self.flow.map(|f| f.values()[i])
     }
 
     /// A record of the state `engine` holds at `step`, time `t`, reached by a step `dt`, in a
@@ -146,6 +182,10 @@ impl Record {
             rejected: 0,
             wall_seconds: 0.0,
             couple,
+            flow: engine.flow().map(|f| FlowColumns {
+                max_speed: f.max_speed,
+                dissipation: f.dissipation,
+            }),
         }
     }
 }
@@ -173,8 +213,8 @@ pub const HEADER: &str =
 rate,rejected,wall_seconds";
 
 /// Writes `timeseries.csv` row by row (values in shortest round-trip form). The header comes
-/// with the first row (with [`COUPLE_COLUMNS`] appended when its record has them), or at the
-/// first flush of a file with no rows.
+/// with the first row (with [`COUPLE_COLUMNS`] or [`FLOW_COLUMNS`] appended when its record has
+/// them), or at the first flush of a file with no rows.
 pub struct TimeSeries {
     path: PathBuf,
     out: BufWriter<File>,
@@ -195,19 +235,15 @@ impl TimeSeries {
         })
     }
 
-    /// Write the header if it is not yet written: with the area-difference columns when
-    /// `couple`.
-    fn header(&mut self, couple: bool) -> Result<()> {
+    /// Write the header if it is not yet written: the names of `first`, the first row's record
+    /// (without a row, [`HEADER`]).
+    fn header(&mut self, first: Option<&Record>) -> Result<()> {
         if self.header_written {
             return Ok(());
         }
         self.header_written = true;
-        let extra = if couple {
-            format!(",{}", COUPLE_COLUMNS.join(","))
-        } else {
-            String::new()
-        };
-        writeln!(self.out, "{HEADER}{extra}").map_err(|e| io(&self.path, e))
+        let header = first.map_or(HEADER.to_string(), |r| r.names().join(","));
+        writeln!(self.out, "{header}").map_err(|e| io(&self.path, e))
     }
 
     /// Continue the file at `path` after its row of `step`: rows of later steps (written after
@@ -221,7 +257,9 @@ impl TimeSeries {
         let text = std::fs::read_to_string(path).map_err(|source| io(path, source))?;
         let mut lines = text.lines();
         let couple_header = format!("{HEADER},{}", COUPLE_COLUMNS.join(","));
-        if !matches!(lines.next(), Some(h) if h == HEADER || h == couple_header) {
+        let flow_header = format!("{HEADER},{}", FLOW_COLUMNS.join(","));
+        if !matches!(lines.next(), Some(h) if h == HEADER || h == couple_header || h == flow_header)
+        {
             return Err(Error::config(
                 "timeseries.csv",
                 format!("{} does not start with the header {HEADER}", path.display()),
@@ -262,7 +300,7 @@ impl TimeSeries {
     }
 
     fn write_row(&mut self, r: &Record) -> Result<()> {
-        self.header(r.couple.is_some())?;
+        self.header(Some(r))?;
         write!(
             self.out,
             "{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -281,10 +319,8 @@ impl TimeSeries {
             r.wall_seconds
         )
         .map_err(|e| io(&self.path, e))?;
-        if let Some(c) = &r.couple {
-            for v in c.values() {
-                write!(self.out, ",{v}").map_err(|e| io(&self.path, e))?;
-            }
+        for v in r.extra_values() {
+            write!(self.out, ",{v}").map_err(|e| io(&self.path, e))?;
         }
         writeln!(self.out).map_err(|e| io(&self.path, e))
     }
@@ -294,7 +330,7 @@ impl TimeSeries {
     /// # Errors
     /// `Error::Io` on a write failure.
     pub fn flush(&mut self) -> Result<()> {
-        self.header(false)?;
+        self.header(None)?;
         self.out.flush().map_err(|e| io(&self.path, e))
     }
 }
@@ -319,10 +355,10 @@ fn parse_row(line: &str) -> Option<Record> {
         rejected: count(x()?)?,
         wall_seconds: x()?,
         couple: None,
+        flow: None,
     };
     let rest: Vec<f64> = f.map(|v| v.parse::<f64>().ok()).collect::<Option<_>>()?;
     let couple = match rest[..] {
-        [] => None,
         [bending_energy, da, w, c0_eff, lambda] => Some(CoupleColumns {
             bending_energy,
             da,
@@ -330,9 +366,19 @@ fn parse_row(line: &str) -> Option<Record> {
             c0_eff,
             lambda,
         }),
-        _ => return None,
+        _ => None,
     };
-    Some(Record { couple, ..r })
+    let flow = match rest[..] {
+        [max_speed, dissipation] => Some(FlowColumns {
+            max_speed,
+            dissipation,
+        }),
+        _ => None,
+    };
+    let known = [0, COUPLE_COLUMNS.len(), FLOW_COLUMNS.len()];
+    known
+        .contains(&rest.len())
+        .then_some(Record { couple, flow, ..r })
 }
 
 fn io(path: &Path, source: std::io::Error) -> Error {

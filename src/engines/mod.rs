@@ -35,6 +35,8 @@ pub struct AreaConstraint {
     pub alpha: f64,
     /// Target area A0.
     pub target: f64,
+    /// σ of the fixed method (0 otherwise).
+    pub sigma: f64,
 }
 
 impl AreaConstraint {
@@ -44,6 +46,7 @@ impl AreaConstraint {
             method: AreaMethod::None,
             alpha: 0.0,
             target: 0.0,
+            sigma: 0.0,
         }
     }
 }
@@ -95,7 +98,8 @@ pub trait Engine {
     /// The stationarity residual RMS_Ω(μ − μ̄) of the current state at the current σ (module
     /// docs).
     fn residual(&self) -> f64;
-    /// Replace the area constraint (σ is reset to 0 when the method changes to none).
+    /// Replace the area constraint (σ is reset to 0 when the method changes to none, and set
+    /// to the constraint's σ by the fixed method).
     fn set_area(&mut self, area: AreaConstraint);
     /// Advance from time `t` by at most `dt`.
     ///
@@ -110,6 +114,10 @@ pub trait Engine {
     /// # Errors
     /// A sentence if the engine cannot hold the term.
     fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), String>;
+    /// What the current state's Stokes flow measured (the Stokes dynamics only).
+    fn flow(&self) -> Option<spectral::flow::FlowStats> {
+        None
+    }
     /// The area-difference term the engine holds, if any.
     fn area_difference(&self) -> Option<AreaDifference> {
         None

@@ -65,6 +65,10 @@ pub fn engine_f64_per_point(scene: &Scene, mirror: &[bool]) -> f64 {
         }
         (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf1) => pick(7.9, 16.1, 10.9),
         (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf2) => pick(9.9, 20.0, 12.7),
+        // The flow's scratch on the periodic box: 3 + d real fields and 1 + d half spectra
+        // (10 f64 per point in 3D), beside the conserved step's arrays.
+        (Method::Spectral, Dynamics::Stokes, Scheme::Sbdf1) => 7.9 + 10.0,
+        (Method::Spectral, Dynamics::Stokes, Scheme::Sbdf2) => 9.9 + 10.0,
     }
 }
 
@@ -154,6 +158,8 @@ fn engine_name(scene: &Scene) -> &'static str {
     match (scene.method, scene.dynamics, scene.scheme) {
         (Method::Fd, _, _) => "fd",
         (_, Dynamics::Relaxational, _) => "relaxational (L-BFGS)",
+        (_, Dynamics::Stokes, Scheme::Sbdf1) => "spectral sbdf1 with stokes flow",
+        (_, Dynamics::Stokes, Scheme::Sbdf2) => "spectral sbdf2 with stokes flow",
         (_, _, Scheme::Sbdf1) => "spectral sbdf1",
         (_, _, Scheme::Sbdf2) => "spectral sbdf2",
     }

@@ -159,6 +159,8 @@ fn mirror_axes(scene: &Scene, grid: &Grid, phi: &Array3<f64>, c0: &C0) -> Result
     let internal = |scene_axis: usize| scene_axis + 3 - scene.dim;
     let mut mirror = vec![false; scene.dim];
     match &scene.symmetry {
+        // The flow is solved on the periodic box (mirrors would need sine transforms).
+        Symmetry::Auto(_) if scene.stokes_flow().is_some() => {}
         Symmetry::Auto(_) => {
             for (s, m) in mirror.iter_mut().enumerate() {
                 let a = internal(s);

@@ -8,7 +8,7 @@
 use crate::analysis::axisym::{self, Branch};
 use crate::error::{Error, Result};
 use crate::problem::config::{
-    axis_index, Axisym, AxisymBranch, Difference, Ellipsoid, Shape, SpheroidKind, Union,
+    axis_index, Axisym, AxisymBranch, Difference, Ellipsoid, Harmonic, Shape, SpheroidKind, Union,
 };
 use crate::problem::revolution::{self, Meridian};
 use std::f64::consts::PI;
@@ -191,7 +191,42 @@ pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
         }
         Shape::Axisym(a) => prepare(shape, "initial", dim, a.r0 / 100.0)
             .map_or(f64::NAN, |s| s.signed_distance(p, dim)),
+        Shape::Harmonic(h) => harmonic_distance(h, sub(p, h.center.as_deref()), dim),
+        Shape::Slab(s) => {
+            let normal = axis_of(&s.axis, dim);
+            let along = (0..dim).find(|&a| a != normal);
+            let x = along.map_or(0.0, |a| p[a]);
+            let wave = s.amplitude * (2.0 * PI * x / s.wavelength).cos();
+            s.thickness / 2.0 - (p[normal] - wave).abs()
+        }
     }
+}
+
+/// The radial distance R(1 + aY) − r of the quasi-sphere `h` at `q` (from its centre): Y =
+/// P_l(cos θ) about its axis (3D) or cos(lθ) from the x axis (2D).
+fn harmonic_distance(h: &Harmonic, q: [f64; 3], dim: usize) -> f64 {
+    let r = norm(q);
+    let y = if r == 0.0 {
+        0.0
+    } else if dim == 2 {
+        (h.mode as f64 * q[1].atan2(q[0])).cos()
+    } else {
+        legendre(h.mode, q[axis_of(&h.axis, dim)] / r)
+    };
+    h.radius * (1.0 + h.amplitude * y) - r
+}
+
+/// The Legendre polynomial P_l(x) by the recurrence (j + 1)P_{j+1} = (2j + 1)x P_j − j P_{j−1}.
+pub fn legendre(l: usize, x: f64) -> f64 {
+    let (mut p0, mut p1) = (1.0, x);
+    if l == 0 {
+        return p0;
+    }
+    for j in 1..l {
+        let j = j as f64;
+        (p0, p1) = (p1, ((2.0 * j + 1.0) * x * p1 - j * p0) / (j + 1.0));
+    }
+    p1
 }
 
 /// The shape with every spheroid given by (v, R0) replaced by its ellipsoid (solve once, then

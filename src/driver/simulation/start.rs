@@ -18,9 +18,11 @@ use crate::problem::setup::Problem;
 pub fn stability_bound(scene: &Scene, grid: &Grid) -> Option<f64> {
     match (scene.method, scene.dynamics) {
         (Method::Fd, _) => Some(fd::stability_bound(grid, scene.eps, 0.0)),
-        (Method::Spectral, Dynamics::Conserved) => {
+        (Method::Spectral, Dynamics::Conserved | Dynamics::Stokes) => {
+            // The diffusive channel M∇²μ: the bound of M = 1 divided by M.
             let b =
                 spectral::stability_bound(grid, scene.eps, &scene.stabilizer(), scene.laplacian);
+            let b = b / scene.mobility();
             b.is_finite().then_some(b)
         }
         (Method::Spectral, Dynamics::Relaxational) => None,
@@ -80,7 +82,7 @@ pub fn build_engine(scene: &Scene, problem: &Problem) -> Result<Box<dyn Engine +
         (Method::Fd, _) => {
             Box::new(FdEngine::new(grid, scene.eps, c0, phi, 0.0, scene.threads()).map_err(bad)?)
         }
-        (Method::Spectral, Dynamics::Conserved) => {
+        (Method::Spectral, Dynamics::Conserved | Dynamics::Stokes) => {
             Box::new(SpectralEngine::new(scene, grid, c0, phi).map_err(bad)?)
         }
         (Method::Spectral, Dynamics::Relaxational) => {
@@ -171,6 +173,7 @@ pub fn constrain(engine: &mut (dyn Engine + Send), scene: &Scene, a0: f64) -> Re
         method: scene.area_method(),
         alpha: scene.alpha(),
         target: a0,
+        sigma: scene.area.sigma.unwrap_or(0.0),
     });
     if let Some(term) = AreaDifference::of(scene, a0) {
         let field = if scene.ade.is_some() {

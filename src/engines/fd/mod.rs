@@ -661,6 +661,7 @@ mod tests {
             method: AreaMethod::Lagrangian,
             alpha: 0.05,
             target,
+            sigma: 0.0,
         });
         e
     }

@@ -158,6 +158,7 @@ fn runs_match_the_cpu() {
             method: AreaMethod::Projection,
             alpha: 0.0,
             target: cpu.measures().area * 1.001,
+            sigma: 0.0,
         };
         cpu.set_area(constraint);
         gpu.set_area(constraint);

@@ -180,6 +180,7 @@ fn engine_with_area(mut case: serde_json::Value) -> RelaxEngine {
         method: AreaMethod::Projection,
         alpha: 0.0,
         target,
+        sigma: 0.0,
     });
     e
 }

@@ -5,6 +5,7 @@
 
 use super::curvature::{add_couple, couple_sums, CoupleInputs, CoupleSums};
 use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm, State};
+use super::flow::FlowStats;
 use super::kernels::{sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::saved::spectrum;
@@ -15,7 +16,7 @@ use super::update::{Update, MAX_LEVELS};
 use crate::engines::numerics::sum_in_fixed_tree;
 use crate::engines::{Diverged, Saved, SavedArray};
 use crate::problem::area_difference::AreaDifference;
-use crate::problem::config::{Laplacian, Scene, Stabilizer};
+use crate::problem::config::{AreaMethod, Laplacian, Scene, Stabilizer};
 use crate::problem::grid::Grid;
 use crate::problem::model::{Measures, C0};
 use ndarray::{Array3, CowArray, Ix3};
@@ -197,7 +198,15 @@ impl SpectralEngine {
         if scene.ade.is_some() || scene.bilayer_couple.is_some() {
             ev = ev.with_curvature();
         }
-        let cur = ev.state_of(&phi, 0.0)?;
+        if let Some(flow) = scene.stokes_flow() {
+            ev = ev.with_flow(flow);
+        }
+        // A fixed tension acts from the first step (the flow's force holds it).
+        let sigma = match scene.area_method() {
+            AreaMethod::Fixed => scene.area.sigma.unwrap_or(0.0),
+            _ => 0.0,
+        };
+        let cur = ev.state_at(&phi, 0.0, sigma)?;
         let passes = CpuPasses {
             states: States::new(cur, ev.blank()),
             ev,
@@ -389,6 +398,10 @@ impl Passes for CpuPasses {
 
     fn name(&self) -> &'static str {
         "spectral"
+    }
+
+    fn flow(&self) -> Option<FlowStats> {
+        self.ev.has_flow().then_some(self.states.cur.flow)
     }
 
     fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), DeviceFailure> {

@@ -14,13 +14,14 @@
 //! ([`Evaluator::finish`]).
 
 use super::curvature::CurvatureScratch;
+use super::flow::{Flow, FlowStats};
 use super::kernels::{pointwise_sums, sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::engines::Diverged;
 use crate::problem::area_difference::AreaDifference;
-use crate::problem::config::Laplacian;
+use crate::problem::config::{FlowSpec, Laplacian};
 use crate::problem::grid::Grid;
 use crate::problem::model::{
     self, bulk, bulk_at_zero_c0, bulk_derivative, bulk_derivative_at_zero_c0, Measures,
@@ -85,6 +86,8 @@ pub struct State {
     pub multiplier_sums: (f64, f64),
     /// m̂ = FT[δM/δφ] of the area-difference term ([`super::curvature`]); empty without it.
     pub curvature_hat: Array3<Complex64>,
+    /// What the Stokes flow of this state measured (zeros without a flow).
+    pub flow: FlowStats,
 }
 
 /// Per-axis tables of the spectrum's modes ([`crate::engines::spectral::pieces`]). At mode (i0, i1, i2)
@@ -177,6 +180,8 @@ pub struct Evaluator {
     pub(super) curvature: Option<CurvatureScratch>,
     /// The area-difference term at its reference area (the gradient's λ reads it).
     pub area_difference: Option<AreaDifference>,
+    /// The Stokes dynamics' flow, whose advection the explicit term carries ([`super::flow`]).
+    flow: Option<Flow>,
     /// Spectral scratch: the input of the ∇²φ inverse transform, then FT[f] (the engines also
     /// use it between evaluations).
     pub spare: Array3<Complex64>,
@@ -208,6 +213,7 @@ impl Evaluator {
             explicit,
             curvature: None,
             area_difference: None,
+            flow: None,
             eps,
             c0,
             transform,
@@ -222,17 +228,36 @@ impl Evaluator {
         self
     }
 
-    /// The state holding the real field `phi`, evaluated at time `t`.
+    /// The evaluator with the Stokes flow `spec` in the explicit term ([`super::flow`]).
+    pub fn with_flow(mut self, spec: FlowSpec) -> Self {
+        self.flow = Some(Flow::new(spec, &self.transform, self.grid.h));
+        self
+    }
+
+    /// Whether the explicit term carries the Stokes flow's advection.
+    pub fn has_flow(&self) -> bool {
+        self.flow.is_some()
+    }
+
+    /// The state holding the real field `phi`, evaluated at time `t` with multiplier 0.
     ///
     /// # Errors
     /// [`Diverged`] if `phi` is not finite.
     pub fn state_of(&mut self, phi: &Array3<f64>, t: f64) -> Result<State, Diverged> {
+        self.state_at(phi, t, 0.0)
+    }
+
+    /// The state holding the real field `phi`, evaluated at time `t` with multiplier `sigma`.
+    ///
+    /// # Errors
+    /// [`Diverged`] if `phi` is not finite.
+    pub fn state_at(&mut self, phi: &Array3<f64>, t: f64, sigma: f64) -> Result<State, Diverged> {
         let mut s = self.blank();
         // The state's own real field is the forward transform's scratch (the evaluation
         // rewrites it), so a 3D run never touches the pages of `work`.
         s.phi.assign(phi);
         self.transform.forward(&mut s.phi, &mut s.hat);
-        self.evaluate(&mut s, t, None, Some(0.0))?;
+        self.evaluate(&mut s, t, None, Some(sigma))?;
         Ok(s)
     }
 
@@ -249,6 +274,7 @@ impl Evaluator {
                 Some(_) => Array3::zeros(self.transform.spectral_shape()),
                 None => Array3::zeros((0, 0, 0)),
             },
+            flow: FlowStats::default(),
         }
     }
 
@@ -351,6 +377,16 @@ impl Evaluator {
         state.multiplier_sums = (combined.qq, combined.gq);
         self.evaluate_curvature(state);
         self.add_curvature_gradient(state);
+        if let Some(flow) = self.flow.as_mut() {
+            let tension = (self.eps, sigma.unwrap_or(0.0));
+            state.flow = flow.advect(
+                &mut self.transform,
+                &self.symbols,
+                tension,
+                &state.hat,
+                &mut state.nonlinear,
+            );
+        }
         Ok(sums.change)
     }
 }

@@ -4,6 +4,7 @@ pub(crate) mod control;
 pub mod curvature;
 pub mod engine;
 pub mod evaluator;
+pub mod flow;
 pub(crate) mod kernels;
 pub(crate) mod pieces;
 pub(crate) mod saved;

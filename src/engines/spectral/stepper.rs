@@ -12,6 +12,7 @@
 
 use super::control;
 use super::curvature::CoupleSums;
+use super::flow::FlowStats;
 use super::update::{self, Update};
 use crate::engines::numerics::nearest_root;
 use crate::engines::{
@@ -152,6 +153,10 @@ pub trait Passes {
     fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String>;
     /// Short name for logs and tables.
     fn name(&self) -> &'static str;
+    /// What the current state's Stokes flow measured, if the step has one.
+    fn flow(&self) -> Option<FlowStats> {
+        None
+    }
     /// Hold the area-difference term `term` (ADE or the bilayer couple). A device without it
     /// fails (its scenes are refused before: [`crate::engines::supports`]).
     fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), DeviceFailure> {
@@ -193,6 +198,8 @@ const COUPLE_TOL: f64 = 1e-12;
 pub struct Stepper<P> {
     passes: P,
     eps: f64,
+    /// M of the diffusive channel M∇²μ (1 but for the Stokes dynamics).
+    mobility: f64,
     stabilizer: Stabilizer,
     scheme: Scheme,
     /// Controller settings with dt_min and dt_max resolved.
@@ -226,6 +233,7 @@ impl<P: Passes> Stepper<P> {
             volume0: passes.states().cur.measures().volume,
             passes,
             eps: scene.eps,
+            mobility: scene.mobility(),
             stabilizer: scene.stabilizer(),
             scheme: scene.scheme,
             adaptive: control::adaptive_settings(scene),
@@ -275,7 +283,7 @@ impl<P: Passes> Stepper<P> {
             &[]
         };
         let c = (update::row(self.scheme).coefficients)(dt, history);
-        Update::new(c, dt, self.eps, &self.stabilizer)
+        Update::new(c, dt, self.eps, &self.stabilizer, self.mobility)
     }
 
     /// σ used in this step's update, or `None` if the projection has no real root (only the
@@ -283,7 +291,7 @@ impl<P: Passes> Stepper<P> {
     fn choose_sigma(&self, u: &Update) -> Result<Option<f64>, DeviceFailure> {
         Ok(match self.area.method {
             AreaMethod::None => Some(0.0),
-            AreaMethod::Lagrangian => Some(self.sigma),
+            AreaMethod::Lagrangian | AreaMethod::Fixed => Some(self.sigma),
             AreaMethod::Projection => {
                 let [app, apq, aqq] = self.passes.area_quadratic(u)?;
                 nearest_root(aqq, apq, app - self.area.target, self.sigma)
@@ -322,7 +330,7 @@ impl<P: Passes> Stepper<P> {
         };
         let sigma = match self.area.method {
             AreaMethod::None => 0.0,
-            AreaMethod::Lagrangian => self.sigma,
+            AreaMethod::Lagrangian | AreaMethod::Fixed => self.sigma,
             AreaMethod::Projection => {
                 let pp = app + 2.0 * l0 * apr + l0 * l0 * arr;
                 let pq = apq + l1 * apr + l0 * aqr + l0 * l1 * arr;
@@ -512,8 +520,10 @@ where
     }
 
     fn set_area(&mut self, area: AreaConstraint) {
-        if area.method == AreaMethod::None {
-            self.sigma = 0.0;
+        match area.method {
+            AreaMethod::None => self.sigma = 0.0,
+            AreaMethod::Fixed => self.sigma = area.sigma,
+            _ => {}
         }
         self.area = area;
     }
@@ -542,6 +552,10 @@ where
 
     fn lambda(&self) -> f64 {
         self.lambda
+    }
+
+    fn flow(&self) -> Option<FlowStats> {
+        self.passes.flow()
     }
 
     fn area_difference(&self) -> Option<AreaDifference> {

@@ -111,17 +111,20 @@ pub struct Update {
 }
 
 impl Update {
-    /// The update of a step of `dt` with coefficients `c`, interface width `eps` and
-    /// stabiliser `s`.
-    pub fn new(c: Coefficients, dt: f64, eps: f64, s: &Stabilizer) -> Self {
+    /// The update of a step of `dt` with coefficients `c`, interface width `eps`, stabiliser
+    /// `s` and mobility `m` of the diffusive channel m∇²μ (1 for the conserved flow): each of
+    /// the operator's terms (2ε⁴k⁶, S, c_σσk⁴) is multiplied by m, and N̂ holds m times the
+    /// conserved flow's explicit part (plus the advection of the Stokes dynamics,
+    /// [`super::flow`]).
+    pub fn new(c: Coefficients, dt: f64, eps: f64, s: &Stabilizer, m: f64) -> Self {
         let e2 = eps * eps;
         Update {
             c,
             dt,
-            s2: s.s2,
-            s4e2: s.s4 * e2,
-            e4x2: 2.0 * e2 * e2,
-            c_sigma: TENSION_FACTOR * eps,
+            s2: m * s.s2,
+            s4e2: m * s.s4 * e2,
+            e4x2: m * 2.0 * e2 * e2,
+            c_sigma: m * TENSION_FACTOR * eps,
         }
     }
 

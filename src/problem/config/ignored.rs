@@ -71,9 +71,13 @@ pub(super) fn ignored_keys(scene: &Scene) -> Vec<Ignored> {
                 "the L-BFGS chooses its steps by line search; t counts iterations × dt",
             );
         }
-        Dynamics::Conserved => add(
+        Dynamics::Conserved | Dynamics::Stokes => add(
             "lbfgs_memory",
-            r#""dynamics": "conserved""#,
+            if scene.dynamics == Dynamics::Stokes {
+                r#""dynamics": "stokes""#
+            } else {
+                r#""dynamics": "conserved""#
+            },
             "only the relaxational L-BFGS keeps pairs",
         ),
     }
@@ -81,6 +85,7 @@ pub(super) fn ignored_keys(scene: &Scene) -> Vec<Ignored> {
     if area != AreaMethod::Lagrangian {
         let name = match area {
             AreaMethod::Projection => "projection",
+            AreaMethod::Fixed => "fixed",
             _ => "none",
         };
         add(

@@ -16,14 +16,14 @@ mod validation;
 pub use c0::{C0Ball, C0Band, C0Cap, C0Field, C0File, C0Spec, Pole};
 pub use scene::{
     axis_index, AdaptiveSettings, AdaptiveSpec, AdeMultiplier, AdeSpec, AreaMethod, AreaSpec,
-    AutoTag, BilayerCoupleSpec, Device, Dynamics, Laplacian, Method, OutputSpec, Scene, Scheme,
-    Stabilizer, StabilizerSpec, Symmetry, VolumeRamp, CHECKPOINT_MINUTES, MAX_LBFGS_MEMORY,
+    AutoTag, BilayerCoupleSpec, Device, Dynamics, FlowSpec, Laplacian, Method, OutputSpec, Scene,
+    Scheme, Stabilizer, StabilizerSpec, Symmetry, VolumeRamp, CHECKPOINT_MINUTES, MAX_LBFGS_MEMORY,
     RECORD_ROWS, SERIAL_BELOW,
 };
 pub use schedule::Schedule;
 pub use shapes::{
-    Axisym, AxisymBranch, Capsule, Cup, Difference, Ellipsoid, Initial, Shape, Sphere, Spheroid,
-    SpheroidKind, Union,
+    Axisym, AxisymBranch, Capsule, Cup, Difference, Ellipsoid, Harmonic, Initial, Shape, Slab,
+    Sphere, Spheroid, SpheroidKind, Union,
 };
 
 use crate::error::{Error, Result};

@@ -86,6 +86,9 @@ pub struct Scene {
     /// same stationary states).
     #[serde(default)]
     pub dynamics: Dynamics,
+    /// The fluid of `"dynamics": "stokes"`: `{"viscosity": η, "mobility": M}`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flow: Option<FlowSpec>,
     /// Discrete Laplacian of the spectral engine: `spectral` (−|k|², the default) or `fd` (the
     /// symbol −Σ (4/h²) sin²(k_a h/2) of the FD reference's (2d+1)-point stencil: the engine
     /// then integrates exactly the FD reference's semi-discrete equations, semi-implicitly).
@@ -225,6 +228,19 @@ pub enum Dynamics {
     /// Preconditioned L-BFGS on the constrained energy (same stationary states; `t` counts
     /// iterations × dt, not physical time).
     Relaxational,
+    /// The membrane in a Stokes fluid (`flow`): ∂φ/∂t + u·∇φ = M∇²μ, η∇²u − ∇p + μ∇φ = 0,
+    /// ∇·u = 0 on the periodic box (docs/src/theory/flow.md).
+    Stokes,
+}
+
+/// `flow`: the Stokes dynamics' viscosity η and mobility M.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlowSpec {
+    /// η > 0, the same inside and out.
+    pub viscosity: f64,
+    /// M > 0, the mobility of the diffusive channel M∇²μ.
+    pub mobility: f64,
 }
 
 /// `adaptive`: a flag or the controller's settings.
@@ -295,6 +311,8 @@ pub enum AreaMethod {
     Lagrangian,
     /// No area constraint (σ = 0).
     None,
+    /// No area constraint, σ held at `area.sigma` (a membrane at fixed tension).
+    Fixed,
 }
 
 /// `area`: `{"method": ..., "alpha": α, "target": A0}`.
@@ -310,6 +328,9 @@ pub struct AreaSpec {
     /// Target area A0 (default: area of the prepared initial field).
     #[serde(default)]
     pub target: Option<f64>,
+    /// The tension σ of the `fixed` method.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
 }
 
 /// `volume`: `{"final_fraction": f, "ramp_time": T}`, the target
@@ -469,6 +490,16 @@ impl Scene {
     /// α of the Lagrangian area update (default 1e-3).
     pub fn alpha(&self) -> f64 {
         self.area.alpha.unwrap_or(1e-3)
+    }
+
+    /// The flow of the Stokes dynamics, if the scene runs it.
+    pub fn stokes_flow(&self) -> Option<FlowSpec> {
+        self.flow.filter(|_| self.dynamics == Dynamics::Stokes)
+    }
+
+    /// The mobility M of the step's diffusive channel: the flow's, else 1 (∂φ/∂t = ∇²μ).
+    pub fn mobility(&self) -> f64 {
+        self.stokes_flow().map_or(1.0, |f| f.mobility)
     }
 
     /// Steps between two `timeseries.csv` rows: `output.record_every` if given, else

@@ -61,6 +61,47 @@ pub enum Shape {
     Difference(Difference),
     /// Surface of revolution from the axisymmetric reference solver or a contour file.
     Axisym(Axisym),
+    /// A sphere (circle) with one harmonic on its radius: a quasi-sphere's mode.
+    Harmonic(Harmonic),
+    /// A slab of fluid between two parallel interfaces, displaced by one cosine wave.
+    Slab(Slab),
+}
+
+/// The quasi-sphere r = R (1 + a Y(θ)): Y = P_l(cos θ), θ from `axis` (3D), or
+/// Y = cos(lθ), θ from the x axis (2D), with l = `mode`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Harmonic {
+    /// R.
+    pub radius: f64,
+    /// l (the Legendre degree in 3D, the Fourier mode in 2D), ≥ 2.
+    pub mode: usize,
+    /// a, relative to R; |a| < 0.5.
+    pub amplitude: f64,
+    /// The axis of P_l in 3D (`"x"`, `"y"` or `"z"`; default the last).
+    #[serde(default)]
+    pub axis: Option<String>,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// The slab |y − a cos(2πx/λ)| < thickness/2 about the box centre, y along `axis` (its
+/// normal; default the last) and x the first other axis: two interfaces displaced together
+/// by one wave (a bending mode of a flat membrane pair). λ should divide the box's length
+/// along x.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Slab {
+    /// Distance between the two interfaces.
+    pub thickness: f64,
+    /// λ of the wave.
+    pub wavelength: f64,
+    /// a, the wave's amplitude (a length).
+    pub amplitude: f64,
+    /// The normal to the interfaces (`"x"`, `"y"` or `"z"`; default the last).
+    #[serde(default)]
+    pub axis: Option<String>,
 }
 
 /// Sphere (circle in 2D) of radius `radius`.
@@ -272,9 +313,12 @@ impl<'de> Deserialize<'de> for Shape {
             "union" => kind(v).map(Shape::Union),
             "difference" => kind(v).map(Shape::Difference),
             "axisym" => kind(v).map(Shape::Axisym),
+            "harmonic" => kind(v).map(Shape::Harmonic),
+            "slab" => kind(v).map(Shape::Slab),
             _ => Err(format!(
                 "{PATH_MARK}shape{PATH_MARK}unknown variant {tag}, expected one of `sphere`, \
-                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `union`, `difference`, `axisym`"
+                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `union`, `difference`, `axisym`, \
+                 `harmonic`, `slab`"
             )),
         };
         shape.map_err(D::Error::custom)

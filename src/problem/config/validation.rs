@@ -64,6 +64,7 @@ impl Scene {
         self.validate_c0()?;
         self.validate_area_difference()?;
         self.validate_symmetry()?;
+        self.validate_flow()?;
         if let Initial::Shape(s) = &self.initial {
             validate_shape(s, "initial", self.dim)?;
         }
@@ -207,6 +208,88 @@ impl Scene {
             return Err(Error::config(
                 "area.alpha",
                 "only the lagrangian area method uses alpha",
+            ));
+        }
+        match (self.area_method(), self.area.sigma) {
+            (AreaMethod::Fixed, None) => Err(Error::config(
+                "area.sigma",
+                "the fixed area method holds σ at area.sigma: give it",
+            )),
+            (AreaMethod::Fixed, Some(sigma)) => {
+                finite("area.sigma", sigma)?;
+                if self.area.target.is_some() {
+                    return Err(Error::config(
+                        "area.target",
+                        "the fixed area method holds σ, not the area; drop target",
+                    ));
+                }
+                if self.method == Method::Fd || self.dynamics == Dynamics::Relaxational {
+                    return Err(Error::config(
+                        "area.method",
+                        "a fixed tension is held by the spectral engine's time step only \
+                         (conserved or stokes dynamics)",
+                    ));
+                }
+                Ok(())
+            }
+            (_, Some(_)) => Err(Error::config(
+                "area.sigma",
+                "only the fixed area method uses sigma",
+            )),
+            (_, None) => Ok(()),
+        }
+    }
+
+    /// `dynamics: "stokes"` needs `flow` with η > 0 and M > 0, the spectral CPU engine on the
+    /// periodic box with its spectral Laplacian, and no area-difference term; `flow` belongs to
+    /// it alone.
+    fn validate_flow(&self) -> Result<()> {
+        let Some(flow) = self.flow else {
+            if self.dynamics == Dynamics::Stokes {
+                return Err(Error::config(
+                    "flow",
+                    "stokes dynamics needs the fluid: \"flow\": {\"viscosity\": η, \"mobility\": M}",
+                ));
+            }
+            return Ok(());
+        };
+        if self.dynamics != Dynamics::Stokes {
+            return Err(Error::config(
+                "flow",
+                "only \"dynamics\": \"stokes\" has a fluid; drop flow or set the dynamics",
+            ));
+        }
+        positive("flow.viscosity", flow.viscosity)?;
+        positive("flow.mobility", flow.mobility)?;
+        if self.method == Method::Fd {
+            return Err(Error::config(
+                "dynamics",
+                "stokes dynamics runs on the spectral engine; use method spectral",
+            ));
+        }
+        if self.laplacian != crate::problem::config::Laplacian::Spectral {
+            return Err(Error::config(
+                "laplacian",
+                "stokes dynamics takes the spectral Laplacian (the flow's derivatives are spectral)",
+            ));
+        }
+        if let Symmetry::Axes(axes) = &self.symmetry {
+            if !axes.is_empty() {
+                return Err(Error::config(
+                    "symmetry",
+                    "stokes dynamics runs on the periodic box: a mirror plane would need sine \
+                     transforms for the velocity normal to it; drop the mirror axes",
+                ));
+            }
+        }
+        if self.ade.is_some() || self.bilayer_couple.is_some() {
+            return Err(Error::config(
+                if self.ade.is_some() {
+                    "ade"
+                } else {
+                    "bilayer_couple"
+                },
+                "the area-difference term is not in the stokes step yet; use conserved dynamics",
             ));
         }
         Ok(())
@@ -455,6 +538,40 @@ fn validate_shape(s: &Shape, at: &str, dim: usize) -> Result<()> {
             }
             check_axis(&f("axis"), &s.axis, dim)?;
             check_center(&f("center"), &s.center, dim)
+        }
+        Shape::Harmonic(h) => {
+            positive(&f("radius"), h.radius)?;
+            if h.mode < 2 {
+                return Err(Error::config(
+                    f("mode"),
+                    format!(
+                        "must be at least 2 (0 and 1 are a size change and a shift), got {}",
+                        h.mode
+                    ),
+                ));
+            }
+            if h.amplitude.is_nan() || h.amplitude.abs() >= 0.5 {
+                return Err(Error::config(
+                    f("amplitude"),
+                    format!(
+                        "must lie in (−0.5, 0.5) (relative to the radius), got {}",
+                        h.amplitude
+                    ),
+                ));
+            }
+            check_axis(&f("axis"), &h.axis, dim)?;
+            check_center(&f("center"), &h.center, dim)
+        }
+        Shape::Slab(s) => {
+            positive(&f("thickness"), s.thickness)?;
+            positive(&f("wavelength"), s.wavelength)?;
+            if s.amplitude.is_nan() || s.amplitude.abs() >= s.thickness / 2.0 {
+                return Err(Error::config(
+                    f("amplitude"),
+                    "|amplitude| must be below thickness/2 (the interfaces would cross)",
+                ));
+            }
+            check_axis(&f("axis"), &s.axis, dim)
         }
         Shape::Capsule(s) => {
             positive(&f("radius"), s.radius)?;

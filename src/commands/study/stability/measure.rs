@@ -315,6 +315,7 @@ fn fixed_run(
                 method: crate::problem::config::AreaMethod::Lagrangian,
                 alpha,
                 target,
+                sigma: 0.0,
             });
             target
         }

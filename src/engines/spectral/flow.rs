@@ -1,0 +1,272 @@
+//! The Stokes dynamics' explicit term on the periodic box (docs/src/theory/flow.md): the fluid
+//! driven by the membrane's force, solved exactly in Fourier space, and the advection it
+//! carries. With the chemical potential μ of an evaluated state,
+//!
+//! ```text
+//! f = μ∇φ,   û = (I − κ̂κ̂) f̂ / (η|k|²)  (û(0) = 0),   N̂ ← M N̂ − FT[u·∇φ],
+//! ```
+//!
+//! with κ the derivative's wavenumbers (the Nyquist ones 0, so that ∇ of a real field stays
+//! real) and |k|² the Laplacian's symbol. Then κ·û = 0 exactly, Σ_x u·∇φ = 0 (the advection
+//! moves no volume; its k = 0 coefficient is set to 0, its round-off), and
+//! Σ_x μ u·∇φ = Σ_x u·f = η Σ_k w |k|²|û|² ≥ 0: the semi-discrete energy law
+//! dF_eff/dt = −M∫|∇μ|² − η∫|∇u|² holds term by term on the grid.
+//!
+//! Cost: 3d + 2 transforms per evaluation (μ and the d components of ∇φ back, f forward, u
+//! back, u·∇φ forward).
+
+use super::evaluator::Symbols;
+use super::transform::Transform;
+use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
+use crate::problem::config::FlowSpec;
+use crate::problem::model::TENSION_FACTOR;
+use ndarray::{Array3, Zip};
+use num_complex::Complex64;
+use rayon::prelude::*;
+
+/// What one evaluation's flow measured.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FlowStats {
+    /// max over the grid of |u|.
+    pub max_speed: f64,
+    /// η∫|∇u|² = η Σ_k w |k|² |û|², the rate at which the fluid dissipates energy.
+    pub dissipation: f64,
+}
+
+/// The flow's constants, tables and scratch (one spectrum per velocity component and one
+/// more, one real field per component and three more).
+pub struct Flow {
+    viscosity: f64,
+    mobility: f64,
+    /// The axes of the box longer than 1 (the velocity's components).
+    axes: Vec<usize>,
+    /// κ per axis, over the spectral indices (Nyquist 0).
+    kappa: [Vec<f64>; 3],
+    /// The spectral shape.
+    shape: [usize; 3],
+    /// μ̂, then iκ_aφ̂, then κ·f̂/|κ|², then FT[u·∇φ].
+    spectrum: Array3<Complex64>,
+    /// f̂_a, then û_a.
+    components: Vec<Array3<Complex64>>,
+    /// ∂_aφ on the grid.
+    gradient: Vec<Array3<f64>>,
+    /// μ, then u·∇φ.
+    mu: Array3<f64>,
+    /// f_a, then u_a.
+    component: Array3<f64>,
+    /// |u|².
+    speed_sq: Array3<f64>,
+}
+
+impl Flow {
+    /// The flow `spec` on the box of `transform` with spacing `h`, whose real fields have the
+    /// shape of `zeros`.
+    ///
+    /// # Panics
+    /// If the box has a mirror axis (the flow is solved on the periodic box only).
+    pub fn new(spec: FlowSpec, transform: &Transform, h: f64) -> Self {
+        assert!(
+            !transform.packed() && transform.index_shape() == transform.spectral_shape(),
+            "the flow is solved on the periodic box"
+        );
+        let real = transform.shape();
+        let shape = transform.spectral_shape();
+        let ks = transform.wavenumbers(h);
+        let kappa = std::array::from_fn(|a| {
+            ks[a]
+                .iter()
+                .enumerate()
+                .map(|(j, &k)| {
+                    let nyquist = real[a].is_multiple_of(2) && j == real[a] / 2;
+                    if nyquist {
+                        0.0
+                    } else {
+                        k
+                    }
+                })
+                .collect()
+        });
+        let axes: Vec<usize> = (0..3).filter(|&a| real[a] > 1).collect();
+        let zeros = || Array3::<f64>::zeros(real);
+        Flow {
+            viscosity: spec.viscosity,
+            mobility: spec.mobility,
+            kappa,
+            shape,
+            spectrum: Array3::zeros(shape),
+            components: axes.iter().map(|_| Array3::zeros(shape)).collect(),
+            gradient: axes.iter().map(|_| zeros()).collect(),
+            mu: zeros(),
+            component: zeros(),
+            speed_sq: zeros(),
+            axes,
+        }
+    }
+
+    /// Replace the conserved flow's explicit term `nonlinear` (N̂ of φ̂ = `hat`) by
+    /// M N̂ − FT[u·∇φ], with u the Stokes flow of the force μ∇φ at tension `sigma` (module
+    /// documentation). `sym` gives |k|² and the Parseval weights, `eps` the interface width.
+    pub fn advect(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        (eps, sigma): (f64, f64),
+        hat: &Array3<Complex64>,
+        nonlinear: &mut Array3<Complex64>,
+    ) -> FlowStats {
+        let e4x2 = 2.0 * eps.powi(4);
+        let tension = TENSION_FACTOR * eps * sigma;
+        // μ̂ = −N̂/|k|² + 2ε⁴|k|⁴φ̂ + c_σσ|k|²φ̂ (k ≠ 0; a constant in μ exerts a gradient,
+        // which the projection removes).
+        self.spectral_pass(sym, |i, k, _, out| {
+            *out = if k > 0.0 {
+                -at(nonlinear, i) / k + at(hat, i) * (e4x2 * k * k + tension * k)
+            } else {
+                Complex64::default()
+            };
+        });
+        transform.inverse(&mut self.spectrum, &mut self.mu);
+        for (c, a) in self.axes.clone().into_iter().enumerate() {
+            let kappa = self.kappa[a].clone();
+            self.spectral_pass(sym, |i, _, idx, out| {
+                *out = at(hat, i) * Complex64::new(0.0, kappa[idx[a]]);
+            });
+            transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
+            Zip::from(&mut self.component)
+                .and(&self.mu)
+                .and(&self.gradient[c])
+                .par_for_each(|f, &mu, &g| *f = mu * g);
+            transform.forward(&mut self.component, &mut self.components[c]);
+        }
+        let dissipation = self.project(sym);
+        for c in 0..self.axes.len() {
+            transform.inverse(&mut self.components[c], &mut self.component);
+            let first = c == 0;
+            Zip::from(&mut self.mu)
+                .and(&mut self.speed_sq)
+                .and(&self.component)
+                .and(&self.gradient[c])
+                .par_for_each(|adv, s, &u, &g| {
+                    if first {
+                        (*adv, *s) = (u * g, u * u);
+                    } else {
+                        (*adv, *s) = (*adv + u * g, *s + u * u);
+                    }
+                });
+        }
+        let max_speed_sq = self.speed_sq.par_iter().copied().reduce(|| 0.0, f64::max);
+        transform.forward(&mut self.mu, &mut self.spectrum);
+        self.spectrum[[0, 0, 0]] = Complex64::default();
+        let mobility = self.mobility;
+        Zip::from(&mut *nonlinear)
+            .and(&self.spectrum)
+            .par_for_each(|n, &a| *n = *n * mobility - a);
+        transform.hermitian_symmetrize(nonlinear);
+        FlowStats {
+            max_speed: max_speed_sq.sqrt(),
+            dissipation,
+        }
+    }
+
+    /// The Oseen projection in place on the force's spectra: s = κ·f̂/|κ|², then
+    /// f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a. Returns η Σ_k w |k|²|û|².
+    fn project(&mut self, sym: &Symbols) -> f64 {
+        let (axes, kappa) = (&self.axes, &self.kappa);
+        let components = &self.components;
+        self.spectrum
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_chunks_mut(PAR_CHUNK)
+            .enumerate()
+            .for_each(|(t, chunk)| {
+                for (l, out) in chunk.iter_mut().enumerate() {
+                    let i = t * PAR_CHUNK + l;
+                    let idx = index_of(i, self.shape);
+                    let mut dot = Complex64::default();
+                    let mut norm = 0.0;
+                    for (c, &a) in axes.iter().enumerate() {
+                        let k = kappa[a][idx[a]];
+                        dot += components[c].as_slice().expect("standard layout")[i] * k;
+                        norm += k * k;
+                    }
+                    *out = if norm > 0.0 {
+                        dot / norm
+                    } else {
+                        Complex64::default()
+                    };
+                }
+            });
+        let eta = self.viscosity;
+        let mut dissipation = 0.0;
+        for c in 0..self.axes.len() {
+            let a = self.axes[c];
+            let (kappa, s, shape) = (&self.kappa[a], &self.spectrum, self.shape);
+            let partials = self.components[c]
+                .as_slice_mut()
+                .expect("standard layout")
+                .par_chunks_mut(PAR_CHUNK)
+                .enumerate()
+                .map(|(t, chunk)| {
+                    let mut sum = 0.0;
+                    for (l, u) in chunk.iter_mut().enumerate() {
+                        let i = t * PAR_CHUNK + l;
+                        let idx = index_of(i, shape);
+                        let (k2, w) = mode_symbols(sym, idx);
+                        *u = if k2 > 0.0 {
+                            (*u - s.as_slice().expect("standard layout")[i] * kappa[idx[a]])
+                                / (eta * k2)
+                        } else {
+                            Complex64::default()
+                        };
+                        sum += w * k2 * u.norm_sqr();
+                    }
+                    sum
+                });
+            dissipation += eta * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y);
+        }
+        dissipation
+    }
+
+    /// Write `f(i, |k|², [j0, j1, j2], out)` into every mode `i` of the scratch spectrum, in
+    /// parallel chunks.
+    fn spectral_pass(
+        &mut self,
+        sym: &Symbols,
+        f: impl Fn(usize, f64, [usize; 3], &mut Complex64) + Sync,
+    ) {
+        let shape = self.shape;
+        self.spectrum
+            .as_slice_mut()
+            .expect("standard layout")
+            .par_chunks_mut(PAR_CHUNK)
+            .enumerate()
+            .for_each(|(t, chunk)| {
+                for (l, out) in chunk.iter_mut().enumerate() {
+                    let i = t * PAR_CHUNK + l;
+                    let idx = index_of(i, shape);
+                    f(i, mode_symbols(sym, idx).0, idx, out);
+                }
+            });
+    }
+}
+
+/// The index (j0, j1, j2) of the flat spectral position `i` in a spectrum of shape `shape`.
+#[inline]
+fn index_of(i: usize, [_, s1, s2]: [usize; 3]) -> [usize; 3] {
+    [i / (s1 * s2), (i / s2) % s1, i % s2]
+}
+
+/// |k|² and the Parseval weight w of the mode at `idx`.
+#[inline]
+fn mode_symbols(sym: &Symbols, [i0, i1, i2]: [usize; 3]) -> (f64, f64) {
+    (
+        sym.k2[0][i0] + sym.k2[1][i1] + sym.k2[2][i2],
+        sym.weight[0][i0] * sym.weight[1][i1] * sym.weight[2][i2],
+    )
+}
+
+/// The coefficient at flat position `i` of a spectrum.
+#[inline]
+fn at(a: &Array3<Complex64>, i: usize) -> Complex64 {
+    a.as_slice().expect("standard layout")[i]
+}
