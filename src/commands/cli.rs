@@ -276,6 +276,13 @@ enum Study {
         after_help = "Example:\n  vesicle study ade runs/studies/stability_ade.json --out runs/results/stability_ade [--quick]"
     )]
     Ade(StudyArgs),
+    /// The Stokes dynamics' relaxation rates: a seeded mode of a quasi-circle, a quasi-sphere
+    /// or a flat membrane at fixed tension, its fitted decay rate over the sharp rate times the
+    /// periodic box's factor, extrapolated in ε/R.
+    #[command(
+        after_help = "Example:\n  vesicle study rates runs/studies/rates.json --out runs/results/rates [--quick]"
+    )]
+    Rates(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -433,6 +440,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Ade(args)) => {
             args.run(crate::commands::study::stability::AdeStability::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Rates(args)) => {
+            args.run(crate::commands::study::rates::RatesStudy::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Budding(args)) => {

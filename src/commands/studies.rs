@@ -10,6 +10,7 @@ use crate::commands::study::convergence::Convergence;
 use crate::commands::study::file;
 use crate::commands::study::harness::{self, Report, Study};
 use crate::commands::study::pinning::PinningStudy;
+use crate::commands::study::rates::RatesStudy;
 use crate::commands::study::precision::Precision;
 use crate::commands::study::resolution::ResolutionStudy;
 use crate::commands::study::stability::{AdeStability, Stability};
@@ -89,6 +90,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         PinningStudy::NAME => run_file::<PinningStudy>(args),
         ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
         AdeStability::NAME => run_file::<AdeStability>(args),
+        RatesStudy::NAME => run_file::<RatesStudy>(args),
         "stationary" => run_stationary(args),
         _ => Err(Error::config(
             "study",
@@ -177,6 +179,7 @@ mod tests {
             "pinning",
             "resolution",
             "ade",
+            "rates",
         ] {
             assert!(
                 names.iter().any(|n| n == expected),

@@ -3,7 +3,7 @@
 //! declared mirror planes are symmetries of φ and c0.
 
 use crate::error::{Error, Result};
-use crate::problem::config::{axis_index, Initial, Scene, Symmetry};
+use crate::problem::config::{axis_index, Initial, Scene, Shape, Symmetry};
 use crate::problem::grid::Grid;
 use crate::problem::model::{SpontaneousCurvature, C0};
 use crate::problem::shapes;
@@ -38,7 +38,7 @@ pub struct Problem {
 pub fn build(scene: &Scene) -> Result<Problem> {
     let full_grid = Grid::new(&scene.n, scene.h, &vec![false; scene.dim]);
     let full_phi = initial_field(scene, &full_grid)?;
-    check_fits(&full_grid, &full_phi)?;
+    check_fits(&full_grid, &full_phi, runs_through(scene))?;
     let full_c0 = C0::new(&scene.c0, &full_grid, scene.eps)?;
     let mirror = mirror_axes(scene, &full_grid, &full_phi, &full_c0)?;
     let grid = Grid::new(&scene.n, scene.h, &mirror);
@@ -100,11 +100,28 @@ fn initial_field(scene: &Scene, grid: &Grid) -> Result<Array3<f64>> {
     }
 }
 
+/// The internal axes a `slab` initial shape runs through (every axis but its normal): it
+/// crosses the periodic faces across them by construction.
+fn runs_through(scene: &Scene) -> Vec<usize> {
+    match &scene.initial {
+        Initial::Shape(Shape::Slab(s)) => {
+            let normal = s.axis.as_deref().and_then(|a| axis_index(a, scene.dim));
+            let normal = normal.unwrap_or(scene.dim - 1);
+            (0..scene.dim)
+                .filter(|&a| a != normal)
+                .map(|a| a + 3 - scene.dim)
+                .collect()
+        }
+        _ => Vec::new(),
+    }
+}
+
 /// The outer faces of the box must be bulk outside (φ ≤ FACE_PHI_MAX), except along an axis
-/// the field does not depend on (a periodic tube or slab running through the box).
-fn check_fits(grid: &Grid, phi: &Array3<f64>) -> Result<()> {
+/// the field does not depend on (a periodic tube or slab running through the box) or one of
+/// `through`, which the shape crosses periodically (a wavy slab).
+fn check_fits(grid: &Grid, phi: &Array3<f64>, through: Vec<usize>) -> Result<()> {
     for a in 0..3 {
-        if grid.shape[a] == 1 || invariant_along(phi, a) {
+        if grid.shape[a] == 1 || invariant_along(phi, a) || through.contains(&a) {
             continue;
         }
         for idx in [0, grid.shape[a] - 1] {
@@ -159,6 +176,8 @@ fn mirror_axes(scene: &Scene, grid: &Grid, phi: &Array3<f64>, c0: &C0) -> Result
     let internal = |scene_axis: usize| scene_axis + 3 - scene.dim;
     let mut mirror = vec![false; scene.dim];
     match &scene.symmetry {
+        // The flow is solved on the periodic box (mirrors would need sine transforms).
+        Symmetry::Auto(_) if scene.stokes_flow().is_some() => {}
         // The flow is solved on the periodic box (mirrors would need sine transforms).
         Symmetry::Auto(_) if scene.stokes_flow().is_some() => {}
         Symmetry::Auto(_) => {

@@ -23,6 +23,7 @@ pub mod harness;
 pub mod levels;
 pub mod pinning;
 pub mod precision;
+pub mod rates;
 pub mod resolution;
 pub mod shape_case;
 pub mod stability;

@@ -8,7 +8,7 @@ use crate::engines::spectral::{self, SpectralEngine};
 use crate::engines::{AreaConstraint, Diverged, Engine};
 use crate::error::{Error, Result};
 use crate::problem::area_difference::AreaDifference;
-use crate::problem::config::{AdaptiveSpec, Device, Dynamics, Method, Scene, Scheme};
+use crate::problem::config::{AdaptiveSpec, AreaMethod, Device, Dynamics, Method, Scene, Scheme};
 use crate::problem::grid::Grid;
 use crate::problem::setup::Problem;
 
@@ -205,7 +205,16 @@ fn prepare(scene: &Scene, problem: &Problem) -> Result<Preparation> {
     prep_scene.dynamics = Dynamics::Conserved;
     prep_scene.scheme = Scheme::Sbdf1;
     let mut engine = build_engine(&prep_scene, problem)?;
-    engine.set_area(AreaConstraint::none());
+    // A fixed tension shapes the interface's profile (it pulls on ∫|∇φ|²): the preparation
+    // builds the profile the run will hold, at that tension; the other methods prepare at σ = 0.
+    engine.set_area(match scene.area_method() {
+        AreaMethod::Fixed => AreaConstraint {
+            sigma: scene.area.sigma.unwrap_or(0.0),
+            method: AreaMethod::Fixed,
+            ..AreaConstraint::none()
+        },
+        _ => AreaConstraint::none(),
+    });
     let mut prep = Simulation::new(engine, scene.dt, scene.dim, scene.eps);
     if let Err(e) = prep.run(&StopRules::steps(scene.prepare_steps), &mut []) {
         let during =

@@ -1,0 +1,262 @@
+//! One rate: the scene of a seeded mode, its run under the Stokes dynamics at fixed tension,
+//! and the mode's amplitude, whose logarithm is fitted against time.
+//!
+//! The amplitude is a moment of the inside indicator χ = (1 + φ)/2, linear in the mode's
+//! amplitude and blind to the others at first order:
+//!
+//! ```text
+//! circle (mode n):   Q = Σ χ Re[(x + iy)^n]            (about the centroid)
+//! sphere (mode l):   Q = Σ χ r^l P_l(z/r)              (about the centroid)
+//! flat (wave λ):     Q = Σ χ y cos(2πx/λ)              (y across the slab)
+//! ```
+
+use super::spec::Spec;
+use crate::commands::study::fit;
+use crate::driver::simulation::{Flow, Now, Probe, Simulation, StopRules};
+use crate::error::{Error, Result};
+use crate::problem::config::{self, Scene};
+use crate::problem::flow::{self as theory, bending_modulus};
+use crate::problem::grid::Grid;
+use crate::problem::setup;
+use crate::problem::shapes::legendre;
+use ndarray::Array3;
+use serde_json::json;
+use std::f64::consts::PI;
+use std::time::Instant;
+
+/// Which membrane a case seeds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kind {
+    /// The quasi-circle's mode n.
+    Circle,
+    /// The quasi-sphere's mode l.
+    Sphere,
+    /// The flat membrane's wave.
+    Flat,
+}
+
+impl Kind {
+    /// The name in the tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Circle => "circle",
+            Kind::Sphere => "sphere",
+            Kind::Flat => "flat",
+        }
+    }
+}
+
+/// One case to run: the membrane, its mode (n, l, or λ/ε for the flat one), σ̄ and size.
+#[derive(Clone, Copy, Debug)]
+pub struct Case {
+    /// The membrane.
+    pub kind: Kind,
+    /// n or l (0 for the flat membrane).
+    pub mode: usize,
+    /// σ̄: σR²/κ, or σ/(κk²) for the flat membrane.
+    pub sigma_bar: f64,
+    /// R/ε, or λ/ε.
+    pub size: f64,
+    /// L/R (closed vesicles) or the box's height over λ (flat).
+    pub box_ratio: f64,
+}
+
+/// What one case measured; a row of `cases.csv`.
+#[derive(Clone, Debug)]
+pub struct Measured {
+    /// The case.
+    pub case: Case,
+    /// Grid points per axis of the box.
+    pub points: Vec<usize>,
+    /// Δt.
+    pub dt: f64,
+    /// Steps run.
+    pub steps: usize,
+    /// Γ measured (the slope of −ln|Q| over the run after its first tenth).
+    pub rate: f64,
+    /// The sharp rate in free space (flat: of one interface).
+    pub theory: f64,
+    /// The periodic box's factor ([`theory::box_factor`]; 1 for the flat membrane).
+    pub box_factor: f64,
+    /// Γ / (theory × box factor).
+    pub ratio: f64,
+    /// Largest relative deviation of ln|Q| from the fitted line, over the fit.
+    pub fit_residual: f64,
+    /// max|u| at the end.
+    pub max_speed: f64,
+    /// Wall seconds.
+    pub wall: f64,
+}
+
+/// κ at ε = 1 (every case has ε = 1: lengths are in ε).
+fn kappa() -> f64 {
+    bending_modulus(1.0)
+}
+
+/// The sharp rate of `case` in free space, in units of 1/time, at viscosity `eta`.
+pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
+    let r = case.size;
+    match case.kind {
+        Kind::Circle => theory::circle_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3)),
+        Kind::Sphere => theory::sphere_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3)),
+        Kind::Flat => {
+            let k = 2.0 * PI / r;
+            theory::flat_rate(k, kappa(), case.sigma_bar * kappa() * k * k, eta)
+        }
+    }
+}
+
+/// The box factor of `case`.
+pub fn box_factor(case: &Case) -> f64 {
+    match case.kind {
+        Kind::Circle => theory::box_factor(2, case.mode, 1.0 / case.box_ratio),
+        Kind::Sphere => theory::box_factor(3, case.mode, 1.0 / case.box_ratio),
+        Kind::Flat => 1.0,
+    }
+}
+
+/// An even number of points nearest `length / h`.
+fn points(length: f64, h: f64) -> usize {
+    2 * ((length / h / 2.0).round() as usize).max(2)
+}
+
+/// The scene of `case`: the Stokes dynamics with the spec's fluid at σ fixed, SBDF2 with
+/// Δt = min(dt_max, step_per_rate/Γ_expected), run for e_folds/Γ_expected.
+///
+/// # Errors
+/// `Error::Config` if the scene is invalid (a bug of the spec's checks) or too large.
+pub fn scene(spec: &Spec, case: &Case, expected: f64) -> Result<Scene> {
+    let h = spec.h_over_eps;
+    let dt = spec.dt_max.min(spec.step_per_rate / expected);
+    let t_end = spec.e_folds / expected;
+    let r = case.size;
+    let (dim, n, sigma, initial) = match case.kind {
+        Kind::Circle | Kind::Sphere => {
+            let dim = if case.kind == Kind::Circle { 2 } else { 3 };
+            let side = points(case.box_ratio * r, h);
+            (
+                dim,
+                vec![side; dim],
+                case.sigma_bar * kappa() / (r * r),
+                json!({"shape": "harmonic", "radius": r, "mode": case.mode,
+                       "amplitude": spec.amplitude}),
+            )
+        }
+        Kind::Flat => {
+            let k = 2.0 * PI / r;
+            (
+                2,
+                vec![points(r, h), points(case.box_ratio * r, h)],
+                case.sigma_bar * kappa() * k * k,
+                json!({"shape": "slab", "thickness": case.box_ratio * r / 2.0,
+                       "wavelength": r, "amplitude": spec.amplitude * r}),
+            )
+        }
+    };
+    let value = json!({
+        "description": format!("rates study: {} mode {} sigma_bar {} size {}",
+            case.kind.name(), case.mode, case.sigma_bar, r),
+        "dim": dim, "n": n, "h": h, "eps": 1.0,
+        "scheme": "sbdf2", "dt": dt, "t_end": t_end,
+        "prepare_steps": spec.prepare_steps,
+        "dynamics": "stokes",
+        "flow": {"viscosity": spec.viscosity, "mobility": spec.mobility},
+        "area": {"method": "fixed", "sigma": sigma},
+        "initial": initial,
+    });
+    let scene = config::from_value(value)?;
+    crate::problem::memory::check(&scene)?;
+    Ok(scene)
+}
+
+/// Run `case` and fit its rate.
+///
+/// # Errors
+/// `Error::Config` for an invalid scene; `Error::Blowup` if the run diverges.
+pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
+    let started = Instant::now();
+    let theory = sharp_rate(case, spec.viscosity);
+    let factor = box_factor(case);
+    let scene = scene(spec, case, theory * factor)?;
+    let problem = setup::build(&scene)?;
+    let grid = problem.grid.clone();
+    let (mut sim, _) = Simulation::of_scene(&scene, &problem)?;
+    let t_end = scene.t_end.unwrap_or(f64::NAN);
+    let mut series: Vec<(f64, f64)> = Vec::new();
+    let mut max_speed = f64::NAN;
+    let mut probe = Probe(|now: &Now| {
+        let q = amplitude(case, &grid, now.engine.phi());
+        series.push((now.record.t, q.abs().ln()));
+        max_speed = now.engine.flow().map_or(f64::NAN, |f| f.max_speed);
+        Ok(Flow::Continue)
+    });
+    sim.run(&StopRules::of(&scene), &mut [&mut probe])?;
+    let kept: Vec<(f64, f64)> = series
+        .iter()
+        .copied()
+        .filter(|(t, _)| *t >= 0.1 * t_end)
+        .collect();
+    let (t, y): (Vec<f64>, Vec<f64>) = kept.iter().copied().unzip();
+    let line = fit::linear(&t, &y).ok_or_else(|| {
+        Error::config("e_folds", "too few samples to fit a rate; raise e_folds or lower step_per_rate")
+    })?;
+    let fit_residual = kept
+        .iter()
+        .map(|(t, y)| (y - line.intercept - line.slope * t).abs())
+        .fold(0.0f64, f64::max);
+    let rate = -line.slope;
+    Ok(Measured {
+        case: *case,
+        points: scene.n.clone(),
+        dt: scene.dt,
+        steps: sim.clock.step,
+        rate,
+        theory,
+        box_factor: factor,
+        ratio: rate / (theory * factor),
+        fit_residual,
+        max_speed,
+        wall: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The amplitude moment Q of `case`'s mode in the field `phi` on `grid` (module
+/// documentation). 2D fields run along internal axes 1 (x) and 2 (y).
+pub fn amplitude(case: &Case, grid: &Grid, phi: &Array3<f64>) -> f64 {
+    let c = [grid.coords(0), grid.coords(1), grid.coords(2)];
+    let chi = |v: f64| 0.5 * (1.0 + v);
+    let at = |(i, j, k): (usize, usize, usize)| [c[0][i], c[1][j], c[2][k]];
+    // The centroid of χ (its mass Σχ and first moments).
+    let mut mass = 0.0;
+    let mut first = [0.0; 3];
+    for (idx, &v) in phi.indexed_iter() {
+        let p = at(idx);
+        mass += chi(v);
+        for a in 0..3 {
+            first[a] += chi(v) * p[a];
+        }
+    }
+    let centre = first.map(|f| f / mass);
+    let mut q = 0.0;
+    for (idx, &v) in phi.indexed_iter() {
+        let p = at(idx);
+        let d = [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]];
+        q += chi(v)
+            * match case.kind {
+                Kind::Circle => {
+                    let (r, theta) = (d[1].hypot(d[2]), d[2].atan2(d[1]));
+                    r.powi(case.mode as i32) * (case.mode as f64 * theta).cos()
+                }
+                Kind::Sphere => {
+                    let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    if r == 0.0 {
+                        0.0
+                    } else {
+                        r.powi(case.mode as i32) * legendre(case.mode, d[2] / r)
+                    }
+                }
+                Kind::Flat => p[2] * (2.0 * PI * p[1] / case.size).cos(),
+            };
+    }
+    q
+}

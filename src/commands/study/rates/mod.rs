@@ -1,0 +1,284 @@
+//! `vesicle study rates FILE`: the Stokes dynamics' relaxation rates against the sharp
+//! theory (docs/src/theory/flow.md; docs/src/validation/flow.md).
+//!
+//! Each case seeds one mode (a quasi-circle's n, a quasi-sphere's l, a flat membrane's wave)
+//! with a small amplitude, runs the Stokes dynamics at fixed tension from it, and fits the
+//! mode's decay rate ([`measure`]). The rate is compared with the sharp rate in free space
+//! times the periodic box's factor ([`crate::problem::flow::box_factor`]): their ratio
+//! should tend to 1 as ε/R → 0. For each (membrane, mode, σ̄) the ratio is extrapolated to
+//! ε/R = 0 (ε/λ for the flat membrane, whose cases are its sizes) by the polynomial through
+//! the sizes' ratios (linear through two, quadratic through three), and its distance from 1
+//! is the error the table reports.
+//!
+//! Writes `rates.txt`, `cases.csv` (every run), `rates.csv` (per membrane, mode and σ̄: the
+//! ratio at each size and extrapolated) and the chart `rates` (ratio against ε/R).
+
+pub mod measure;
+pub mod spec;
+
+use super::harness::{Report, Study};
+use super::table::{self, Column, Format, Row};
+use crate::error::Result;
+use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
+use measure::{Case, Kind, Measured};
+pub use spec::Spec;
+use std::path::Path;
+
+impl Row for Measured {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("membrane", "membrane", Format::Plain, |r| r.case.kind.name().into()),
+            Column::both("mode", "mode", Format::Plain, |r| r.case.mode.into()),
+            Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| r.case.sigma_bar.into()),
+            Column::both("size", "R or lambda", Format::Plain, |r: &Self| r.case.size.into())
+                .unit("eps"),
+            Column::both("box", "L/R or H/lambda", Format::Plain, |r| r.case.box_ratio.into()),
+            Column::csv("points", |r| r.points.iter().product::<usize>().into()),
+            Column::both("dt", "dt", Format::Sci(2), |r| r.dt.into()),
+            Column::both("steps", "steps", Format::Plain, |r| r.steps.into()),
+            Column::both("rate", "rate", Format::Sci(4), |r| r.rate.into()),
+            Column::both("theory", "sharp (free)", Format::Sci(4), |r| r.theory.into()),
+            Column::both("box_factor", "box factor", Format::Fixed(4), |r| r.box_factor.into()),
+            Column::both("ratio", "rate/(sharp x box)", Format::Fixed(4), |r| r.ratio.into()),
+            Column::both("fit_residual", "fit residual", Format::Sci(1), |r| {
+                r.fit_residual.into()
+            }),
+            Column::csv("max_speed", |r| r.max_speed.into()),
+            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| r.wall.into()).unit("s"),
+        ]
+    }
+}
+
+/// The extrapolated ratio of one (membrane, mode, σ̄); a row of `rates.csv`.
+#[derive(Clone, Debug)]
+pub struct Rate {
+    /// `circle`, `sphere` or `flat`.
+    pub membrane: &'static str,
+    /// n or l (0 flat).
+    pub mode: usize,
+    /// σ̄.
+    pub sigma_bar: f64,
+    /// Γ ηR³/κ of the sharp theory (closed vesicles), or Γ/(κk³/4η) − 1 = σ̄ (flat: NaN).
+    pub reduced_theory: f64,
+    /// The ratio at each size, smallest ε/R last: "0.9519 0.9730 0.9829".
+    pub ratios: String,
+    /// The ratio extrapolated to ε/R = 0.
+    pub extrapolated: f64,
+    /// extrapolated − 1, in percent.
+    pub error_percent: f64,
+    /// Wall seconds of its cases.
+    pub wall: f64,
+}
+
+impl Row for Rate {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("membrane", "membrane", Format::Plain, |r| r.membrane.into()),
+            Column::both("mode", "mode", Format::Plain, |r| r.mode.into()),
+            Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| r.sigma_bar.into()),
+            Column::both("reduced_theory", "G eta R^3/kappa", Format::Fixed(4), |r| {
+                r.reduced_theory.into()
+            }),
+            Column::both("ratios", "ratio per size (coarse to fine)", Format::Plain, |r| {
+                r.ratios.as_str().into()
+            }),
+            Column::both("extrapolated", "extrapolated", Format::Fixed(4), |r| {
+                r.extrapolated.into()
+            }),
+            Column::both("error_percent", "error", Format::Fixed(2), |r: &Self| {
+                r.error_percent.into()
+            })
+            .unit("%"),
+            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| r.wall.into()).unit("s"),
+        ]
+    }
+}
+
+/// Every case and every extrapolated rate.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// Every run.
+    pub cases: Vec<Measured>,
+    /// Per membrane, mode and σ̄.
+    pub rates: Vec<Rate>,
+}
+
+/// The study.
+pub struct RatesStudy;
+
+impl Study for RatesStudy {
+    const NAME: &'static str = "rates";
+    type Spec = Spec;
+    type Output = Output;
+
+    fn measure(spec: &Spec, _dir: &Path) -> Result<(Output, Report)> {
+        spec.validate()?;
+        let mut cases = Vec::new();
+        let mut rates = Vec::new();
+        for group in groups(spec) {
+            let measured = group
+                .iter()
+                .map(|c| measure::run(spec, c))
+                .collect::<Result<Vec<_>>>()?;
+            rates.push(extrapolate(&measured));
+            cases.extend(measured);
+        }
+        let mut text = String::from("== every case ==\n");
+        text.push_str(&table::text(&cases));
+        text.push_str(
+            "\n== the ratio rate/(sharp free rate x box factor), extrapolated to eps/R = 0 ==\n",
+        );
+        text.push_str(&table::text(&rates));
+        let mut report = Report {
+            text,
+            ..Report::default()
+        };
+        report.table("cases.csv", &cases)?;
+        report.table("rates.csv", &rates)?;
+        report.chart("rates", chart(&cases));
+        Ok((Output { cases, rates }, report))
+    }
+}
+
+/// The cases of the spec, grouped by (membrane, mode, σ̄), each group's sizes coarse (small
+/// R/ε) to fine.
+fn groups(spec: &Spec) -> Vec<Vec<Case>> {
+    let mut out = Vec::new();
+    for (kind, family) in [(Kind::Circle, &spec.circle), (Kind::Sphere, &spec.sphere)] {
+        let Some(f) = family else { continue };
+        for g in &f.groups {
+            let mut sizes = g.r0.clone();
+            sizes.sort_by(f64::total_cmp);
+            for &mode in &g.modes {
+                for &sigma_bar in &g.sigma_bar {
+                    out.push(
+                        sizes
+                            .iter()
+                            .map(|&size| Case {
+                                kind,
+                                mode,
+                                sigma_bar,
+                                size,
+                                box_ratio: f.box_over_r,
+                            })
+                            .collect(),
+                    );
+                }
+            }
+        }
+    }
+    if let Some(f) = &spec.flat {
+        let mut sizes = f.wavelengths.clone();
+        sizes.sort_by(f64::total_cmp);
+        for &sigma_bar in &f.sigma_bar {
+            out.push(
+                sizes
+                    .iter()
+                    .map(|&size| Case {
+                        kind: Kind::Flat,
+                        mode: 0,
+                        sigma_bar,
+                        size,
+                        box_ratio: f.height,
+                    })
+                    .collect(),
+            );
+        }
+    }
+    out
+}
+
+/// The value at x = 0 of the polynomial through `(x_i, y_i)`: Σ_i y_i Π_{j≠i} x_j/(x_j − x_i).
+pub fn value_at_zero(points: &[(f64, f64)]) -> f64 {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, &(xi, yi))| {
+            let weight: f64 = points
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, &(xj, _))| xj / (xj - xi))
+                .product();
+            yi * weight
+        })
+        .sum()
+}
+
+/// The group's ratios at each size and their extrapolation to ε/R = 0 through the last three
+/// sizes (the finest).
+fn extrapolate(group: &[Measured]) -> Rate {
+    let first = &group[0].case;
+    let points: Vec<(f64, f64)> = group.iter().map(|m| (1.0 / m.case.size, m.ratio)).collect();
+    let tail = &points[points.len().saturating_sub(3)..];
+    let extrapolated = value_at_zero(tail);
+    Rate {
+        membrane: first.kind.name(),
+        mode: first.mode,
+        sigma_bar: first.sigma_bar,
+        reduced_theory: match first.kind {
+            Kind::Circle => crate::problem::flow::circle_rate(first.mode, first.sigma_bar),
+            Kind::Sphere => crate::problem::flow::sphere_rate(first.mode, first.sigma_bar),
+            Kind::Flat => f64::NAN,
+        },
+        ratios: group
+            .iter()
+            .map(|m| format!("{:.4}", m.ratio))
+            .collect::<Vec<_>>()
+            .join(" "),
+        extrapolated,
+        error_percent: 100.0 * (extrapolated - 1.0),
+        wall: group.iter().map(|m| m.wall).sum(),
+    }
+}
+
+/// The ratio against ε/R per (membrane, mode, σ̄), with the target 1.
+fn chart(cases: &[Measured]) -> Figure {
+    let mut fig = Figure::new(
+        "Stokes relaxation rates: phase field over sharp theory (times the box factor)",
+        Axis::linear("eps / R   (flat membrane: eps / wavelength)"),
+        Axis::linear("rate / (sharp rate x box factor)"),
+    );
+    fig.legend = Corner::LowerLeft;
+    let marks = [Shape::Circle, Shape::Square, Shape::Triangle, Shape::Diamond];
+    let mut keys: Vec<(Kind, usize, f64)> = Vec::new();
+    for m in cases {
+        let key = (m.case.kind, m.case.mode, m.case.sigma_bar);
+        if !keys.contains(&key) {
+            keys.push(key);
+        }
+    }
+    for (i, &(kind, mode, sigma_bar)) in keys.iter().enumerate() {
+        let pts = cases
+            .iter()
+            .filter(|m| (m.case.kind, m.case.mode, m.case.sigma_bar) == (kind, mode, sigma_bar))
+            .map(|m| (1.0 / m.case.size, m.ratio))
+            .collect();
+        let label = match kind {
+            Kind::Flat => format!("flat, sigma_bar {sigma_bar}"),
+            _ => format!("{} {mode}, sigma_bar {sigma_bar}", kind.name()),
+        };
+        fig.push(Series::new(label, pts, colour(i), Mark::LinePoints(marks[i % marks.len()])));
+    }
+    let xmax = cases.iter().map(|m| 1.0 / m.case.size).fold(0.0, f64::max);
+    fig.push(
+        Series::new("sharp limit", vec![(0.0, 1.0), (xmax, 1.0)], [0, 0, 0], Mark::Dashed)
+            .unlisted(),
+    );
+    fig
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The extrapolation is exact for a polynomial of the degree it fits: y = 1 + 2x − 3x²
+    /// through three points gives 1, y = 0.5 − x through two gives 0.5.
+    #[test]
+    fn extrapolation_is_exact_on_polynomials() {
+        let q = |x: f64| 1.0 + 2.0 * x - 3.0 * x * x;
+        let pts: Vec<(f64, f64)> = [0.1, 0.05, 0.02].iter().map(|&x| (x, q(x))).collect();
+        assert!((value_at_zero(&pts) - 1.0).abs() < 1e-12);
+        assert!((value_at_zero(&[(0.2, 0.3), (0.1, 0.4)]) - 0.5).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,172 @@
+//! The rates study file (`runs/studies/rates.json`): which modes, tensions and sizes of the
+//! quasi-circle, the quasi-sphere and the flat membrane, the fluid and the lattice. Strict:
+//! unknown keys are refused, every value checked, errors name the key.
+
+use crate::error::{Error, Result};
+use serde::Deserialize;
+
+/// The study file's keys.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    /// `"rates"`.
+    pub study: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// h/ε of every case.
+    pub h_over_eps: f64,
+    /// η.
+    pub viscosity: f64,
+    /// M of the diffusive channel.
+    pub mobility: f64,
+    /// The seeded mode's amplitude: relative to R (circle, sphere) or to λ (flat).
+    pub amplitude: f64,
+    /// The largest Δt (the explicit flow's stability: Δt = 4 ran and Δt = 8 diverged at
+    /// M = 0.01, h = ε/2).
+    pub dt_max: f64,
+    /// Δt = min(`dt_max`, `step_per_rate` / Γ): the rate's resolution in time.
+    pub step_per_rate: f64,
+    /// The e-folds of the mode each case runs for (after its first tenth, which is left out of
+    /// the fit).
+    pub e_folds: f64,
+    /// Steps of the conserved flow (SBDF1, M = 1, σ = 0) that build the tanh profile first.
+    pub prepare_steps: usize,
+    /// The quasi-circle (2D).
+    #[serde(default)]
+    pub circle: Option<Family>,
+    /// The quasi-sphere (3D).
+    #[serde(default)]
+    pub sphere: Option<Family>,
+    /// The flat membrane (2D).
+    #[serde(default)]
+    pub flat: Option<Flat>,
+}
+
+/// Modes of a closed vesicle: groups of (modes, tensions) with the sizes each is run at.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Family {
+    /// L/R, the periodic box's side over the radius.
+    #[serde(rename = "box")]
+    pub box_over_r: f64,
+    /// The groups.
+    pub groups: Vec<Group>,
+}
+
+/// Modes and tensions run at the same sizes.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Group {
+    /// n (circle) or l (sphere), each ≥ 2.
+    pub modes: Vec<usize>,
+    /// σ̄ = σR²/κ.
+    pub sigma_bar: Vec<f64>,
+    /// R/ε of each size (at least two: the rate is extrapolated in ε/R).
+    pub r0: Vec<f64>,
+}
+
+/// Wavelengths of the flat membrane.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Flat {
+    /// λ/ε of each case (the box is one wavelength long).
+    pub wavelengths: Vec<f64>,
+    /// σ/(κk²) of each case.
+    pub sigma_bar: Vec<f64>,
+    /// The box's height over λ (the slab is half of it: the two interfaces λ·height/2 apart).
+    pub height: f64,
+}
+
+impl Spec {
+    /// Check every value.
+    ///
+    /// # Errors
+    /// `Error::Config` naming the key.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.h_over_eps > 0.0 && self.h_over_eps <= 1.0) {
+            return Err(Error::config("h_over_eps", "need 0 < h/ε ≤ 1"));
+        }
+        for (key, v) in [
+            ("viscosity", self.viscosity),
+            ("mobility", self.mobility),
+            ("dt_max", self.dt_max),
+            ("step_per_rate", self.step_per_rate),
+            ("e_folds", self.e_folds),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(Error::config(key, format!("must be finite and > 0, got {v}")));
+            }
+        }
+        if !(self.amplitude > 0.0 && self.amplitude < 0.2) {
+            return Err(Error::config("amplitude", "need 0 < a < 0.2 (a linear mode)"));
+        }
+        if self.circle.is_none() && self.sphere.is_none() && self.flat.is_none() {
+            return Err(Error::config("circle", "give circle, sphere and/or flat"));
+        }
+        for (key, family) in [("circle", &self.circle), ("sphere", &self.sphere)] {
+            if let Some(f) = family {
+                f.validate().map_err(|e| within(key, e))?;
+            }
+        }
+        if let Some(f) = &self.flat {
+            if f.wavelengths.is_empty() || f.wavelengths.iter().any(|w| !(*w >= 8.0)) {
+                return Err(Error::config("flat.wavelengths", "need λ/ε ≥ 8, at least one"));
+            }
+            if f.sigma_bar.is_empty() || f.sigma_bar.iter().any(|s| !(*s >= 0.0)) {
+                return Err(Error::config("flat.sigma_bar", "need values ≥ 0, at least one"));
+            }
+            if !(f.height >= 2.0) {
+                return Err(Error::config(
+                    "flat.height",
+                    "need ≥ 2 (the interfaces at least a wavelength apart)",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Family {
+    fn validate(&self) -> Result<()> {
+        if !(self.box_over_r >= 2.5) {
+            return Err(Error::config(
+                "box",
+                "need L/R ≥ 2.5 (the vesicle and its images apart)",
+            ));
+        }
+        if self.groups.is_empty() {
+            return Err(Error::config("groups", "need at least one group"));
+        }
+        for (i, g) in self.groups.iter().enumerate() {
+            g.validate().map_err(|e| within(&format!("groups[{i}]"), e))?;
+        }
+        Ok(())
+    }
+}
+
+impl Group {
+    fn validate(&self) -> Result<()> {
+        if self.modes.is_empty() || self.modes.iter().any(|&m| m < 2) {
+            return Err(Error::config("modes", "need modes ≥ 2, at least one"));
+        }
+        if self.sigma_bar.is_empty() || self.sigma_bar.iter().any(|s| !(*s >= 0.0)) {
+            return Err(Error::config("sigma_bar", "need values ≥ 0, at least one"));
+        }
+        if self.r0.len() < 2 || self.r0.iter().any(|r| !(*r >= 6.0)) {
+            return Err(Error::config(
+                "r0",
+                "need at least two R/ε ≥ 6 (the rate is extrapolated in ε/R)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `e` with its field under `key`.
+fn within(key: &str, e: Error) -> Error {
+    match e {
+        Error::Config { field, reason } => Error::config(format!("{key}.{field}"), reason),
+        other => other,
+    }
+}
