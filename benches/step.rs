@@ -3,7 +3,8 @@
 //! held, σ = 0, as the C floor `fft_limit` times its step) and the FD explicit-Euler step, on
 //! full periodic boxes of 64³ and 128³ and on the eighth box, 1 and 2 threads; and one L-BFGS
 //! iteration of the relaxational engine against one conserved step on the 48³ prolate of the
-//! route to stationary shapes (docs/src/performance.md). Compare with `benches/fft.rs` (the
+//! route to stationary shapes (docs/src/performance.md); and the Stokes dynamics' step beside
+//! the conserved one (docs/src/theory/flow.md). Compare with `benches/fft.rs` (the
 //! transforms alone) and with the C floors timed in the same session (`benches/floors.sh`;
 //! docs/src/performance.md, "One step against a C floor").
 
@@ -191,9 +192,39 @@ fn bench_relaxation(c: &mut Criterion) {
     group.finish();
 }
 
+/// The Stokes dynamics' step (docs/src/theory/flow.md: the conserved step plus 3d + 2
+/// transforms of the flow) beside the conserved step, SBDF2 at fixed tension on the same full
+/// periodic boxes (a quasi-sphere on 64³, a quasi-circle on 512²), 1 and 2 threads.
+fn bench_stokes(c: &mut Criterion) {
+    let mut group = c.benchmark_group("stokes");
+    for (dim, n, radius) in [(3usize, 64usize, 16.0), (2, 512, 128.0)] {
+        for dynamics in ["conserved", "stokes"] {
+            for threads in [1, 2] {
+                let id = BenchmarkId::new(dynamics, format!("{n}^{dim}/t{threads}"));
+                let make = || {
+                    engine_of(json!({
+                        "dim": dim, "n": vec![n; dim], "h": 1.0, "eps": 1.0, "scheme": "sbdf2",
+                        "dt": 1.0, "max_steps": 1, "threads": threads, "dynamics": dynamics,
+                        "flow": if dynamics == "stokes" {
+                            json!({"viscosity": 1.0, "mobility": 0.01})
+                        } else {
+                            serde_json::Value::Null
+                        },
+                        "area": {"method": "fixed", "sigma": 0.01},
+                        "initial": {"shape": "harmonic", "radius": radius, "mode": 2,
+                                    "amplitude": 0.02}
+                    }))
+                };
+                time_steps(&mut group, id, threads, make, 1.0);
+            }
+        }
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();
-    targets = bench_steps, bench_relaxation
+    targets = bench_steps, bench_relaxation, bench_stokes
 }
 criterion_main!(benches);

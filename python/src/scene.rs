@@ -21,7 +21,7 @@ use vesicle::problem::config;
 /// refuses a grid whose estimated memory exceeds what the machine has.
 ///
 /// The keys are those of the scene-file reference: dim, n, h, eps, method ("spectral" | "fd"),
-/// dynamics ("conserved" | "relaxational"), scheme, dt, adaptive, t_end, max_steps,
+/// dynamics ("conserved" | "relaxational" | "stokes", with flow), scheme, dt, adaptive, t_end, max_steps,
 /// stop_residual, initial, c0, area, symmetry, prepare_steps, threads, output, ...
 #[pyclass(frozen, module = "vesicle")]
 pub struct Scene {

@@ -85,7 +85,9 @@ pub fn box_factor(dim: usize, mode: usize, r_over_l: f64) -> f64 {
         1.0 / (16.0 * PI * n * (n * n - 1.0))
     } else {
         let l = mode as f64;
-        l * (l + 1.0) / (2.0 * l + 1.0) / (2.0 * PI * (2.0 * l - 1.0) * (2.0 * l + 1.0) * (2.0 * l + 3.0))
+        l * (l + 1.0)
+            / (2.0 * l + 1.0)
+            / (2.0 * PI * (2.0 * l - 1.0) * (2.0 * l + 1.0) * (2.0 * l + 3.0))
     };
     lattice * cell / free
 }
@@ -187,7 +189,10 @@ mod tests {
             (3, 4, 0.25, 0.9874),
         ] {
             let f = box_factor(dim, mode, r_over_l);
-            assert!((f - want).abs() < 1e-3, "dim {dim} mode {mode} R/L {r_over_l}: {f}");
+            assert!(
+                (f - want).abs() < 1e-3,
+                "dim {dim} mode {mode} R/L {r_over_l}: {f}"
+            );
         }
         let short = |r: f64| 1.0 - box_factor(2, 2, r);
         let ratio = short(1.0 / 6.0) / short(1.0 / 12.0);

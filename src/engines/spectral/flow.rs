@@ -12,6 +12,10 @@
 //! Σ_x μ u·∇φ = Σ_x u·f = η Σ_k w |k|²|û|² ≥ 0: the semi-discrete energy law
 //! dF_eff/dt = −M∫|∇μ|² − η∫|∇u|² holds term by term on the grid.
 //!
+//! With `flow.shear_rate` γ̇ the fluid also carries the imposed shear u_x = (γ̇/k₀) sin(k₀y)
+//! (k₀ = 2π/L_y), the exact Stokes flow of a periodic (Kolmogorov) body force: added to u
+//! before the advection, it does work on the membrane, so the energy law then has a source.
+//!
 //! Cost: 3d + 2 transforms per evaluation (μ and the d components of ∇φ back, f forward, u
 //! back, u·∇φ forward).
 
@@ -20,7 +24,7 @@ use super::transform::Transform;
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::problem::config::FlowSpec;
 use crate::problem::model::TENSION_FACTOR;
-use ndarray::{Array3, Zip};
+use ndarray::{Array3, Axis, Zip};
 use num_complex::Complex64;
 use rayon::prelude::*;
 
@@ -56,6 +60,8 @@ pub struct Flow {
     component: Array3<f64>,
     /// |u|².
     speed_sq: Array3<f64>,
+    /// The imposed shear flow u_x(y) along the y axis's points (`None`: no imposed flow).
+    shear: Option<Vec<f64>>,
 }
 
 impl Flow {
@@ -88,6 +94,14 @@ impl Flow {
         });
         let axes: Vec<usize> = (0..3).filter(|&a| real[a] > 1).collect();
         let zeros = || Array3::<f64>::zeros(real);
+        // u_x(y) = (γ̇/k₀) sin(k₀y), y from the box centre along the second axis.
+        let shear = spec.shear_rate.map(|rate| {
+            let n = real[axes[1]];
+            let k0 = 2.0 * std::f64::consts::PI / (n as f64 * h);
+            (0..n)
+                .map(|j| rate / k0 * (k0 * (j as f64 + 0.5 - n as f64 / 2.0) * h).sin())
+                .collect()
+        });
         Flow {
             viscosity: spec.viscosity,
             mobility: spec.mobility,
@@ -99,6 +113,7 @@ impl Flow {
             mu: zeros(),
             component: zeros(),
             speed_sq: zeros(),
+            shear,
             axes,
         }
     }
@@ -141,6 +156,12 @@ impl Flow {
         let dissipation = self.project(sym);
         for c in 0..self.axes.len() {
             transform.inverse(&mut self.components[c], &mut self.component);
+            if let (0, Some(profile)) = (c, &self.shear) {
+                let y = self.axes[1];
+                for (j, mut plane) in self.component.axis_iter_mut(Axis(y)).enumerate() {
+                    plane += profile[j];
+                }
+            }
             let first = c == 0;
             Zip::from(&mut self.mu)
                 .and(&mut self.speed_sq)
@@ -292,6 +313,7 @@ mod tests {
             FlowSpec {
                 viscosity: 1.7,
                 mobility: 0.05,
+                shear_rate: None,
             },
         );
         for n in [&[24, 19][..], &[12, 11, 10]] {

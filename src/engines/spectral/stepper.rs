@@ -216,6 +216,8 @@ pub struct Stepper<P> {
     volume_ramp: Option<VolumeRamp>,
     /// Whether C0 is ramped in time (F may then rise legitimately).
     c0_ramped: bool,
+    /// Whether an imposed flow does work on the membrane (F may then rise legitimately).
+    driven: bool,
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see [`Stepper::check_constraints`]).
     energy_guard: bool,
@@ -243,6 +245,7 @@ impl<P: Passes> Stepper<P> {
             area: AreaConstraint::none(),
             volume_ramp: scene.volume,
             c0_ramped,
+            driven: scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some()),
             dt_next: None,
             energy_guard: true,
             couple: None,
@@ -463,7 +466,8 @@ impl<P: Passes> Stepper<P> {
     /// Volume (and area under projection) held; F_eff (at the σ of the update) must not rise
     /// where the scheme guarantees that it falls: adaptive steps, and fixed SBDF1 steps (the
     /// stabilised first-order step is dissipative; SBDF2 is not guaranteed to be, and a ramped
-    /// C0 may raise F legitimately). Off when the energy guard is off (stability studies), and
+    /// C0 or an imposed shear flow may raise F legitimately). Off when the energy guard is off
+    /// (stability studies), and
     /// for a step that starts (time `t`) while a volume ramp runs: deflating does work on the
     /// vesicle, so F may rise; once V0 is constant the guard holds again. The volume is checked
     /// against its target at the step's end, `t_new`.
@@ -477,7 +481,8 @@ impl<P: Passes> Stepper<P> {
         let guard = self.energy_guard
             && control::dissipative(self.adaptive.as_ref(), self.scheme)
             && !ramping
-            && !self.c0_ramped;
+            && !self.c0_ramped
+            && !self.driven;
         let states = self.passes.states();
         control::check_step(
             &self.with_ade(states.cur.measures(), lambda),

@@ -241,6 +241,10 @@ pub struct FlowSpec {
     pub viscosity: f64,
     /// M > 0, the mobility of the diffusive channel M∇²μ.
     pub mobility: f64,
+    /// γ̇: an imposed Kolmogorov shear flow u = (γ̇/k₀) sin(k₀y) x̂, k₀ = 2π/L_y (y from the box
+    /// centre), the Stokes flow of the body force ηγ̇k₀ sin(k₀y) x̂: shear rate γ̇ at y = 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_rate: Option<f64>,
 }
 
 /// `adaptive`: a flag or the controller's settings.

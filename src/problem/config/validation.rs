@@ -261,6 +261,9 @@ impl Scene {
         }
         positive("flow.viscosity", flow.viscosity)?;
         positive("flow.mobility", flow.mobility)?;
+        if let Some(g) = flow.shear_rate {
+            finite("flow.shear_rate", g)?;
+        }
         if self.method == Method::Fd {
             return Err(Error::config(
                 "dynamics",

@@ -82,6 +82,10 @@ pub struct Measured {
     pub ratio: f64,
     /// Largest relative deviation of ln|Q| from the fitted line, over the fit.
     pub fit_residual: f64,
+    /// δ ≈ σ/(3ε), the relative widening of the interface's profile the fixed tension holds
+    /// (docs/src/theory/flow.md): the phase field departs from the sharp membrane once it is
+    /// a few percent.
+    pub widening: f64,
     /// max|u| at the end.
     pub max_speed: f64,
     /// Wall seconds.
@@ -97,8 +101,12 @@ fn kappa() -> f64 {
 pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
     let r = case.size;
     match case.kind {
-        Kind::Circle => theory::circle_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3)),
-        Kind::Sphere => theory::sphere_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3)),
+        Kind::Circle => {
+            theory::circle_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3))
+        }
+        Kind::Sphere => {
+            theory::sphere_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3))
+        }
         Kind::Flat => {
             let k = 2.0 * PI / r;
             theory::flat_rate(k, kappa(), case.sigma_bar * kappa() * k * k, eta)
@@ -112,6 +120,14 @@ pub fn box_factor(case: &Case) -> f64 {
         Kind::Circle => theory::box_factor(2, case.mode, 1.0 / case.box_ratio),
         Kind::Sphere => theory::box_factor(3, case.mode, 1.0 / case.box_ratio),
         Kind::Flat => 1.0,
+    }
+}
+
+/// σ of `case` (ε = 1): σ̄κ/R², or σ̄κk² for the flat membrane.
+pub fn tension(case: &Case) -> f64 {
+    match case.kind {
+        Kind::Flat => case.sigma_bar * kappa() * (2.0 * PI / case.size).powi(2),
+        _ => case.sigma_bar * kappa() / (case.size * case.size),
     }
 }
 
@@ -130,28 +146,24 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64) -> Result<Scene> {
     let dt = spec.dt_max.min(spec.step_per_rate / expected);
     let t_end = spec.e_folds / expected;
     let r = case.size;
-    let (dim, n, sigma, initial) = match case.kind {
+    let sigma = tension(case);
+    let (dim, n, initial) = match case.kind {
         Kind::Circle | Kind::Sphere => {
             let dim = if case.kind == Kind::Circle { 2 } else { 3 };
             let side = points(case.box_ratio * r, h);
             (
                 dim,
                 vec![side; dim],
-                case.sigma_bar * kappa() / (r * r),
                 json!({"shape": "harmonic", "radius": r, "mode": case.mode,
                        "amplitude": spec.amplitude}),
             )
         }
-        Kind::Flat => {
-            let k = 2.0 * PI / r;
-            (
-                2,
-                vec![points(r, h), points(case.box_ratio * r, h)],
-                case.sigma_bar * kappa() * k * k,
-                json!({"shape": "slab", "thickness": case.box_ratio * r / 2.0,
+        Kind::Flat => (
+            2,
+            vec![points(r, h), points(case.box_ratio * r, h)],
+            json!({"shape": "slab", "thickness": case.box_ratio * r / 2.0,
                        "wavelength": r, "amplitude": spec.amplitude * r}),
-            )
-        }
+        ),
     };
     let value = json!({
         "description": format!("rates study: {} mode {} sigma_bar {} size {}",
@@ -198,7 +210,10 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
         .collect();
     let (t, y): (Vec<f64>, Vec<f64>) = kept.iter().copied().unzip();
     let line = fit::linear(&t, &y).ok_or_else(|| {
-        Error::config("e_folds", "too few samples to fit a rate; raise e_folds or lower step_per_rate")
+        Error::config(
+            "e_folds",
+            "too few samples to fit a rate; raise e_folds or lower step_per_rate",
+        )
     })?;
     let fit_residual = kept
         .iter()
@@ -215,6 +230,7 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
         box_factor: factor,
         ratio: rate / (theory * factor),
         fit_residual,
+        widening: tension(case) / 3.0,
         max_speed,
         wall: started.elapsed().as_secs_f64(),
     })

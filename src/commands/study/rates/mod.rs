@@ -27,24 +27,44 @@ use std::path::Path;
 impl Row for Measured {
     fn columns() -> Vec<Column<Self>> {
         vec![
-            Column::both("membrane", "membrane", Format::Plain, |r| r.case.kind.name().into()),
+            Column::both("membrane", "membrane", Format::Plain, |r| {
+                r.case.kind.name().into()
+            }),
             Column::both("mode", "mode", Format::Plain, |r| r.case.mode.into()),
-            Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| r.case.sigma_bar.into()),
-            Column::both("size", "R or lambda", Format::Plain, |r: &Self| r.case.size.into())
-                .unit("eps"),
-            Column::both("box", "L/R or H/lambda", Format::Plain, |r| r.case.box_ratio.into()),
+            Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| {
+                r.case.sigma_bar.into()
+            }),
+            Column::both("size", "R or lambda", Format::Plain, |r: &Self| {
+                r.case.size.into()
+            })
+            .unit("eps"),
+            Column::both("box", "L/R or H/lambda", Format::Plain, |r| {
+                r.case.box_ratio.into()
+            }),
             Column::csv("points", |r| r.points.iter().product::<usize>().into()),
             Column::both("dt", "dt", Format::Sci(2), |r| r.dt.into()),
             Column::both("steps", "steps", Format::Plain, |r| r.steps.into()),
             Column::both("rate", "rate", Format::Sci(4), |r| r.rate.into()),
-            Column::both("theory", "sharp (free)", Format::Sci(4), |r| r.theory.into()),
-            Column::both("box_factor", "box factor", Format::Fixed(4), |r| r.box_factor.into()),
-            Column::both("ratio", "rate/(sharp x box)", Format::Fixed(4), |r| r.ratio.into()),
+            Column::both("theory", "sharp (free)", Format::Sci(4), |r| {
+                r.theory.into()
+            }),
+            Column::both("box_factor", "box factor", Format::Fixed(4), |r| {
+                r.box_factor.into()
+            }),
+            Column::both("ratio", "rate/(sharp x box)", Format::Fixed(4), |r| {
+                r.ratio.into()
+            }),
             Column::both("fit_residual", "fit residual", Format::Sci(1), |r| {
                 r.fit_residual.into()
             }),
+            Column::both("widening", "profile widening", Format::Fixed(3), |r| {
+                r.widening.into()
+            }),
             Column::csv("max_speed", |r| r.max_speed.into()),
-            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| r.wall.into()).unit("s"),
+            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| {
+                r.wall.into()
+            })
+            .unit("s"),
         ]
     }
 }
@@ -75,13 +95,18 @@ impl Row for Rate {
         vec![
             Column::both("membrane", "membrane", Format::Plain, |r| r.membrane.into()),
             Column::both("mode", "mode", Format::Plain, |r| r.mode.into()),
-            Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| r.sigma_bar.into()),
+            Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| {
+                r.sigma_bar.into()
+            }),
             Column::both("reduced_theory", "G eta R^3/kappa", Format::Fixed(4), |r| {
                 r.reduced_theory.into()
             }),
-            Column::both("ratios", "ratio per size (coarse to fine)", Format::Plain, |r| {
-                r.ratios.as_str().into()
-            }),
+            Column::both(
+                "ratios",
+                "ratio per size (coarse to fine)",
+                Format::Plain,
+                |r| r.ratios.as_str().into(),
+            ),
             Column::both("extrapolated", "extrapolated", Format::Fixed(4), |r| {
                 r.extrapolated.into()
             }),
@@ -89,7 +114,10 @@ impl Row for Rate {
                 r.error_percent.into()
             })
             .unit("%"),
-            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| r.wall.into()).unit("s"),
+            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| {
+                r.wall.into()
+            })
+            .unit("s"),
         ]
     }
 }
@@ -240,7 +268,12 @@ fn chart(cases: &[Measured]) -> Figure {
         Axis::linear("rate / (sharp rate x box factor)"),
     );
     fig.legend = Corner::LowerLeft;
-    let marks = [Shape::Circle, Shape::Square, Shape::Triangle, Shape::Diamond];
+    let marks = [
+        Shape::Circle,
+        Shape::Square,
+        Shape::Triangle,
+        Shape::Diamond,
+    ];
     let mut keys: Vec<(Kind, usize, f64)> = Vec::new();
     for m in cases {
         let key = (m.case.kind, m.case.mode, m.case.sigma_bar);
@@ -258,12 +291,22 @@ fn chart(cases: &[Measured]) -> Figure {
             Kind::Flat => format!("flat, sigma_bar {sigma_bar}"),
             _ => format!("{} {mode}, sigma_bar {sigma_bar}", kind.name()),
         };
-        fig.push(Series::new(label, pts, colour(i), Mark::LinePoints(marks[i % marks.len()])));
+        fig.push(Series::new(
+            label,
+            pts,
+            colour(i),
+            Mark::LinePoints(marks[i % marks.len()]),
+        ));
     }
     let xmax = cases.iter().map(|m| 1.0 / m.case.size).fold(0.0, f64::max);
     fig.push(
-        Series::new("sharp limit", vec![(0.0, 1.0), (xmax, 1.0)], [0, 0, 0], Mark::Dashed)
-            .unlisted(),
+        Series::new(
+            "sharp limit",
+            vec![(0.0, 1.0), (xmax, 1.0)],
+            [0, 0, 0],
+            Mark::Dashed,
+        )
+        .unlisted(),
     );
     fig
 }

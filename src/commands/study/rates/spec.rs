@@ -95,11 +95,17 @@ impl Spec {
             ("e_folds", self.e_folds),
         ] {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(Error::config(key, format!("must be finite and > 0, got {v}")));
+                return Err(Error::config(
+                    key,
+                    format!("must be finite and > 0, got {v}"),
+                ));
             }
         }
         if !(self.amplitude > 0.0 && self.amplitude < 0.2) {
-            return Err(Error::config("amplitude", "need 0 < a < 0.2 (a linear mode)"));
+            return Err(Error::config(
+                "amplitude",
+                "need 0 < a < 0.2 (a linear mode)",
+            ));
         }
         if self.circle.is_none() && self.sphere.is_none() && self.flat.is_none() {
             return Err(Error::config("circle", "give circle, sphere and/or flat"));
@@ -110,13 +116,19 @@ impl Spec {
             }
         }
         if let Some(f) = &self.flat {
-            if f.wavelengths.is_empty() || f.wavelengths.iter().any(|w| !(*w >= 8.0)) {
-                return Err(Error::config("flat.wavelengths", "need λ/ε ≥ 8, at least one"));
+            if f.wavelengths.is_empty() || f.wavelengths.iter().any(|w| !at_least(*w, 8.0)) {
+                return Err(Error::config(
+                    "flat.wavelengths",
+                    "need λ/ε ≥ 8, at least one",
+                ));
             }
-            if f.sigma_bar.is_empty() || f.sigma_bar.iter().any(|s| !(*s >= 0.0)) {
-                return Err(Error::config("flat.sigma_bar", "need values ≥ 0, at least one"));
+            if f.sigma_bar.is_empty() || f.sigma_bar.iter().any(|s| !at_least(*s, 0.0)) {
+                return Err(Error::config(
+                    "flat.sigma_bar",
+                    "need values ≥ 0, at least one",
+                ));
             }
-            if !(f.height >= 2.0) {
+            if !at_least(f.height, 2.0) {
                 return Err(Error::config(
                     "flat.height",
                     "need ≥ 2 (the interfaces at least a wavelength apart)",
@@ -129,7 +141,7 @@ impl Spec {
 
 impl Family {
     fn validate(&self) -> Result<()> {
-        if !(self.box_over_r >= 2.5) {
+        if !at_least(self.box_over_r, 2.5) {
             return Err(Error::config(
                 "box",
                 "need L/R ≥ 2.5 (the vesicle and its images apart)",
@@ -139,7 +151,8 @@ impl Family {
             return Err(Error::config("groups", "need at least one group"));
         }
         for (i, g) in self.groups.iter().enumerate() {
-            g.validate().map_err(|e| within(&format!("groups[{i}]"), e))?;
+            g.validate()
+                .map_err(|e| within(&format!("groups[{i}]"), e))?;
         }
         Ok(())
     }
@@ -150,10 +163,10 @@ impl Group {
         if self.modes.is_empty() || self.modes.iter().any(|&m| m < 2) {
             return Err(Error::config("modes", "need modes ≥ 2, at least one"));
         }
-        if self.sigma_bar.is_empty() || self.sigma_bar.iter().any(|s| !(*s >= 0.0)) {
+        if self.sigma_bar.is_empty() || self.sigma_bar.iter().any(|s| !at_least(*s, 0.0)) {
             return Err(Error::config("sigma_bar", "need values ≥ 0, at least one"));
         }
-        if self.r0.len() < 2 || self.r0.iter().any(|r| !(*r >= 6.0)) {
+        if self.r0.len() < 2 || self.r0.iter().any(|r| !at_least(*r, 6.0)) {
             return Err(Error::config(
                 "r0",
                 "need at least two R/ε ≥ 6 (the rate is extrapolated in ε/R)",
@@ -161,6 +174,11 @@ impl Group {
         }
         Ok(())
     }
+}
+
+/// x ≥ `lo` (false for NaN).
+fn at_least(x: f64, lo: f64) -> bool {
+    x >= lo
 }
 
 /// `e` with its field under `key`.

@@ -1,0 +1,36 @@
+"""The Stokes dynamics from Python: the keys pass through `Scene` (and are refused where the
+command line refuses them), and the records carry the flow's columns, as timeseries.csv does."""
+
+import pytest
+import vesicle
+
+from conftest import ellipse
+
+
+def stokes(**extra):
+    """The ellipse on the full periodic box (the flow has no mirror planes) in a fluid."""
+    scene = ellipse(symmetry=[], dynamics="stokes", flow={"viscosity": 1.0, "mobility": 0.01},
+                    area={"method": "fixed", "sigma": 0.01}, adaptive=False, dt=0.5)
+    scene.update(extra)
+    return scene
+
+
+def test_stokes_records_carry_the_flow_columns():
+    sim = vesicle.Simulation(stokes(max_steps=6))
+    sim.run()
+    r = sim.record
+    assert r["max_speed"] > 0.0 and r["dissipation"] > 0.0
+    assert r["sigma"] == 0.01
+    assert len(sim.history["max_speed"]) == len(sim.history["step"])
+
+
+def test_flow_without_stokes_is_refused_naming_the_key():
+    with pytest.raises(vesicle.InvalidInput) as err:
+        vesicle.Scene(ellipse(flow={"viscosity": 1.0, "mobility": 0.01}))
+    assert err.value.field == "flow"
+
+
+def test_stokes_with_mirrors_is_refused_naming_the_key():
+    with pytest.raises(vesicle.InvalidInput) as err:
+        vesicle.Scene(stokes(symmetry=["x"]))
+    assert err.value.field == "symmetry"
