@@ -276,6 +276,13 @@ enum Study {
         after_help = "Example:\n  vesicle study ade runs/studies/stability_ade.json --out runs/results/stability_ade [--quick]"
     )]
     Ade(StudyArgs),
+    /// Non-axisymmetric ADE shapes (triaxial, starfish): a seeded scene relaxed by L-BFGS per
+    /// h/ε and Δa0, its w, Δa, e and semi-axes against the axisymmetric starts relaxed in the
+    /// same box (interpolated to its v) and the sharp axisymmetric branches at its v.
+    #[command(
+        after_help = "Example:\n  vesicle study nonaxisymmetric runs/studies/nonaxisymmetric.json --out runs/results/nonaxisymmetric [--quick]"
+    )]
+    Nonaxisymmetric(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -433,6 +440,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Ade(args)) => {
             args.run(crate::commands::study::stability::AdeStability::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Nonaxisymmetric(args)) => {
+            args.run(crate::commands::study::nonaxisymmetric::Nonaxisymmetric::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Budding(args)) => {

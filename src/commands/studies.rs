@@ -9,6 +9,7 @@ use crate::commands::study::budding::Budding;
 use crate::commands::study::convergence::Convergence;
 use crate::commands::study::file;
 use crate::commands::study::harness::{self, Report, Study};
+use crate::commands::study::nonaxisymmetric::Nonaxisymmetric;
 use crate::commands::study::pinning::PinningStudy;
 use crate::commands::study::precision::Precision;
 use crate::commands::study::resolution::ResolutionStudy;
@@ -89,6 +90,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         PinningStudy::NAME => run_file::<PinningStudy>(args),
         ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
         AdeStability::NAME => run_file::<AdeStability>(args),
+        Nonaxisymmetric::NAME => run_file::<Nonaxisymmetric>(args),
         "stationary" => run_stationary(args),
         _ => Err(Error::config(
             "study",
@@ -177,6 +179,7 @@ mod tests {
             "pinning",
             "resolution",
             "ade",
+            "nonaxisymmetric",
         ] {
             assert!(
                 names.iter().any(|n| n == expected),
