@@ -330,7 +330,7 @@ fn one_case(
         "output": {"png": false, "vti": false}
     });
     let label = format!("h = eps/{eps_over_h}, alpha = {alpha}, da0 = {da0}");
-    let scene = super::file::scene(&spec.scene, &[at.clone()], "scene", dir)?;
+    let scene = super::file::scene(&spec.scene, std::slice::from_ref(&at), "scene", dir)?;
     let na = relax(&scene, "non-axisymmetric", eps_over_h, alpha, da0)
         .map_err(|e| e.within(&format!("non-axisymmetric start, {label}")))?;
     eprintln!(
@@ -384,7 +384,7 @@ fn one_case(
         .filter(|(_, w)| w.is_finite())
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map_or(("none", f64::NAN), |(b, w)| (b.name(), w));
-    let lowest_pf = if !(w_axi <= na.w) {
+    let lowest_pf = if w_axi.is_nan() || w_axi > na.w {
         "non-axisymmetric"
     } else {
         lowest_axi
