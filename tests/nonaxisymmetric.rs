@@ -58,3 +58,55 @@ fn triaxial_seed_ends_triaxial_and_below_the_axisymmetric_states() {
         );
     }
 }
+
+/// The committed scenes validate as they are, say what they show, and run L-BFGS on a box
+/// that keeps only mirror planes (no axis of revolution is imposed).
+#[test]
+fn scenes_validate_with_mirror_planes_only() {
+    for name in ["triaxial3d", "starfish3d"] {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("runs/{name}.json"));
+        let s = vesicle::problem::config::load(&path, &[]).expect("valid scene");
+        s.validate().expect("valid scene");
+        assert!(s.description.len() > 40, "{name}: describe what it shows");
+        assert_eq!(
+            s.dynamics,
+            vesicle::problem::config::Dynamics::Relaxational,
+            "{name}"
+        );
+        assert!(s.ade.is_some(), "{name}: an ADE scene");
+    }
+}
+
+/// A study file whose axisymmetric start names a branch the `axisym` initial shape does not
+/// have is refused before anything runs, naming the key.
+#[test]
+fn study_refuses_an_unknown_axisymmetric_branch() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("s.json");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("runs/triaxial3d.json");
+    std::fs::write(
+        &file,
+        json!({
+            "study": "nonaxisymmetric", "scene": scene, "da0": [1.06], "eps_over_h": [1.0],
+            "axisymmetric": [{"branch": "pear", "axis": "x"}]
+        })
+        .to_string(),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let args = vesicle::commands::studies::Args {
+        file: &file,
+        quick: false,
+        set: &[],
+        out: &out,
+        force: false,
+    };
+    match vesicle::commands::studies::run("nonaxisymmetric", &args) {
+        Err(vesicle::error::Error::Config { field, .. }) => {
+            assert_eq!(field, "axisymmetric[0].branch")
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(!out.exists(), "nothing written");
+}
