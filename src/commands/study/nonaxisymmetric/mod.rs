@@ -542,3 +542,71 @@ pub fn semi_axes(phi: &Array3<f64>, h: f64) -> [f64; 3] {
 pub fn triaxiality(a: [f64; 3]) -> f64 {
     (a[0] - a[1]).min(a[1] - a[2]) / a[1]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state(v: f64, w: f64) -> State {
+        State {
+            h_over_eps: 1.0,
+            alpha: 1.0,
+            da0: 1.0,
+            start: String::new(),
+            r0: 1.0,
+            v,
+            w,
+            e: w,
+            da: 1.0,
+            c0_eff: 0.0,
+            axes: [1.0; 3],
+            triaxiality: 0.0,
+            iterations: 0,
+            residual: 0.0,
+            converged: true,
+            wall: 0.0,
+        }
+    }
+
+    /// The second-moment semi-axes of a sharp solid ellipsoid (φ = ±1, semi-axes 12, 8 and
+    /// 5 h) are its semi-axes to the lattice's O(h/a) (within 2%), sorted; τ is then
+    /// min(4, 3)/8; a ball reads τ = 0 to round-off.
+    #[test]
+    fn semi_axes_of_a_solid_ellipsoid() {
+        let n = [40, 32, 24];
+        let c = |i: usize, k: usize| i as f64 + 0.5 - n[k] as f64 / 2.0;
+        let inside = |a: [f64; 3]| {
+            Array3::from_shape_fn((n[0], n[1], n[2]), |(i, j, k)| {
+                let r =
+                    (c(i, 0) / a[0]).powi(2) + (c(j, 1) / a[1]).powi(2) + (c(k, 2) / a[2]).powi(2);
+                if r <= 1.0 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            })
+        };
+        let axes = semi_axes(&inside([8.0, 12.0, 5.0]), 1.0);
+        for (got, want) in axes.iter().zip([12.0, 8.0, 5.0]) {
+            assert!((got / want - 1.0).abs() < 0.02, "{axes:?}");
+        }
+        assert!((triaxiality(axes) - 3.0 / 8.0).abs() < 0.02, "{axes:?}");
+        let ball = semi_axes(&inside([7.0, 7.0, 7.0]), 1.0);
+        assert!(triaxiality(ball).abs() < 1e-12, "{ball:?}");
+    }
+
+    /// w at v interpolates between the nearest runs on either side of it (not the last two),
+    /// and extrapolates from the two nearest when all lie on one side.
+    #[test]
+    fn w_interpolates_between_the_bracketing_runs() {
+        let runs = [
+            state(0.79, 2.0),
+            state(0.83, 0.0),
+            state(0.80, 1.0),
+            state(0.82, 3.0),
+        ];
+        assert!((at_volume(&runs, 0.81) - 2.0).abs() < 1e-12);
+        let one_side = [state(0.82, 3.0), state(0.83, 4.0), state(0.85, 9.0)];
+        assert!((at_volume(&one_side, 0.81) - 2.0).abs() < 1e-12);
+    }
+}
