@@ -37,7 +37,7 @@
 #   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
 #   pearling3d       run pearling3d.json (200 000 steps), measure, render   ~62 min (recorded)
 #   triaxial3d       run triaxial3d.json (L-BFGS, ~1 000 iterations), render        ~40 s, measured
-#   starfish3d       run starfish3d.json (L-BFGS, ~800 iterations), render          ~20 s, measured
+#   starfish3d       run starfish3d.json (L-BFGS, ~2 000 iterations), render      141 s, measured
 # The recorded scene times are of older builds (pear3d, recorded at 94 s, now takes 11 s). The
 # default (cheap) groups are the first four.
 set -euo pipefail

@@ -23,7 +23,7 @@ pub use scene::{
 pub use schedule::Schedule;
 pub use shapes::{
     Axisym, AxisymBranch, Capsule, Cup, Difference, Ellipsoid, Initial, Shape, Sphere, Spheroid,
-    SpheroidKind, Union,
+    SpheroidKind, Star, Union,
 };
 
 use crate::error::{Error, Result};
