@@ -68,8 +68,6 @@ pub struct State {
     pub iterations: usize,
     /// Final stationarity residual.
     pub residual: f64,
-    /// Whether the scene's `stop_residual` was met.
-    pub converged: bool,
     /// Wall seconds (the built field to the measured state).
     pub wall: f64,
 }
@@ -480,7 +478,8 @@ const VOLUME_TOL: f64 = 3e-3;
 /// Relax `scene` by its own rules and measure the end state.
 ///
 /// # Errors
-/// `Error::Config` for a scene that cannot be built or one without ADE columns;
+/// `Error::Config` for a scene that cannot be built, one without ADE columns, or a relaxation
+/// that stops before the scene's `stop_residual` (field `scene.max_steps`);
 /// `Error::Blowup` if a step diverges.
 fn relax(scene: &Scene, start: &str, eps_over_h: f64, alpha: f64, da0: f64) -> Result<State> {
     let problem = crate::problem::setup::build(scene)?;
@@ -488,6 +487,18 @@ fn relax(scene: &Scene, start: &str, eps_over_h: f64, alpha: f64, da0: f64) -> R
     let (mut sim, a0) = Simulation::of_scene(scene, &problem)?;
     let stopped = sim.run(&StopRules::of(scene), &mut [])?;
     let last = sim.record();
+    if stopped.as_str() != "stationary" {
+        return Err(Error::config(
+            "scene.max_steps",
+            format!(
+                "{start} stopped ({}) at residual {:.2e} after {} iterations, before the \
+                 scene's stop_residual: raise max_steps",
+                stopped.as_str(),
+                last.residual,
+                last.step
+            ),
+        ));
+    }
     let couple = last
         .couple
         .ok_or_else(|| Error::config("scene.ade", "the run has no ADE record"))?;
@@ -509,7 +520,6 @@ fn relax(scene: &Scene, start: &str, eps_over_h: f64, alpha: f64, da0: f64) -> R
         triaxiality: triaxiality(axes),
         iterations: last.step,
         residual: last.residual,
-        converged: stopped.as_str() == "stationary",
         wall: clock.elapsed().as_secs_f64(),
     })
 }
@@ -563,7 +573,6 @@ mod tests {
             triaxiality: 0.0,
             iterations: 0,
             residual: 0.0,
-            converged: true,
             wall: 0.0,
         }
     }
