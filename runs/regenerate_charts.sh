@@ -36,6 +36,8 @@
 #   deflation3d      run deflation3d.json (215 000 steps), measure, render     280 s, measured
 #   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
 #   pearling3d       run pearling3d.json (200 000 steps), measure, render   ~62 min (recorded)
+#   triaxial3d       run triaxial3d.json (L-BFGS, ~1 000 iterations), render        ~40 s, measured
+#   starfish3d       run starfish3d.json (L-BFGS, ~2 000 iterations), render      141 s, measured
 # The recorded scene times are of older builds (pear3d, recorded at 94 s, now takes 11 s). The
 # default (cheap) groups are the first four.
 set -euo pipefail
@@ -46,7 +48,7 @@ WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
 ALL=(convergence stability stability_ade pinning resolution precision pear3d budding axisym_c0 axisym_bc
      axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade budding3d deflation3d
-     dumbbell3d pearling3d)
+     dumbbell3d pearling3d triaxial3d starfish3d)
 
 # Run the program, echoing the command.
 vesicle() {
@@ -162,6 +164,25 @@ group_dumbbell3d() {
     vesicle render "$out" --cut y
     frame 150000 dumbbell3d_150000.png
 }
+# last_frame TO: the rendered final state of the scene in $out (an L-BFGS run's last step is
+# not fixed in advance), kept as scenes/TO.
+last_frame() {
+    local f
+    f=$(ls "$out"/frames/frame_*.png | tail -n 1)
+    keep "$f" "scenes/$1"
+}
+group_triaxial3d() {
+    scene triaxial3d
+    vesicle render "$out"
+    frame 0 triaxial3d_seed.png
+    last_frame triaxial3d_final.png
+}
+group_starfish3d() {
+    scene starfish3d
+    vesicle render "$out"
+    frame 0 starfish3d_seed.png
+    last_frame starfish3d_final.png
+}
 group_pearling3d() {
     scene pearling3d
     vesicle measure "$out" --force
@@ -217,6 +238,10 @@ FIGURES=(
     pearling3d_110000.png=scenes/pearling3d_110000.png
     pearling3d_200000.png=scenes/pearling3d_200000.png
     pearling3d_neck.png=scenes/pearling3d_neck.png
+    triaxial3d_seed.png=scenes/triaxial3d_seed.png
+    triaxial3d_final.png=scenes/triaxial3d_final.png
+    starfish3d_seed.png=scenes/starfish3d_seed.png
+    starfish3d_final.png=scenes/starfish3d_final.png
 )
 
 if [ "${1:-}" = "--list" ]; then

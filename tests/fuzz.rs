@@ -91,6 +91,7 @@ const WORDS: &[&str] = &[
     "spheroid",
     "cup",
     "capsule",
+    "star",
     "union",
     "difference",
     "prolate",

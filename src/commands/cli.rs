@@ -283,6 +283,13 @@ enum Study {
         after_help = "Example:\n  vesicle study rates runs/studies/rates.json --out runs/results/rates [--quick]"
     )]
     Rates(StudyArgs),
+    /// Non-axisymmetric ADE shapes (triaxial, starfish): a seeded scene relaxed by L-BFGS per
+    /// h/ε and Δa0, its w, Δa, e and semi-axes against the axisymmetric starts relaxed in the
+    /// same box (interpolated to its v) and the sharp axisymmetric branches at its v.
+    #[command(
+        after_help = "Example:\n  vesicle study nonaxisymmetric runs/studies/nonaxisymmetric.json --out runs/results/nonaxisymmetric [--quick]"
+    )]
+    Nonaxisymmetric(StudyArgs),
 }
 
 /// Parse the command line, run it, and return the process exit code.
@@ -444,6 +451,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Rates(args)) => {
             args.run(crate::commands::study::rates::RatesStudy::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Nonaxisymmetric(args)) => {
+            args.run(crate::commands::study::nonaxisymmetric::Nonaxisymmetric::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Budding(args)) => {

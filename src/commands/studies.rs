@@ -9,6 +9,7 @@ use crate::commands::study::budding::Budding;
 use crate::commands::study::convergence::Convergence;
 use crate::commands::study::file;
 use crate::commands::study::harness::{self, Report, Study};
+use crate::commands::study::nonaxisymmetric::Nonaxisymmetric;
 use crate::commands::study::pinning::PinningStudy;
 use crate::commands::study::precision::Precision;
 use crate::commands::study::rates::RatesStudy;
@@ -91,6 +92,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
         AdeStability::NAME => run_file::<AdeStability>(args),
         RatesStudy::NAME => run_file::<RatesStudy>(args),
+        Nonaxisymmetric::NAME => run_file::<Nonaxisymmetric>(args),
         "stationary" => run_stationary(args),
         _ => Err(Error::config(
             "study",
@@ -180,6 +182,7 @@ mod tests {
             "resolution",
             "ade",
             "rates",
+            "nonaxisymmetric",
         ] {
             assert!(
                 names.iter().any(|n| n == expected),

@@ -8,7 +8,8 @@
 use crate::analysis::axisym::{self, Branch};
 use crate::error::{Error, Result};
 use crate::problem::config::{
-    axis_index, Axisym, AxisymBranch, Difference, Ellipsoid, Harmonic, Shape, SpheroidKind, Union,
+    axis_index, Axisym, AxisymBranch, Difference, Ellipsoid, Harmonic, Shape, SpheroidKind, Star,
+    Union,
 };
 use crate::problem::revolution::{self, Meridian};
 use std::f64::consts::PI;
@@ -181,6 +182,16 @@ pub fn signed_distance(shape: &Shape, p: [f64; 3], dim: usize) -> f64 {
             r[ax] = (q[ax].abs() - s.length / 2.0).max(0.0);
             s.radius - norm(r)
         }
+        Shape::Star(s) => {
+            let q = sub(p, s.center.as_deref());
+            let ax = axis_of(&s.axis, dim);
+            let (a, b) = match ax {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (0, 1),
+            };
+            star_distance(q[a], q[b], q[ax], s)
+        }
         Shape::Union(u) => {
             u.of.iter()
                 .map(|s| signed_distance(s, p, dim))
@@ -291,6 +302,28 @@ fn ellipsoid_distance(q: [f64; 3], a: [f64; 3], dim: usize) -> f64 {
     }
 }
 
+/// First-order signed distance to the star F = (ρ/R(θ))² + (ζ/t)² = 1,
+/// R(θ) = R̄(1 + a cos mθ), at in-plane coordinates (`u`, `w`) (ρ, θ) and `zeta` along its
+/// axis, as for the ellipsoid: d ≈ (1 − f) f/g with f = √F and g = |∇F|/2 =
+/// √((ρ/R²)² + (ρR′/R³)² + (ζ/t²)²), R′ = −R̄am sin mθ (the in-plane gradient has the radial
+/// part ρ/R² and the angular part (1/ρ)∂θ(F/2) = −ρR′/R³). At ρ = ζ = 0: min(R̄(1 − a), t).
+fn star_distance(u: f64, w: f64, zeta: f64, s: &Star) -> f64 {
+    let rho = u.hypot(w);
+    let theta = w.atan2(u);
+    let m = f64::from(s.arms);
+    let r = s.radius * (1.0 + s.amplitude * (m * theta).cos());
+    let dr = -s.radius * s.amplitude * m * (m * theta).sin();
+    let t = s.thickness;
+    let f = ((rho / r).powi(2) + (zeta / t).powi(2)).sqrt();
+    let g = ((rho / (r * r)).powi(2) + (rho * dr / r.powi(3)).powi(2) + (zeta / (t * t)).powi(2))
+        .sqrt();
+    if g < 1e-300 {
+        (s.radius * (1.0 - s.amplitude)).min(t)
+    } else {
+        (1.0 - f) * f / g
+    }
+}
+
 /// Semi-axes (equatorial, polar) of the spheroid (3D) or ellipse (2D) with reduced volume `v`
 /// and size `r0`. 3D: v = V/((4π/3) R0³) with A = 4π R0²; 2D: v = 4πV/L² with L = 2π R0.
 /// The aspect ratio q = polar/equatorial is found by bisection (v is monotone in q on each
@@ -359,4 +392,44 @@ pub fn ellipse_perimeter(a: f64, c: f64) -> f64 {
         })
         .sum();
     s * 2.0 * PI / m as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::config::Star;
+
+    fn star(arms: u32, amplitude: f64) -> Shape {
+        Shape::Star(Star {
+            radius: 20.0,
+            thickness: 6.0,
+            arms,
+            amplitude,
+            axis: None,
+            center: None,
+        })
+    }
+
+    /// The star's surface lies at R̄(1 + a) on an arm (θ = 0, along x for axis z), at
+    /// R̄(1 − a) between two arms (θ = π/m) and at ±t on the axis; unmodulated it is the oblate
+    /// ellipsoid (R̄, R̄, t) with the ellipsoid's distance. Odd m keeps the mirror y → −y and
+    /// breaks x → −x.
+    #[test]
+    fn star_surface_and_symmetries() {
+        let s = star(3, 0.4);
+        let d = |p: [f64; 3]| signed_distance(&s, p, 3);
+        assert!(d([28.0, 0.0, 0.0]).abs() < 1e-12);
+        let between = std::f64::consts::PI / 3.0;
+        assert!(d([12.0 * between.cos(), 12.0 * between.sin(), 0.0]).abs() < 1e-12);
+        assert!(d([0.0, 0.0, 6.0]).abs() < 1e-12 && d([0.0, 0.0, 0.0]) > 0.0);
+        let p = [9.0, 7.0, 2.0];
+        assert!((d(p) - d([9.0, -7.0, 2.0])).abs() < 1e-12);
+        assert!((d(p) - d([-9.0, 7.0, 2.0])).abs() > 1.0);
+        let plain = signed_distance(&star(4, 0.0), p, 3);
+        let ellipsoid = Shape::Ellipsoid(Ellipsoid {
+            axes: vec![20.0, 20.0, 6.0],
+            center: None,
+        });
+        assert!((plain - signed_distance(&ellipsoid, p, 3)).abs() < 1e-12);
+    }
 }

@@ -85,7 +85,7 @@ impl CaseResult {
 }
 
 /// Smallest even `m ≥ n` whose half has no prime factor above 5 (fast transform lengths).
-fn transform_friendly(n: usize) -> usize {
+pub(crate) fn transform_friendly(n: usize) -> usize {
     let smooth = |mut k: usize| {
         for p in [2, 3, 5] {
             while k.is_multiple_of(p) {

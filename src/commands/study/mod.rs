@@ -11,6 +11,8 @@
 //! * [`pinning`]: the lattice pinning of stationary energies against h/ε; [`resolution`]: speed
 //!   against accuracy for stationary shapes against the sharp reference (both on the shapes of
 //!   [`shape_case`]);
+//! * [`nonaxisymmetric`]: a non-axisymmetric ADE state (triaxial, starfish) against the
+//!   axisymmetric branches at the same (v, α, Δa0), phase field and sharp;
 //! * [`budding`]: quasi-static budding in c̄0 through stationary states beside the sharp pear
 //!   branch.
 
@@ -21,6 +23,7 @@ pub mod file;
 pub mod fit;
 pub mod harness;
 pub mod levels;
+pub mod nonaxisymmetric;
 pub mod pinning;
 pub mod precision;
 pub mod rates;

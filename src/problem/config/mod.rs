@@ -23,7 +23,7 @@ pub use scene::{
 pub use schedule::Schedule;
 pub use shapes::{
     Axisym, AxisymBranch, Capsule, Cup, Difference, Ellipsoid, Harmonic, Initial, Shape, Slab,
-    Sphere, Spheroid, SpheroidKind, Union,
+    Sphere, Spheroid, SpheroidKind, Star, Union,
 };
 
 use crate::error::{Error, Result};

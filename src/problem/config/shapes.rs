@@ -55,6 +55,8 @@ pub enum Shape {
     Cup(Cup),
     /// Tube with round caps.
     Capsule(Capsule),
+    /// Flat disc with an m-fold angular modulation of its radius (3D; starfish seeds).
+    Star(Star),
     /// Union of shapes: d = max d_i.
     Union(Union),
     /// `base` with `minus` removed: d = min(d_base, −d_minus).
@@ -174,6 +176,28 @@ pub struct Capsule {
     /// Length of the straight part along `axis`.
     pub length: f64,
     /// The symmetry axis (`"x"`, `"y"` or `"z"`; default the last).
+    #[serde(default)]
+    pub axis: Option<String>,
+    /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
+    #[serde(default)]
+    pub center: Option<Vec<f64>>,
+}
+
+/// Flat star (3D): the ellipsoid-like disc F = (ρ/R(θ))² + (ζ/`thickness`)² ≤ 1 with
+/// R(θ) = `radius`·(1 + `amplitude`·cos(`arms`·θ)), ρ, θ polar coordinates in the plane normal to
+/// `axis` (θ from the first of the other two axes: an arm along it) and ζ along `axis`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Star {
+    /// Mean radius R̄ of the disc in its plane.
+    pub radius: f64,
+    /// Half-thickness along `axis`.
+    pub thickness: f64,
+    /// Number of arms m ≥ 2.
+    pub arms: u32,
+    /// Relative modulation a ∈ [0, 1) of the radius (arm tips at R̄(1 + a), between arms R̄(1 − a)).
+    pub amplitude: f64,
+    /// The disc's normal (`"x"`, `"y"` or `"z"`; default the last).
     #[serde(default)]
     pub axis: Option<String>,
     /// Offset of the shape's centre from the box centre (`dim` numbers; default 0).
@@ -310,6 +334,7 @@ impl<'de> Deserialize<'de> for Shape {
             "spheroid" => kind(v).map(Shape::Spheroid),
             "cup" => kind(v).map(Shape::Cup),
             "capsule" => kind(v).map(Shape::Capsule),
+            "star" => kind(v).map(Shape::Star),
             "union" => kind(v).map(Shape::Union),
             "difference" => kind(v).map(Shape::Difference),
             "axisym" => kind(v).map(Shape::Axisym),
@@ -317,7 +342,7 @@ impl<'de> Deserialize<'de> for Shape {
             "slab" => kind(v).map(Shape::Slab),
             _ => Err(format!(
                 "{PATH_MARK}shape{PATH_MARK}unknown variant {tag}, expected one of `sphere`, \
-                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `union`, `difference`, `axisym`, \
+                 `ellipsoid`, `spheroid`, `cup`, `capsule`, `star`, `union`, `difference`, `axisym`, \
                  `harmonic`, `slab`"
             )),
         };

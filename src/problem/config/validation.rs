@@ -597,6 +597,33 @@ fn validate_shape(s: &Shape, at: &str, dim: usize) -> Result<()> {
             validate_shape(&d.base, &f("base"), dim)?;
             validate_shape(&d.minus, &f("minus"), dim)
         }
+        Shape::Star(s) => {
+            if dim != 3 {
+                return Err(Error::config(
+                    f("shape"),
+                    format!("star is a flat 3D disc with arms: it needs dim = 3, got {dim}"),
+                ));
+            }
+            positive(&f("radius"), s.radius)?;
+            positive(&f("thickness"), s.thickness)?;
+            if s.arms < 2 {
+                return Err(Error::config(
+                    f("arms"),
+                    format!("need at least 2 arms, got {}", s.arms),
+                ));
+            }
+            if !(s.amplitude >= 0.0 && s.amplitude < 1.0) {
+                return Err(Error::config(
+                    f("amplitude"),
+                    format!(
+                        "must lie in [0, 1) (the radius stays positive), got {}",
+                        s.amplitude
+                    ),
+                ));
+            }
+            check_axis(&f("axis"), &s.axis, dim)?;
+            check_center(&f("center"), &s.center, dim)
+        }
         Shape::Axisym(s) => {
             if dim != 3 {
                 return Err(Error::config(
