@@ -12,7 +12,7 @@
 //!   against accuracy for stationary shapes against the sharp reference (both on the shapes of
 //!   [`shape_case`]);
 //! * [`budding`]: quasi-static budding in c̄0 through stationary states beside the sharp pear
-//!   branch.
+//!   branch; [`heating`]: budding on heating, the same in the ADE model's Δa0.
 
 pub mod budding;
 pub mod classify;
@@ -20,6 +20,7 @@ pub mod convergence;
 pub mod file;
 pub mod fit;
 pub mod harness;
+pub mod heating;
 pub mod levels;
 pub mod pinning;
 pub mod precision;
