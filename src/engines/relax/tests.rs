@@ -201,7 +201,11 @@ fn a_start_off_the_area_constraint_is_relaxed_not_stalled() {
             e.set_area(crate::engines::AreaConstraint { target, ..e.area });
             for i in 0..5 {
                 e.step(0.0, 1.0).expect("iteration");
-                assert!(!e.stalled, "stalled at iteration {i} (A0 × {})", 1.0 + sign * 5e-3);
+                assert!(
+                    !e.stalled,
+                    "stalled at iteration {i} (A0 × {})",
+                    1.0 + sign * 5e-3
+                );
             }
             let a = e.measures().area;
             assert!((a - target).abs() < 1e-9 * target, "A = {a}, A0 = {target}");
