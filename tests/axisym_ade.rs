@@ -238,8 +238,10 @@ fn cli_writes_the_bc_diagram() {
 /// The ADE pear near its budding limit: the BC pear path clusters its modes at the neck below
 /// 0.1 R0, so at v = 0.8, α = 1.4, Δa0 = 1.6 (Δa ≈ 1.31, near L_pear's 1.346) the pear's w
 /// converges with the nodes (unclustered, 121/181/241 nodes gave 2.27223/2.27067/2.27037:
-/// 2e-3 apart); clustered, 121 and 241 nodes agree to 1e-5 (seen: 3e-7). At v = 0.85 the
-/// stable pear's path reaches a neck below 0.01 R0 with Δa0 approaching L_pear's from below.
+/// 2e-3 apart); clustered, 121 and 241 nodes agree to 1e-5. At v = 0.85 the stable pear's
+/// path reaches a neck below 0.01 R0 with Δa0 near L_pear's 1.728 (within 0.03: at a neck of
+/// 0.005 R0 Δa0 is 1.704 with 241 nodes, 1.730 with these 121, whose K = 40 modes do not
+/// converge the narrowest necks).
 #[test]
 fn the_ade_pear_converges_to_a_narrow_neck() {
     let w = |nodes| {
@@ -262,7 +264,7 @@ fn the_ade_pear_converges_to_a_narrow_neck() {
     let l = l_pear_at(0.85).unwrap().da0(1.4, 0.0);
     assert!(narrowest.0 < 0.01, "neck {}", narrowest.0);
     assert!(
-        narrowest.1 < l && narrowest.1 > l - 0.05,
+        (narrowest.1 - l).abs() < 0.03,
         "Δa0 {} vs L_pear {l}",
         narrowest.1
     );
