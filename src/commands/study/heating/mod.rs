@@ -227,6 +227,9 @@ pub fn sharp_at(sharp: &[Sharp], v: f64) -> Option<&Sharp> {
     sharp.iter().find(|s| (s.v - v).abs() < 1e-9)
 }
 
+/// A picture and its file name.
+type Picture = (String, RgbImage);
+
 /// The continuation at `R0 = r0` ε from the revolved contour `(r, z)`: the rows and the
 /// pictures at the `Δa0` of `render`.
 fn continuation(
@@ -235,7 +238,7 @@ fn continuation(
     r0: f64,
     (r, z): (&[f64], &[f64]),
     render: &[f64],
-) -> Result<(Vec<Row>, Vec<(String, RgbImage)>)> {
+) -> Result<(Vec<Row>, Vec<Picture>)> {
     let mut problem = setup::build(base).map_err(within("scene"))?;
     let full_grid = Grid::new(&base.n, base.h, &[false; 3]);
     let start = revolved(r, z, r0 * base.eps, base.eps, &full_grid);
@@ -294,7 +297,7 @@ fn continuation(
 }
 
 /// The shaded picture of the φ = 0 surface of `full` (the unfolded field of `row`'s state).
-fn picture(full: &Array3<f64>, scene: &Scene, row: &Row) -> Result<(String, RgbImage)> {
+fn picture(full: &Array3<f64>, scene: &Scene, row: &Row) -> Result<Picture> {
     let mesh = crate::analysis::surface::extract(full, scene.h);
     let (n0, n1, n2) = full.dim();
     let bounds = Bounds::of_grid([n0, n1, n2], scene.h);
@@ -364,14 +367,14 @@ fn check(spec: &Spec) -> Result<()> {
 pub fn box_side(x: f64) -> usize {
     let smooth = |mut n: usize| {
         for p in [2, 3, 5] {
-            while n % p == 0 {
+            while n.is_multiple_of(p) {
                 n /= p;
             }
         }
         n == 1
     };
     (x.ceil().max(2.0) as usize..)
-        .find(|&n| n % 2 == 0 && smooth(n))
+        .find(|&n| n.is_multiple_of(2) && smooth(n))
         .expect("smooth numbers are unbounded")
 }
 
