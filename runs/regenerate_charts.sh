@@ -24,6 +24,7 @@
 #   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations)                  505 s, measured
+#   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     44 s, measured
 #   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121               59 s, measured
@@ -46,7 +47,7 @@ cd "$(dirname "$0")/.."
 VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
-ALL=(convergence stability stability_ade pinning resolution precision pear3d budding axisym_c0 axisym_bc
+ALL=(convergence stability stability_ade pinning resolution precision pear3d budding heating axisym_c0 axisym_bc
      axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade budding3d deflation3d
      dumbbell3d pearling3d triaxial3d starfish3d)
 
@@ -112,6 +113,10 @@ group_pear3d() {
 group_budding() {
     study budding budding.json
     for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
+}
+group_heating() {
+    study heating heating.json
+    same_names "$out" heating
 }
 # seq_list FROM STEP COUNT: the comma-separated list FROM, FROM + STEP, … (COUNT values).
 seq_list() {
@@ -200,6 +205,13 @@ FIGURES=(
     axisym_ade_phase.png=axisym_ade/phase.png
     budding_neck_r0.png=budding/budding_neck_r0.png
     budding_skewness.png=budding/budding_skewness.png
+    heating_neck.png=heating/heating_neck.png
+    heating_w.png=heating/heating_w.png
+    heating_w_error.png=heating/heating_w_error.png
+    heating_departure.png=heating/heating_departure.png
+    heating_shape_03.png=heating/shape_03_da0_1.550.png
+    heating_shape_08.png=heating/shape_08_da0_1.640.png
+    heating_shape_12.png=heating/shape_12_da0_1.550.png
     convergence_eps.png=convergence/convergence_eps.png
     convergence_space.png=convergence/convergence_space.png
     convergence_space_semilog.png=convergence/convergence_space_semilog.png

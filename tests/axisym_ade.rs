@@ -234,3 +234,38 @@ fn cli_writes_the_bc_diagram() {
     assert!(summary.lines().any(|l| l.starts_with(&want)), "{summary}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The ADE pear near its budding limit: the BC pear path clusters its modes at the neck below
+/// 0.1 R0, so at v = 0.8, α = 1.4, Δa0 = 1.6 (Δa ≈ 1.31, near L_pear's 1.346) the pear's w
+/// converges with the nodes (unclustered, 121/181/241 nodes gave 2.27223/2.27067/2.27037:
+/// 2e-3 apart); clustered, 121 and 241 nodes agree to 1e-5. At v = 0.85 the stable pear's
+/// path reaches a neck below 0.01 R0 with Δa0 near L_pear's 1.728 (within 0.03: at a neck of
+/// 0.005 R0 Δa0 is 1.704 with 241 nodes, 1.730 with these 121, whose K = 40 modes do not
+/// converge the narrowest necks).
+#[test]
+fn the_ade_pear_converges_to_a_narrow_neck() {
+    let w = |nodes| {
+        ade_solution(Branch::Pear, 0.8, 1.4, 1.6, &Options::with_nodes(nodes))
+            .unwrap()
+            .w
+    };
+    let (coarse, fine) = (w(121), w(241));
+    assert!((coarse - fine).abs() < 1e-5, "w {coarse} vs {fine}");
+    let curve = axisym::bc_curve(Branch::Pear, 0.85, (1.0, 1.45), &opts());
+    let img = axisym::ade_image(&curve.shapes, 1.4);
+    let narrowest = curve
+        .shapes
+        .iter()
+        .zip(&img)
+        .filter(|(_, p)| p.stable)
+        .filter_map(|(s, p)| s.neck().map(|n| (n, p.da0)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap();
+    let l = l_pear_at(0.85).unwrap().da0(1.4, 0.0);
+    assert!(narrowest.0 < 0.01, "neck {}", narrowest.0);
+    assert!(
+        (narrowest.1 - l).abs() < 0.03,
+        "Δa0 {} vs L_pear {l}",
+        narrowest.1
+    );
+}

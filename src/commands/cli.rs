@@ -254,6 +254,14 @@ enum Study {
         after_help = "Example:\n  vesicle study budding runs/studies/budding.json --out out/budding [--quick]"
     )]
     Budding(StudyArgs),
+    /// Budding on heating (ADE): from the axisymmetric ADE prolate at v, Δa0 stepped up and
+    /// down with an L-BFGS relaxation at each step (a small up-down asymmetry seeded first), at
+    /// one or more R0; w, Δa, neck and skewness against Δa0 beside the sharp ADE prolate and
+    /// pear branches at the same v.
+    #[command(
+        after_help = "Example:\n  vesicle study heating runs/studies/heating.json --out out/heating [--quick]"
+    )]
+    Heating(StudyArgs),
     /// Lattice pinning of stationary energies: e and v of shapes started from the sharp
     /// reference and relaxed by L-BFGS, over R0 steps of a fraction of ε and sub-cell shifts of
     /// the centre, at several h/ε; the residual of a smooth fit in (ε/R0)² and the spread over
@@ -459,6 +467,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Budding(args)) => {
             args.run(crate::commands::study::budding::Budding::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Heating(args)) => {
+            args.run(crate::commands::study::heating::Heating::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Pinning(args)) => {

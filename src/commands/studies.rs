@@ -9,6 +9,7 @@ use crate::commands::study::budding::Budding;
 use crate::commands::study::convergence::Convergence;
 use crate::commands::study::file;
 use crate::commands::study::harness::{self, Report, Study};
+use crate::commands::study::heating::Heating;
 use crate::commands::study::nonaxisymmetric::Nonaxisymmetric;
 use crate::commands::study::pinning::PinningStudy;
 use crate::commands::study::precision::Precision;
@@ -88,6 +89,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         Precision::NAME => run_file::<Precision>(args),
         Stability::NAME => run_file::<Stability>(args),
         Budding::NAME => run_file::<Budding>(args),
+        Heating::NAME => run_file::<Heating>(args),
         PinningStudy::NAME => run_file::<PinningStudy>(args),
         ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
         AdeStability::NAME => run_file::<AdeStability>(args),
@@ -178,6 +180,7 @@ mod tests {
             "precision",
             "stability",
             "budding",
+            "heating",
             "pinning",
             "resolution",
             "ade",

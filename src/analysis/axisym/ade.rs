@@ -12,6 +12,7 @@
 
 use super::bc::bc_curve_until;
 use super::functional::Basis;
+use super::map::reproject;
 use super::pear::full_basis;
 use super::solver::{newton, NewtonSettings};
 use super::{ade_da0, solution, Branch, Model, Options, Solution};
@@ -125,10 +126,12 @@ pub fn ade_solution(
         })?;
     let (i, f, _) = best;
     let (s0, s1) = (&curve.shapes[i], &curve.shapes[i + 1]);
+    // Both in the coordinates of s0's map (a pear's map changes as its neck narrows).
+    let a1 = reproject(&s1.coefficients, &s1.map, &s0.map, &s1.modes);
     let a0: Vec<f64> = s0
         .coefficients
         .iter()
-        .zip(&s1.coefficients)
+        .zip(&a1)
         .map(|(x, y)| x + f * (y - x))
         .collect();
     let model = Model::Ade { alpha, da0 };
@@ -137,7 +140,7 @@ pub fn ade_solution(
             .with_c0(opts.c0)
             .with_model(model)
     } else {
-        full_basis(&opts.with_model(model))
+        full_basis(&opts.with_model(model)).with_map(s0.map)
     };
     let set = NewtonSettings {
         tol: opts.tol,

@@ -20,6 +20,7 @@
 //! the constant `−c̄0 Δa + c̄0²/4`).
 
 use super::functional::Basis;
+use super::map::{new_map, reproject};
 use super::pear::{full_basis, odd_stability};
 use super::solver::{
     constraints, fd_hessian, kkt_matrix, lagrangian_grad, lu_solve, minimise, newton, Converged,
@@ -58,6 +59,8 @@ struct Walker {
     set: NewtonSettings,
     v: f64,
     last: Vec<Converged>,
+    /// The neck the basis's map was made for (`None`: the identity map).
+    mapped: Option<f64>,
 }
 
 impl Walker {
@@ -73,6 +76,7 @@ impl Walker {
             },
             v,
             last: Vec::new(),
+            mapped: None,
         }
     }
 
@@ -95,6 +99,36 @@ impl Walker {
 
     fn solution(&self) -> Solution {
         solution(self.branch, &self.basis, self.current())
+    }
+
+    /// For the pear, once its neck `s` (the state `cur`) calls for a new map
+    /// ([`new_map`]: below 0.1 R0, or narrowed or moved since the last one): the basis
+    /// stretched at the neck, `prev` and `cur` re-projected onto it ([`reproject`]) and `cur`
+    /// solved again at its `Δa`. Returns the pair in the new coordinates, or `None` (basis
+    /// unchanged) if no map is due or the solve fails.
+    fn remap(
+        &mut self,
+        s: &Solution,
+        prev: &Converged,
+        cur: &Converged,
+    ) -> Option<(Converged, Converged)> {
+        if self.branch != Branch::Pear {
+            return None;
+        }
+        let (map, neck) = new_map(s, &self.basis.map, self.mapped)?;
+        let old = self.basis.map;
+        let modes = self.basis.modes.clone();
+        let nb = self.basis.clone().with_map(map);
+        let a_cur = reproject(&cur.a, &old, &map, &modes);
+        let saved = std::mem::replace(&mut self.basis, nb);
+        let Some(c) = self.solve_at(cur.eval.j, &a_cur) else {
+            self.basis = saved;
+            return None;
+        };
+        self.mapped = Some(neck);
+        let mut p = prev.clone();
+        p.a = reproject(&prev.a, &old, &map, &modes);
+        Some((p, c))
     }
 }
 
@@ -239,7 +273,8 @@ fn multipliers(c: &Converged, closure: bool) -> Vec<f64> {
 /// (`d` the unit secant), the corrector [`newton_arc`]. Steps grow by 1.5 after a success (at
 /// most `H_MAX`) and halve after a failure. Returns the shapes after `cur`, in path order,
 /// until `stop` holds (that shape included), `|c̄0,eff| > C_MAX`, the step falls below
-/// `H_MIN` or `MAX_STEPS` are taken.
+/// `H_MIN` or `MAX_STEPS` are taken. On the pear the modes cluster at a neck below 0.1 R0
+/// ([`Walker::remap`]), so the path reaches [`Options::neck_min`]; each shape carries its map.
 fn arc_follow(
     w: &mut Walker,
     mut prev: Converged,
@@ -288,12 +323,12 @@ fn arc_follow(
         w.basis.model = Model::Bc { da: next.eval.j };
         let s = solution(w.branch, &w.basis, &next);
         let done = stop(&s) || s.c0_eff.abs() > C_MAX;
+        let remapped = if done { None } else { w.remap(&s, &cur, &next) };
         out.push(s);
         if done {
             break;
         }
-        prev = cur;
-        cur = next;
+        (prev, cur) = remapped.unwrap_or((cur, next));
     }
     out
 }
@@ -310,8 +345,10 @@ fn both_ways(
     w.basis.model = Model::Bc { da: first.eval.j };
     let s0 = solution(w.branch, &w.basis, &first);
     let fwd_up = second.eval.j >= first.eval.j;
+    let (basis, mapped) = (w.basis.clone(), w.mapped);
     let ahead = arc_follow(w, first.clone(), second.clone(), |s| stop(s, fwd_up));
-    // Backwards: from `second` through `first` and on.
+    // Backwards: from `second` through `first` and on, in their own coordinates.
+    (w.basis, w.mapped) = (basis, mapped);
     let behind = arc_follow(w, second, first, |s| stop(s, !fwd_up));
     let mut all: Vec<Solution> = behind.into_iter().rev().collect();
     all.push(s0);
@@ -555,7 +592,7 @@ pub fn bc_solution(branch: Branch, v: f64, da: f64, opts: &Options) -> Result<So
     let basis = if branch.up_down_symmetric() {
         basis_of(branch, opts)
     } else {
-        full_basis(opts)
+        full_basis(opts).with_map(near.map)
     };
     let mut w = Walker::new(branch, v, basis, !branch.up_down_symmetric(), opts);
     let c = w

@@ -17,6 +17,7 @@
 //! sine series still converges exponentially, now with a share `(1 − α)/2` of the modes on the
 //! Lorentzian of half-width `(1 − β)/π` in `t` around the neck. `α = 1` is the identity.
 
+use super::Solution;
 use std::f64::consts::PI;
 
 /// The map `t(τ)` of the module docs: neck position, kernel width and background weight.
@@ -136,6 +137,64 @@ impl NeckMap {
     pub fn stretch(&self, tau: f64) -> f64 {
         1.0 / self.density(self.t(tau))
     }
+}
+
+/// Neck radius (units of `R0`) below which the pear continuations stretch the contour parameter at
+/// the neck ([`NeckMap::at_neck`]).
+const MAP_NECK: f64 = 0.1;
+
+/// The continuations map again when the neck has narrowed below this fraction of the neck the
+/// current map was made for.
+const REMAP_SHRINK: f64 = 0.7;
+
+/// The map for `s` if its neck calls for a new one: a neck below [`MAP_NECK`] and no map yet,
+/// or narrowed below [`REMAP_SHRINK`] of `mapped` (the neck the current map `map` was made
+/// for), or moved by more than half the kernel's half-width. Returns the new map and its neck.
+pub(super) fn new_map(s: &Solution, map: &NeckMap, mapped: Option<f64>) -> Option<(NeckMap, f64)> {
+    let (s_n, b) = s.neck_at()?;
+    if b > MAP_NECK {
+        return None;
+    }
+    let l = s.length();
+    let moved = (s_n / l - map.centre).abs() > 0.5 * map.half_width();
+    let narrowed = mapped.is_none_or(|m| b < REMAP_SHRINK * m);
+    (narrowed || moved).then(|| (NeckMap::at_neck(s_n, b, l), b))
+}
+
+/// The coefficients, in the basis of `to` (modes `modes`), of the shape with coefficients
+/// `a` in the basis of `from`: `ψ` is a function of the arclength fraction `t`, so at
+/// `τ_j = j/N` of the new parameter, `ψ = π τ_old + Σ a_k sin(kπ τ_old)` with
+/// `τ_old = τ_from(t_to(τ_j))`, and `a'_k = (2/N) Σ_j (ψ_j − π τ_j) sin(kπ j/N)` (the discrete
+/// sine transform, exact for sine series below `N = 4 max k`); `a` itself when the maps are equal.
+pub(super) fn reproject(a: &[f64], from: &NeckMap, to: &NeckMap, modes: &[usize]) -> Vec<f64> {
+    if from == to {
+        return a.to_vec();
+    }
+    let kmax = modes.iter().copied().max().unwrap_or(1);
+    let n = 4 * kmax;
+    let f: Vec<f64> = (1..n)
+        .map(|j| {
+            let tau = j as f64 / n as f64;
+            let old = from.tau(to.t(tau));
+            let psi: f64 = PI * old
+                + modes
+                    .iter()
+                    .zip(a)
+                    .map(|(k, ak)| ak * (*k as f64 * PI * old).sin())
+                    .sum::<f64>();
+            psi - PI * tau
+        })
+        .collect();
+    modes
+        .iter()
+        .map(|&k| {
+            2.0 / n as f64
+                * f.iter()
+                    .enumerate()
+                    .map(|(i, fj)| fj * (k as f64 * PI * (i + 1) as f64 / n as f64).sin())
+                    .sum::<f64>()
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@
 use super::branches::Tracker;
 use super::eigen::symmetric_eigen;
 use super::functional::{Basis, Eval};
-use super::map::NeckMap;
+use super::map::{new_map, reproject, NeckMap};
 use super::solver::{lu_solve, minimise, newton, Converged, NewtonSettings};
 use super::{solution, Branch, Options, Solution};
 use std::f64::consts::PI;
@@ -718,61 +718,6 @@ pub fn follow_pear(v_floor: f64, opts: &Options) -> PearBranch {
     out
 }
 
-/// Neck radius (units of `R0`) below which [`arclength`] stretches the contour parameter at
-/// the neck ([`NeckMap::at_neck`]).
-const MAP_NECK: f64 = 0.1;
-
-/// [`arclength`] maps again when the neck has narrowed below this fraction of the neck the
-/// current map was made for.
-const REMAP_SHRINK: f64 = 0.7;
-
-/// The map for `s` if its neck calls for a new one: a neck below [`MAP_NECK`] and no map yet,
-/// or narrowed below [`REMAP_SHRINK`] of `mapped` (the neck the current map `map` was made
-/// for), or moved by more than half the kernel's half-width. Returns the new map and its neck.
-fn new_map(s: &Solution, map: &NeckMap, mapped: Option<f64>) -> Option<(NeckMap, f64)> {
-    let (s_n, b) = s.neck_at()?;
-    if b > MAP_NECK {
-        return None;
-    }
-    let l = s.length();
-    let moved = (s_n / l - map.centre).abs() > 0.5 * map.half_width();
-    let narrowed = mapped.is_none_or(|m| b < REMAP_SHRINK * m);
-    (narrowed || moved).then(|| (NeckMap::at_neck(s_n, b, l), b))
-}
-
-/// The coefficients, in the basis of `to` (modes `modes`), of the shape with coefficients
-/// `a` in the basis of `from`: `ψ` is a function of the arclength fraction `t`, so at
-/// `τ_j = j/N` of the new parameter, `ψ = π τ_old + Σ a_k sin(kπ τ_old)` with
-/// `τ_old = τ_from(t_to(τ_j))`, and `a'_k = (2/N) Σ_j (ψ_j − π τ_j) sin(kπ j/N)` (the discrete
-/// sine transform, exact for sine series below `N = 4 max k`).
-fn reproject(a: &[f64], from: &NeckMap, to: &NeckMap, modes: &[usize]) -> Vec<f64> {
-    let kmax = modes.iter().copied().max().unwrap_or(1);
-    let n = 4 * kmax;
-    let f: Vec<f64> = (1..n)
-        .map(|j| {
-            let tau = j as f64 / n as f64;
-            let old = from.tau(to.t(tau));
-            let psi: f64 = PI * old
-                + modes
-                    .iter()
-                    .zip(a)
-                    .map(|(k, ak)| ak * (*k as f64 * PI * old).sin())
-                    .sum::<f64>();
-            psi - PI * tau
-        })
-        .collect();
-    modes
-        .iter()
-        .map(|&k| {
-            2.0 / n as f64
-                * f.iter()
-                    .enumerate()
-                    .map(|(i, fj)| fj * (k as f64 * PI * (i + 1) as f64 / n as f64).sin())
-                    .sum::<f64>()
-        })
-        .collect()
-}
-
 /// Move the continuation onto `map`: the basis `full` with `map`, `prev` re-projected, `cur`
 /// re-projected and solved again at its `v` (closure held). `None` if that solve fails.
 fn remap(
@@ -793,7 +738,7 @@ fn remap(
 
 /// The pseudo-arclength continuation of [`follow_pear`] from the states `prev` (coefficients
 /// and multipliers) and `cur`, appending to `out.shapes` and setting `out.end`, `out.last`.
-/// Once the neck is narrower than [`MAP_NECK`] the modes are sines in a parameter stretched
+/// Once the neck is narrower than 0.1 R0 the modes are sines in a parameter stretched
 /// at the neck ([`NeckMap::at_neck`]), made again as the neck narrows or moves ([`new_map`]).
 fn arclength(
     full: &Basis,

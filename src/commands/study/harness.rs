@@ -1,7 +1,7 @@
 //! What every study shares: read the study file (`--quick` applied), refuse an existing output
 //! folder without `--force` before anything is computed, time the study, and write what it
 //! produced — the printed table (also `NAME.txt`, closed by the study's wall time), its CSV
-//! files (typed rows through [`table`]) and its charts (PNG and SVG).
+//! files (typed rows through [`table`]), its charts (PNG and SVG) and pictures (PNG).
 //!
 //! A study is a [`Study`]: a name, a spec read from its file, and a `measure` that turns the
 //! spec into a [`Report`]. [`run`] does the rest; [`run_with`] does the same for a measurement
@@ -11,7 +11,7 @@ use super::file;
 use super::table::{self, Row};
 use crate::error::{Error, Result};
 use crate::output::chart::Figure;
-use crate::output::folder;
+use crate::output::{folder, RgbImage};
 use crate::problem::config::Scene;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};
@@ -44,6 +44,8 @@ pub struct Report {
     pub typed: Vec<table::Table>,
     /// `(file stem, figure)`: each written as `stem.png` and `stem.svg`.
     pub charts: Vec<(String, Figure)>,
+    /// `(file name, picture)`: each written as a PNG file.
+    pub images: Vec<(String, RgbImage)>,
 }
 
 impl Report {
@@ -107,6 +109,9 @@ impl Session {
         }
         for (stem, figure) in &report.charts {
             figure.write(&self.out.join(stem))?;
+        }
+        for (file, image) in &report.images {
+            image.write_png(&self.out.join(file))?;
         }
         println!("-> {}", self.out.display());
         Ok(())

@@ -14,7 +14,7 @@
 //! * [`nonaxisymmetric`]: a non-axisymmetric ADE state (triaxial, starfish) against the
 //!   axisymmetric branches at the same (v, α, Δa0), phase field and sharp;
 //! * [`budding`]: quasi-static budding in c̄0 through stationary states beside the sharp pear
-//!   branch.
+//!   branch; [`heating`]: budding on heating, the same in the ADE model's Δa0.
 
 pub mod budding;
 pub mod classify;
@@ -22,6 +22,7 @@ pub mod convergence;
 pub mod file;
 pub mod fit;
 pub mod harness;
+pub mod heating;
 pub mod levels;
 pub mod nonaxisymmetric;
 pub mod pinning;

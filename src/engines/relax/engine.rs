@@ -34,6 +34,7 @@ impl Engine for RelaxEngine {
 
     /// One L-BFGS iteration (its line search may take several evaluations).
     fn step(&mut self, t: f64, dt: f64) -> Result<StepReport, StepError> {
+        self.retract_start(t + dt)?;
         let mut d = self.recursion(self.pairs.len());
         self.write_direction(&mut d);
         if d.slope >= 0.0 {

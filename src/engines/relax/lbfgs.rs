@@ -15,6 +15,10 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 use std::collections::VecDeque;
 
+/// Relative departure |A − A0|/A0 above which a state counts as off the area constraint
+/// ([`RelaxEngine::retract_start`]); accepted states are on it to round-off.
+const OFF_CONSTRAINT: f64 = 1e-10;
+
 /// Armijo constant: accept when F(φ + αd) ≤ F(φ) + c α ⟨∇F, d⟩.
 pub(super) const ARMIJO: f64 = 1e-4;
 /// Backtracking halvings before the line search gives up.
@@ -214,6 +218,38 @@ impl RelaxEngine {
                 .ev
                 .area_difference
                 .map_or(0.0, |t| t.energy(m.curvature))
+    }
+
+    /// Move a current state that is off the area constraint (a start whose area is not A0,
+    /// e.g. a field edited between relaxations) onto it before an iteration: its retraction
+    /// onto A = A0 along q (the trial at α = 0) becomes the current state, the memory is
+    /// cleared and its gradient formed. Every trial of the line search is retracted, so
+    /// comparing trials with an unretracted state would charge the search with the
+    /// retraction's own change of F, σ(A − A0) to first order, which no small step undoes on
+    /// a nearly stationary state. A state on the constraint is left as it is.
+    ///
+    /// # Errors
+    /// `Diverged` if the current state's gradient cannot be formed again after a failed
+    /// retraction.
+    pub(super) fn retract_start(&mut self, t: f64) -> Result<(), Diverged> {
+        let target = self.area.target;
+        let off = self.area.method != AreaMethod::None
+            && (self.cur.measures.area - target).abs() > OFF_CONSTRAINT * target.abs();
+        if !off {
+            return Ok(());
+        }
+        let mut d = self.recursion(self.pairs.len());
+        self.write_direction(&mut d);
+        self.direction = d;
+        std::mem::swap(&mut self.cur.nonlinear, &mut self.trial.nonlinear);
+        if self.try_step(0.0, t).is_ok() {
+            self.accept();
+            self.reset_memory();
+            self.refresh_gradient();
+            Ok(())
+        } else {
+            self.take_back_gradient(t)
+        }
     }
 
     /// Pairs held in the memory (at most `lbfgs_memory`).

@@ -258,7 +258,7 @@ fn check(spec: &Spec) -> Result<()> {
 }
 
 /// Errors of a scene built from the study key `key`, renamed `key.<field>`.
-fn within(key: &'static str) -> impl Fn(Error) -> Error {
+pub fn within(key: &'static str) -> impl Fn(Error) -> Error {
     move |e| match e {
         Error::Config { field, reason } => Error::config(format!("{key}.{field}"), reason),
         other => other,
@@ -303,7 +303,7 @@ fn base_scene(spec: &Spec) -> Result<Scene> {
 
 /// φ = tanh(d/(√2 ε)) of the surface of revolution about z through the contour `(r, z)` (R0 = 1)
 /// scaled to `r0`, centred in the box of `grid`.
-fn revolved(r: &[f64], z: &[f64], r0: f64, eps: f64, grid: &Grid) -> Array3<f64> {
+pub fn revolved(r: &[f64], z: &[f64], r0: f64, eps: f64, grid: &Grid) -> Array3<f64> {
     let shape = Prepared::Revolution(Revolution {
         meridian: Meridian::new(r, z, r0, AXISYM_SPACING * eps),
         axis: 2,
@@ -313,7 +313,7 @@ fn revolved(r: &[f64], z: &[f64], r0: f64, eps: f64, grid: &Grid) -> Array3<f64>
 }
 
 /// The start must keep bulk outside on the box's faces (φ ≤ [`FACE_PHI_MAX`]).
-fn check_fits(phi: &Array3<f64>) -> Result<()> {
+pub fn check_fits(phi: &Array3<f64>) -> Result<()> {
     let (n0, n1, n2) = phi.dim();
     let on_face = |(i, j, k): (usize, usize, usize)| {
         i == 0 || j == 0 || k == 0 || i == n0 - 1 || j == n1 - 1 || k == n2 - 1
