@@ -133,18 +133,21 @@ impl Flow {
         let tension = TENSION_FACTOR * eps * sigma;
         // μ̂ = −N̂/|k|² + 2ε⁴|k|⁴φ̂ + c_σσ|k|²φ̂ (k ≠ 0; a constant in μ exerts a gradient,
         // which the projection removes).
-        self.spectral_pass(sym, |i, k, _, out| {
+        let nonlinear_in: &Array3<Complex64> = nonlinear;
+        modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
             *out = if k > 0.0 {
-                -at(nonlinear, i) / k + at(hat, i) * (e4x2 * k * k + tension * k)
+                -at(nonlinear_in, i) / k + at(hat, i) * (e4x2 * k * k + tension * k)
             } else {
                 Complex64::default()
             };
+            0.0
         });
         transform.inverse(&mut self.spectrum, &mut self.mu);
-        for (c, a) in self.axes.clone().into_iter().enumerate() {
-            let kappa = self.kappa[a].clone();
-            self.spectral_pass(sym, |i, _, idx, out| {
+        for (c, &a) in self.axes.iter().enumerate() {
+            let kappa = &self.kappa[a];
+            modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
                 *out = at(hat, i) * Complex64::new(0.0, kappa[idx[a]]);
+                0.0
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
             Zip::from(&mut self.component)
@@ -192,83 +195,64 @@ impl Flow {
     /// The Oseen projection in place on the force's spectra: s = κ·f̂/|κ|², then
     /// f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a. Returns η Σ_k w |k|²|û|².
     fn project(&mut self, sym: &Symbols) -> f64 {
-        let (axes, kappa) = (&self.axes, &self.kappa);
-        let components = &self.components;
-        self.spectrum
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(PAR_CHUNK)
-            .enumerate()
-            .for_each(|(t, chunk)| {
-                for (l, out) in chunk.iter_mut().enumerate() {
-                    let i = t * PAR_CHUNK + l;
-                    let idx = index_of(i, self.shape);
-                    let mut dot = Complex64::default();
-                    let mut norm = 0.0;
-                    for (c, &a) in axes.iter().enumerate() {
-                        let k = kappa[a][idx[a]];
-                        dot += components[c].as_slice().expect("standard layout")[i] * k;
-                        norm += k * k;
-                    }
-                    *out = if norm > 0.0 {
-                        dot / norm
-                    } else {
-                        Complex64::default()
-                    };
-                }
-            });
+        let (axes, kappa, components) = (&self.axes, &self.kappa, &self.components);
+        modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
+            let mut dot = Complex64::default();
+            let mut norm = 0.0;
+            for (c, &a) in axes.iter().enumerate() {
+                let k = kappa[a][idx[a]];
+                dot += at(&components[c], i) * k;
+                norm += k * k;
+            }
+            *out = if norm > 0.0 {
+                dot / norm
+            } else {
+                Complex64::default()
+            };
+            0.0
+        });
         let eta = self.viscosity;
         let mut dissipation = 0.0;
-        for c in 0..self.axes.len() {
-            let a = self.axes[c];
-            let (kappa, s, shape) = (&self.kappa[a], &self.spectrum, self.shape);
-            let partials = self.components[c]
-                .as_slice_mut()
-                .expect("standard layout")
-                .par_chunks_mut(PAR_CHUNK)
-                .enumerate()
-                .map(|(t, chunk)| {
-                    let mut sum = 0.0;
-                    for (l, u) in chunk.iter_mut().enumerate() {
-                        let i = t * PAR_CHUNK + l;
-                        let idx = index_of(i, shape);
-                        let (k2, w) = mode_symbols(sym, idx);
-                        *u = if k2 > 0.0 {
-                            (*u - s.as_slice().expect("standard layout")[i] * kappa[idx[a]])
-                                / (eta * k2)
-                        } else {
-                            Complex64::default()
-                        };
-                        sum += w * k2 * u.norm_sqr();
-                    }
-                    sum
-                });
-            dissipation += eta * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y);
+        for (c, &a) in self.axes.iter().enumerate() {
+            let (kappa, s) = (&self.kappa[a], &self.spectrum);
+            let sum = modes_mut(&mut self.components[c], self.shape, sym, |i, idx, (k2, w), u| {
+                *u = if k2 > 0.0 {
+                    (*u - at(s, i) * kappa[idx[a]]) / (eta * k2)
+                } else {
+                    Complex64::default()
+                };
+                w * k2 * u.norm_sqr()
+            });
+            dissipation += eta * sum;
         }
         dissipation
     }
+}
 
-    /// Write `f(i, |k|², [j0, j1, j2], out)` into every mode `i` of the scratch spectrum, in
-    /// parallel chunks.
-    fn spectral_pass(
-        &mut self,
-        sym: &Symbols,
-        f: impl Fn(usize, f64, [usize; 3], &mut Complex64) + Sync,
-    ) {
-        let shape = self.shape;
-        self.spectrum
-            .as_slice_mut()
-            .expect("standard layout")
-            .par_chunks_mut(PAR_CHUNK)
-            .enumerate()
-            .for_each(|(t, chunk)| {
-                for (l, out) in chunk.iter_mut().enumerate() {
-                    let i = t * PAR_CHUNK + l;
-                    let idx = index_of(i, shape);
-                    f(i, mode_symbols(sym, idx).0, idx, out);
-                }
-            });
-    }
+/// Call `f(i, [j0, j1, j2], (|k|², w), &mut out)` on every mode `i` of `spectrum` (of spectral
+/// shape `shape`) in parallel chunks, and return the sum of what it returns, added in a fixed
+/// tree (the same bits on any number of threads).
+fn modes_mut(
+    spectrum: &mut Array3<Complex64>,
+    shape: [usize; 3],
+    sym: &Symbols,
+    f: impl Fn(usize, [usize; 3], (f64, f64), &mut Complex64) -> f64 + Sync,
+) -> f64 {
+    let partials = spectrum
+        .as_slice_mut()
+        .expect("standard layout")
+        .par_chunks_mut(PAR_CHUNK)
+        .enumerate()
+        .map(|(t, chunk)| {
+            let mut sum = 0.0;
+            for (l, out) in chunk.iter_mut().enumerate() {
+                let i = t * PAR_CHUNK + l;
+                let idx = index_of(i, shape);
+                sum += f(i, idx, mode_symbols(sym, idx), out);
+            }
+            sum
+        });
+    sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
 }
 
 /// The index (j0, j1, j2) of the flat spectral position `i` in a spectrum of shape `shape`.
