@@ -215,14 +215,19 @@ impl Flow {
         let mut dissipation = 0.0;
         for (c, &a) in self.axes.iter().enumerate() {
             let (kappa, s) = (&self.kappa[a], &self.spectrum);
-            let sum = modes_mut(&mut self.components[c], self.shape, sym, |i, idx, (k2, w), u| {
-                *u = if k2 > 0.0 {
-                    (*u - at(s, i) * kappa[idx[a]]) / (eta * k2)
-                } else {
-                    Complex64::default()
-                };
-                w * k2 * u.norm_sqr()
-            });
+            let sum = modes_mut(
+                &mut self.components[c],
+                self.shape,
+                sym,
+                |i, idx, (k2, w), u| {
+                    *u = if k2 > 0.0 {
+                        (*u - at(s, i) * kappa[idx[a]]) / (eta * k2)
+                    } else {
+                        Complex64::default()
+                    };
+                    w * k2 * u.norm_sqr()
+                },
+            );
             dissipation += eta * sum;
         }
         dissipation

@@ -2,8 +2,8 @@
 //! theory (docs/src/theory/flow.md; docs/src/validation/flow.md).
 //!
 //! Each case seeds one mode (a quasi-circle's n, a quasi-sphere's l, a flat membrane's wave)
-//! with a small amplitude, runs the Stokes dynamics at fixed tension from it, and fits the
-//! mode's decay rate ([`measure`]). The rate is compared with the sharp rate in free space
+//! with a small amplitude (twice: +a and −a), runs the Stokes dynamics at fixed tension from
+//! it, and fits the decay rate of the difference of the two runs' moments ([`measure`]). The rate is compared with the sharp rate in free space
 //! times the periodic box's factor ([`crate::problem::flow::box_factor`]): their ratio
 //! should tend to 1 as ε/R → 0. For each (membrane, mode, σ̄) the ratio is extrapolated to
 //! ε/R = 0 (ε/λ for the flat membrane, whose cases are its sizes) by the polynomial through
