@@ -105,7 +105,8 @@ fn the_stokes_box_has_no_mirror() {
     assert_eq!(conserved.mirror, vec![true, true]);
     let stokes = common::with(
         &base,
-        json!({"dynamics": "stokes", "flow": {"viscosity": 1.0, "mobility": 0.01}}),
+        json!({"dynamics": "stokes", "flow": {"viscosity": 1.0, "mobility": 0.01},
+               "area": {"method": "fixed", "sigma": 0.0}}),
     );
     let stokes = setup::build(&scene(stokes)).expect("problem");
     assert_eq!(stokes.mirror, vec![false, false]);
