@@ -415,11 +415,18 @@ pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
         }
         _ => format!("{:?}", scene.scheme).to_lowercase(),
     };
+    let area = match scene.area_method() {
+        crate::problem::config::AreaMethod::Fixed => {
+            format!("fixed (σ = {:e})", scene.area.sigma.unwrap_or(0.0))
+        }
+        method => format!(
+            "{method:?} (A0 = {:.6e})",
+            scene.area.target.unwrap_or(f64::NAN)
+        ),
+    };
     s += &format!(
-        "  dt {}  {stepper}  area {:?} (A0 = {:.6e})  stop: {}",
+        "  dt {}  {stepper}  area {area}  stop: {}",
         scene.dt,
-        scene.area_method(),
-        scene.area.target.unwrap_or(f64::NAN),
         stop_text(scene)
     );
     if let Some(b) = bound {
