@@ -210,6 +210,36 @@ fn resumed_area_difference_runs_are_bitwise_identical_to_uninterrupted_ones() {
     }
 }
 
+/// The Stokes dynamics resumed in the middle (SBDF2 adaptive with the area projection, SBDF1 at
+/// fixed tension with an imposed shear, on the full 48² box at h = ε/2, 8 + 8 steps): the history
+/// T̂ⁿ⁻¹ of the flow's part per unit σ is not saved but evaluated again from φ̂ⁿ⁻¹, so φ and
+/// every row (max_speed and dissipation included) are bitwise those of the uninterrupted run.
+#[test]
+fn resumed_stokes_runs_are_bitwise_identical_to_uninterrupted_ones() {
+    let flow = json!({"viscosity": 1.0, "mobility": 0.01});
+    let runs = [
+        (
+            "stokes sbdf2 projection",
+            json!({"dynamics": "stokes", "flow": flow, "scheme": "sbdf2",
+                   "adaptive": {"dt_max": 3.0}}),
+        ),
+        (
+            "stokes sbdf1 fixed shear",
+            json!({"dynamics": "stokes", "scheme": "sbdf1", "dt": 0.5,
+                   "flow": {"viscosity": 1.0, "mobility": 0.01, "shear_rate": 1e-3},
+                   "area": {"method": "fixed", "sigma": 0.05}}),
+        ),
+    ];
+    for (name, extra) in runs {
+        let mut scene = ellipse(extra);
+        scene["h"] = json!(0.5);
+        scene["n"] = json!([48, 48]);
+        scene["initial"]["axes"] = json!([8.0, 5.0]);
+        scene["c0"] = json!(0.0);
+        assert_resume_is_exact(name, &scene, 8);
+    }
+}
+
 /// A volume ramp (V0 from V_init to 0.9 V_init over t ∈ [0, 10]) resumed in the middle of the
 /// ramp (15 + 15 steps of Δt = 0.5, split at t = 7.5) for SBDF1 and SBDF2, fixed and adaptive:
 /// the target is a function of t and of V_init, which the checkpoint carries, so φ and every row

@@ -47,11 +47,15 @@ pub struct Outcome {
     pub signal: Option<i32>,
 }
 
-/// The scene with every default made explicit, as saved under `"spec"` in `summary.json`.
+/// The scene with every default made explicit, as saved under `"spec"` in `summary.json` (the
+/// area target A0 `a0`, except under a fixed tension).
 pub fn resolved_scene(scene: &Scene, a0: f64, mirror: &[bool]) -> Scene {
     let mut s = scene.clone();
     s.area.method = Some(scene.area_method());
-    s.area.target = Some(a0);
+    // A fixed tension holds σ, not an area: its scene has no target.
+    if scene.area_method() != AreaMethod::Fixed {
+        s.area.target = Some(a0);
+    }
     if scene.area_method() == AreaMethod::Lagrangian {
         s.area.alpha = Some(scene.alpha());
     }
@@ -169,10 +173,13 @@ pub fn restore(
 ) -> Result<(Simulation, Problem)> {
     let problem = setup::frame(scene)?;
     let mut engine = build_engine(scene, &problem)?;
-    let target = scene
-        .area
-        .target
-        .ok_or_else(|| Error::config("checkpoint", "its scene lacks the resolved area.target"))?;
+    // A fixed tension has no area target (its constraint ignores it).
+    let target = match scene.area_method() {
+        AreaMethod::Fixed => f64::NAN,
+        _ => scene.area.target.ok_or_else(|| {
+            Error::config("checkpoint", "its scene lacks the resolved area.target")
+        })?,
+    };
     constrain(engine.as_mut(), scene, target)?;
     engine
         .restore(&mut checkpoint.engine, checkpoint.clock.t)

@@ -130,13 +130,14 @@ fn flat(a: &Array3<Complex64>) -> &[f64] {
     reals(a.as_slice().expect("standard layout"))
 }
 
-/// The area-difference term's inputs of an update reading `levels` levels: (φ̂, N̂, m̂) of the
-/// current state `cur` and, with two, of the one before (`prev`, `prev_curvature`).
+/// The second affine term's inputs of an update reading `levels` levels: (φ̂, N̂, m̂ or T̂) of
+/// the current state `cur` and, with two, of the one before (`prev`, `prev_curvature`);
+/// `laplacian` for the area-difference term ([`CoupleInputs`]).
 fn couple_inputs<'a>(
     cur: &'a State,
     prev: Option<&'a [Array3<Complex64>; 2]>,
     prev_curvature: Option<&'a Array3<Complex64>>,
-    levels: usize,
+    (levels, laplacian): (usize, bool),
 ) -> CoupleInputs<'a> {
     let mut inputs = vec![[
         flat(&cur.hat),
@@ -148,7 +149,10 @@ fn couple_inputs<'a>(
         let m = prev_curvature.expect("and its m̂");
         inputs.push([flat(h), flat(n), flat(m)]);
     }
-    CoupleInputs { levels: inputs }
+    CoupleInputs {
+        levels: inputs,
+        laplacian,
+    }
 }
 
 /// Frozen-coefficient stability bound of the semi-implicit step at σ = 0:
@@ -246,6 +250,12 @@ impl DeviceState for State {
 }
 
 impl CpuPasses {
+    /// The levels an update `u` reads and whether its second term carries −|k|²
+    /// ([`CoupleInputs`]).
+    fn levels(&self, u: &Update) -> (usize, bool) {
+        (u.levels(), !self.ev.has_flow())
+    }
+
     /// [`Passes::area_quadratic`] reading `L` levels of history.
     fn area_quadratic_with<const L: usize>(&self, u: &Update) -> [f64; 3] {
         let inputs = Inputs::new(&self.states.cur, self.states.prev.as_ref(), L);
@@ -346,7 +356,7 @@ impl Passes for CpuPasses {
 
     fn accept(&mut self, keep_history: bool) -> Result<(), DeviceFailure> {
         self.states.accept(keep_history, |s| Ok(s.clone()))?;
-        if keep_history && self.ev.area_difference.is_some() {
+        if keep_history && self.ev.has_second_term() {
             let old = &mut self.states.next.curvature_hat;
             match &mut self.prev_curvature {
                 Some(m) => std::mem::swap(m, old),
@@ -383,9 +393,10 @@ impl Passes for CpuPasses {
         self.ev
             .evaluate(&mut self.states.cur, t, None, Some(sigma))
             .map_err(|d| d.0)?;
-        // m̂ⁿ⁻¹ is not saved: it is evaluated again from φ̂ⁿ⁻¹.
+        // m̂ⁿ⁻¹ (or T̂ⁿ⁻¹) is not saved: it is evaluated again from φ̂ⁿ⁻¹.
         self.prev_curvature = None;
-        if let (Some(_), Some([h, _])) = (self.ev.area_difference, &self.states.prev) {
+        let second = self.ev.has_second_term();
+        if let (true, Some([h, _])) = (second, &self.states.prev) {
             let mut before = self.ev.blank();
             before.hat.assign(h);
             self.ev
@@ -412,13 +423,14 @@ impl Passes for CpuPasses {
     fn couple_sums(&self, u: &Update) -> Result<CoupleSums, DeviceFailure> {
         let total = 2 * self.states.cur.hat.len();
         let (prev, prev_m) = (self.states.prev.as_ref(), self.prev_curvature.as_ref());
-        let inputs = couple_inputs(&self.states.cur, prev, prev_m, u.levels());
+        let inputs = couple_inputs(&self.states.cur, prev, prev_m, self.levels(u));
         Ok(couple_sums(&self.ev.symbols, u, &inputs, total))
     }
 
     fn add_couple(&mut self, u: &Update, lambda: f64) -> Result<f64, DeviceFailure> {
         let States { cur, next, prev } = &mut self.states;
-        let inputs = couple_inputs(cur, prev.as_ref(), self.prev_curvature.as_ref(), u.levels());
+        let shape = (u.levels(), !self.ev.has_flow());
+        let inputs = couple_inputs(cur, prev.as_ref(), self.prev_curvature.as_ref(), shape);
         let out = [
             reals_mut(next.hat.as_slice_mut().expect("standard layout")),
             reals_mut(next.nonlinear.as_slice_mut().expect("standard layout")),

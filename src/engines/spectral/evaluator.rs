@@ -84,7 +84,9 @@ pub struct State {
     /// With [`ExplicitTerm::Gradient`]: (⟨q, q⟩_M, ⟨ĝ, q⟩), q = M⁻¹â, whose ratio is the area
     /// multiplier that makes M⁻¹(ĝ + σâ) tangent to A = A0 (zeros otherwise).
     pub multiplier_sums: (f64, f64),
-    /// m̂ = FT[δM/δφ] of the area-difference term ([`super::curvature`]); empty without it.
+    /// The explicit spectrum of the step's second affine term ([`super::curvature`]): m̂ =
+    /// FT[δM/δφ] of the area-difference term, or T̂ = FT[u_σ·∇φ] of the Stokes flow
+    /// ([`super::flow`]; the two never together); empty without either.
     pub curvature_hat: Array3<Complex64>,
     /// What the Stokes flow of this state measured (zeros without a flow).
     pub flow: FlowStats,
@@ -239,6 +241,12 @@ impl Evaluator {
         self.flow.is_some()
     }
 
+    /// Whether a state carries the spectrum of a second affine term (`State::curvature_hat`):
+    /// the area-difference term's m̂ or the Stokes flow's T̂.
+    pub fn has_second_term(&self) -> bool {
+        self.curvature.is_some() || self.flow.is_some()
+    }
+
     /// The state holding the real field `phi`, evaluated at time `t` with multiplier 0.
     ///
     /// # Errors
@@ -270,9 +278,10 @@ impl Evaluator {
             measures: Measures::default(),
             residual: f64::NAN,
             multiplier_sums: (0.0, 0.0),
-            curvature_hat: match self.curvature {
-                Some(_) => Array3::zeros(self.transform.spectral_shape()),
-                None => Array3::zeros((0, 0, 0)),
+            curvature_hat: if self.has_second_term() {
+                Array3::zeros(self.transform.spectral_shape())
+            } else {
+                Array3::zeros((0, 0, 0))
             },
             flow: FlowStats::default(),
         }
@@ -384,7 +393,7 @@ impl Evaluator {
                 &self.symbols,
                 tension,
                 &state.hat,
-                &mut state.nonlinear,
+                [&mut state.nonlinear, &mut state.curvature_hat],
             );
         }
         Ok(sums.change)

@@ -3,7 +3,7 @@
 //! carries. With the chemical potential μ of an evaluated state,
 //!
 //! ```text
-//! f = μ∇φ,   û = (I − κ̂κ̂) f̂ / (η|k|²)  (û(0) = 0),   N̂ ← M N̂ − FT[u·∇φ],
+//! f = μ∇φ,   û = (I − κ̂κ̂) f̂ / (η|k|²)  (û(0) = 0),   advection FT[u·∇φ],
 //! ```
 //!
 //! with κ the derivative's wavenumbers (the Nyquist ones 0, so that ∇ of a real field stays
@@ -12,12 +12,16 @@
 //! Σ_x μ u·∇φ = Σ_x u·f = η Σ_k w |k|²|û|² ≥ 0: the semi-discrete energy law
 //! dF_eff/dt = −M∫|∇μ|² − η∫|∇u|² holds term by term on the grid.
 //!
+//! μ is affine in σ (μ = μ_b + σμ_σ, μ_σ = −c_σ∇²φ), and so is u: the evaluation returns the
+//! advection of u_b in the explicit term and that of u_σ apart (T̂), so that the step can
+//! advect with the σ it solves for, and the area projection sees the flow's response to σ.
+//!
 //! With `flow.shear_rate` γ̇ the fluid also carries the imposed shear u_x = (γ̇/k₀) sin(k₀y)
-//! (k₀ = 2π/L_y), the exact Stokes flow of a periodic (Kolmogorov) body force: added to u
+//! (k₀ = 2π/L_y), the exact Stokes flow of a periodic (Kolmogorov) body force: added to u_b
 //! before the advection, it does work on the membrane, so the energy law then has a source.
 //!
-//! Cost: 3d + 2 transforms per evaluation (μ and the d components of ∇φ back, f forward, u
-//! back, u·∇φ forward).
+//! Cost: 5d + 4 transforms per evaluation (μ_b, μ_σ and the d components of ∇φ back, both
+//! forces forward, both velocities back, both advections forward).
 
 use super::evaluator::Symbols;
 use super::transform::Transform;
@@ -37,8 +41,8 @@ pub struct FlowStats {
     pub dissipation: f64,
 }
 
-/// The flow's constants, tables and scratch (one spectrum per velocity component and one
-/// more, one real field per component and three more).
+/// The flow's constants, tables and scratch (two spectra per velocity component and one
+/// more, one real field per component and five more).
 pub struct Flow {
     viscosity: f64,
     mobility: f64,
@@ -50,14 +54,14 @@ pub struct Flow {
     shape: [usize; 3],
     /// μ̂, then iκ_aφ̂, then κ·f̂/|κ|², then FT[u·∇φ].
     spectrum: Array3<Complex64>,
-    /// f̂_a, then û_a.
-    components: Vec<Array3<Complex64>>,
+    /// f̂_a, then û_a, of the flow at σ = 0 and of the flow per unit σ.
+    components: [Vec<Array3<Complex64>>; 2],
     /// ∂_aφ on the grid.
     gradient: Vec<Array3<f64>>,
-    /// μ, then u·∇φ.
-    mu: Array3<f64>,
-    /// f_a, then u_a.
-    component: Array3<f64>,
+    /// μ_b and μ_σ, then u_b·∇φ and u_σ·∇φ.
+    mu: [Array3<f64>; 2],
+    /// f_a, then (u_b)_a and (u_σ)_a.
+    component: [Array3<f64>; 2],
     /// |u|².
     speed_sq: Array3<f64>,
     /// The imposed shear flow u_x(y) along the y axis's points (`None`: no imposed flow).
@@ -108,41 +112,51 @@ impl Flow {
             kappa,
             shape,
             spectrum: Array3::zeros(shape),
-            components: axes.iter().map(|_| Array3::zeros(shape)).collect(),
+            components: [0, 1].map(|_| axes.iter().map(|_| Array3::zeros(shape)).collect()),
             gradient: axes.iter().map(|_| zeros()).collect(),
-            mu: zeros(),
-            component: zeros(),
+            mu: [zeros(), zeros()],
+            component: [zeros(), zeros()],
             speed_sq: zeros(),
             shear,
             axes,
         }
     }
 
-    /// Replace the conserved flow's explicit term `nonlinear` (N̂ of φ̂ = `hat`) by
-    /// M N̂ − FT[u·∇φ], with u the Stokes flow of the force μ∇φ at tension `sigma` (module
-    /// documentation). `sym` gives |k|² and the Parseval weights, `eps` the interface width.
+    /// Split the flow's advection into its part at σ = 0 and its part per unit σ, both of
+    /// the state φ̂ = `hat`: replace the conserved flow's explicit term `nonlinear` (N̂) by
+    /// M N̂ − FT[u_b·∇φ] and write T̂ = FT[u_σ·∇φ] into `tension`, where u_b is the Stokes flow
+    /// of the force μ_b∇φ (μ at σ = 0, plus the imposed shear) and u_σ that of μ_σ∇φ with
+    /// μ̂_σ = c_σ|k|²φ̂, the tension's part of μ per unit σ. The step then advects with
+    /// u_b + σu_σ at the σ it solves for (docs/src/theory/flow.md, "The step"). Returns max|u|
+    /// and η∫|∇u|² of u = u_b + σu_σ at `sigma`. `sym` gives |k|² and the Parseval weights,
+    /// `eps` the interface width.
     pub fn advect(
         &mut self,
         transform: &mut Transform,
         sym: &Symbols,
         (eps, sigma): (f64, f64),
         hat: &Array3<Complex64>,
-        nonlinear: &mut Array3<Complex64>,
+        [nonlinear, tension]: [&mut Array3<Complex64>; 2],
     ) -> FlowStats {
         let e4x2 = 2.0 * eps.powi(4);
-        let tension = TENSION_FACTOR * eps * sigma;
-        // μ̂ = −N̂/|k|² + 2ε⁴|k|⁴φ̂ + c_σσ|k|²φ̂ (k ≠ 0; a constant in μ exerts a gradient,
-        // which the projection removes).
+        let c_sigma = TENSION_FACTOR * eps;
+        // μ̂_b = −N̂/|k|² + 2ε⁴|k|⁴φ̂ (k ≠ 0; a constant in μ exerts a gradient, which the
+        // projection removes), and μ̂_σ = c_σ|k|²φ̂.
         let nonlinear_in: &Array3<Complex64> = nonlinear;
         modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
             *out = if k > 0.0 {
-                -at(nonlinear_in, i) / k + at(hat, i) * (e4x2 * k * k + tension * k)
+                -at(nonlinear_in, i) / k + at(hat, i) * (e4x2 * k * k)
             } else {
                 Complex64::default()
             };
             0.0
         });
-        transform.inverse(&mut self.spectrum, &mut self.mu);
+        transform.inverse(&mut self.spectrum, &mut self.mu[0]);
+        modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
+            *out = at(hat, i) * (c_sigma * k);
+            0.0
+        });
+        transform.inverse(&mut self.spectrum, &mut self.mu[1]);
         for (c, &a) in self.axes.iter().enumerate() {
             let kappa = &self.kappa[a];
             modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
@@ -150,52 +164,66 @@ impl Flow {
                 0.0
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
-            Zip::from(&mut self.component)
-                .and(&self.mu)
-                .and(&self.gradient[c])
-                .par_for_each(|f, &mu, &g| *f = mu * g);
-            transform.forward(&mut self.component, &mut self.components[c]);
+            for part in 0..2 {
+                Zip::from(&mut self.component[0])
+                    .and(&self.mu[part])
+                    .and(&self.gradient[c])
+                    .par_for_each(|f, &mu, &g| *f = mu * g);
+                transform.forward(&mut self.component[0], &mut self.components[part][c]);
+            }
         }
-        let dissipation = self.project(sym);
+        for part in 0..2 {
+            self.project(sym, part);
+        }
+        let dissipation = self.dissipation(sym, sigma);
         for c in 0..self.axes.len() {
-            transform.inverse(&mut self.components[c], &mut self.component);
+            let [ub, us] = &mut self.component;
+            transform.inverse(&mut self.components[0][c], ub);
+            transform.inverse(&mut self.components[1][c], us);
             if let (0, Some(profile)) = (c, &self.shear) {
                 let y = self.axes[1];
-                for (j, mut plane) in self.component.axis_iter_mut(Axis(y)).enumerate() {
+                for (j, mut plane) in ub.axis_iter_mut(Axis(y)).enumerate() {
                     plane += profile[j];
                 }
             }
             let first = c == 0;
-            Zip::from(&mut self.mu)
+            let [adv_b, adv_s] = &mut self.mu;
+            Zip::from(adv_b)
+                .and(adv_s)
                 .and(&mut self.speed_sq)
-                .and(&self.component)
+                .and(&*ub)
+                .and(&*us)
                 .and(&self.gradient[c])
-                .par_for_each(|adv, s, &u, &g| {
+                .par_for_each(|ab, as_, s, &u, &v, &g| {
+                    let w = u + sigma * v;
                     if first {
-                        (*adv, *s) = (u * g, u * u);
+                        (*ab, *as_, *s) = (u * g, v * g, w * w);
                     } else {
-                        (*adv, *s) = (*adv + u * g, *s + u * u);
+                        (*ab, *as_, *s) = (*ab + u * g, *as_ + v * g, *s + w * w);
                     }
                 });
         }
         let max_speed_sq = self.speed_sq.par_iter().copied().reduce(|| 0.0, f64::max);
-        transform.forward(&mut self.mu, &mut self.spectrum);
+        transform.forward(&mut self.mu[0], &mut self.spectrum);
         self.spectrum[[0, 0, 0]] = Complex64::default();
         let mobility = self.mobility;
         Zip::from(&mut *nonlinear)
             .and(&self.spectrum)
             .par_for_each(|n, &a| *n = *n * mobility - a);
         transform.hermitian_symmetrize(nonlinear);
+        transform.forward(&mut self.mu[1], tension);
+        tension[[0, 0, 0]] = Complex64::default();
+        transform.hermitian_symmetrize(tension);
         FlowStats {
             max_speed: max_speed_sq.sqrt(),
             dissipation,
         }
     }
 
-    /// The Oseen projection in place on the force's spectra: s = κ·f̂/|κ|², then
-    /// f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a. Returns η Σ_k w |k|²|û|².
-    fn project(&mut self, sym: &Symbols) -> f64 {
-        let (axes, kappa, components) = (&self.axes, &self.kappa, &self.components);
+    /// The Oseen projection in place on the force's spectra of `part` (0: σ = 0, 1: per unit
+    /// σ): s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a.
+    fn project(&mut self, sym: &Symbols, part: usize) {
+        let (axes, kappa, components) = (&self.axes, &self.kappa, &self.components[part]);
         modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
             let mut dot = Complex64::default();
             let mut norm = 0.0;
@@ -212,25 +240,36 @@ impl Flow {
             0.0
         });
         let eta = self.viscosity;
-        let mut dissipation = 0.0;
         for (c, &a) in self.axes.iter().enumerate() {
             let (kappa, s) = (&self.kappa[a], &self.spectrum);
-            let sum = modes_mut(
-                &mut self.components[c],
+            modes_mut(
+                &mut self.components[part][c],
                 self.shape,
                 sym,
-                |i, idx, (k2, w), u| {
+                |i, idx, (k2, _), u| {
                     *u = if k2 > 0.0 {
                         (*u - at(s, i) * kappa[idx[a]]) / (eta * k2)
                     } else {
                         Complex64::default()
                     };
-                    w * k2 * u.norm_sqr()
+                    0.0
                 },
             );
-            dissipation += eta * sum;
         }
-        dissipation
+    }
+
+    /// η Σ_k w |k|² |û_b + σû_σ|² over the components: the power the fluid dissipates at σ.
+    fn dissipation(&mut self, sym: &Symbols, sigma: f64) -> f64 {
+        let [base, per_sigma] = &self.components;
+        let eta = self.viscosity;
+        // The scratch spectrum receives nothing: the pass only sums.
+        eta * modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k2, w), _| {
+            let mut sum = 0.0;
+            for (b, t) in base.iter().zip(per_sigma) {
+                sum += (at(b, i) + at(t, i) * sigma).norm_sqr();
+            }
+            w * k2 * sum
+        })
     }
 }
 
@@ -290,8 +329,9 @@ mod tests {
     use crate::problem::model::{SpontaneousCurvature, C0};
 
     /// The semi-discrete energy law term by term (module documentation), on a 2D and a 3D
-    /// field with odd and even lengths, at σ = 0.3: with FT[u·∇φ] = M N̂_conserved − N̂_flow
-    /// (the same state evaluated without and with the flow) and μ̂ = −N̂_conserved/|k|² +
+    /// field with odd and even lengths, at σ = 0.3: with FT[u·∇φ] = M N̂_conserved − N̂_flow +
+    /// σT̂ (the same state evaluated without and with the flow; N̂_flow holds the advection at
+    /// σ = 0, T̂ the advection per unit σ) and μ̂ = −N̂_conserved/|k|² +
     /// 2ε⁴|k|⁴φ̂ + c_σσ|k|²φ̂, Σ_x μ u·∇φ = Σ_k w Re(μ̂ FT[u·∇φ]*) equals the reported
     /// dissipation η Σ_k w |k|²|û|² to 1e-10, and the advection's k = 0 coefficient is 0 (it
     /// moves no volume). A sign slip, a missing projection or a wrong weight misses by O(1).
@@ -336,15 +376,16 @@ mod tests {
             let shape = ev.transform.spectral_shape();
             let (e4x2, tension) = (2.0, TENSION_FACTOR * sigma);
             let mut power = 0.0;
-            for (i, ((&n, &nf), &h)) in plain
+            for (i, (((&n, &nf), &t), &h)) in plain
                 .nonlinear
                 .iter()
                 .zip(flowing.nonlinear.iter())
+                .zip(flowing.curvature_hat.iter())
                 .zip(plain.hat.iter())
                 .enumerate()
             {
                 let (k, w) = mode_symbols(sym, index_of(i, shape));
-                let advection = n * spec.mobility - nf;
+                let advection = n * spec.mobility - nf + t * sigma;
                 if k == 0.0 {
                     assert!(advection.norm() < 1e-12 * n.norm().max(1.0), "{advection}");
                     continue;

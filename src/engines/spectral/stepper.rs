@@ -218,6 +218,9 @@ pub struct Stepper<P> {
     c0_ramped: bool,
     /// Whether an imposed flow does work on the membrane (F may then rise legitimately).
     driven: bool,
+    /// Whether the step advects with the Stokes flow, whose part per unit σ (T̂) enters the
+    /// update as σR̂ beside σQ̂ ([`super::flow`]).
+    tension_flow: bool,
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see [`Stepper::check_constraints`]).
     energy_guard: bool,
@@ -246,6 +249,7 @@ impl<P: Passes> Stepper<P> {
             volume_ramp: scene.volume,
             c0_ramped,
             driven: scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some()),
+            tension_flow: scene.stokes_flow().is_some(),
             dt_next: None,
             energy_guard: true,
             couple: None,
@@ -354,7 +358,7 @@ impl<P: Passes> Stepper<P> {
         sigma_after: f64,
     ) -> Result<Result<(), Rejection>, DeviceFailure> {
         let mut area = self.passes.write_update(u, sigma)?;
-        if self.couple.is_some() {
+        if self.couple.is_some() || self.tension_flow {
             area = self.passes.add_couple(u, lambda)?;
         }
         self.set_volume(t_new)?;
@@ -400,6 +404,9 @@ impl<P: Passes> Stepper<P> {
     fn attempt(&mut self, t: f64, dt: f64) -> Result<Result<(f64, f64), Rejection>, DeviceFailure> {
         let u = self.update(dt);
         let t_new = t + dt;
+        if self.tension_flow {
+            return self.attempt_with_flow(&u, t, t_new);
+        }
         let Some(term) = self.couple else {
             let Some(sigma) = self.choose_sigma(&u)? else {
                 return Ok(Err(Rejection::NoRealRoot));
@@ -461,6 +468,42 @@ impl<P: Passes> Stepper<P> {
         Ok(self
             .check_constraints(multipliers, t, t_new)
             .map(|()| (sigma_after, lambda_after)))
+    }
+
+    /// [`Stepper::attempt`] under the Stokes flow: φ̂^{n+1} = P̂ + σ(Q̂ + R̂) with R̂ the
+    /// advection of the flow per unit σ ([`super::flow`]), so that σ acts through the flow as
+    /// well as through the diffusive channel; the projection takes the root of
+    /// A(σ) = A_PP + 2σ(A_PQ + A_PR) + σ²(A_QQ + 2A_QR + A_RR) nearest the last σ.
+    fn attempt_with_flow(
+        &mut self,
+        u: &Update,
+        t: f64,
+        t_new: f64,
+    ) -> Result<Result<(f64, f64), Rejection>, DeviceFailure> {
+        let sigma = match self.area.method {
+            AreaMethod::None => 0.0,
+            AreaMethod::Lagrangian | AreaMethod::Fixed => self.sigma,
+            AreaMethod::Projection => {
+                let [app, apq, aqq, apr, aqr, arr] = self.passes.couple_sums(u)?.area;
+                let root = nearest_root(
+                    aqq + 2.0 * aqr + arr,
+                    apq + apr,
+                    app - self.area.target,
+                    self.sigma,
+                );
+                let Some(sigma) = root else {
+                    return Ok(Err(Rejection::NoRealRoot));
+                };
+                sigma
+            }
+        };
+        let sigma_after = control::sigma_after(&self.area, self.sigma, self.current().area, sigma);
+        if let Err(r) = self.write_and_finish(u, (sigma, sigma), t_new, sigma_after)? {
+            return Ok(Err(r));
+        }
+        Ok(self
+            .check_constraints((sigma, 0.0), t, t_new)
+            .map(|()| (sigma_after, 0.0)))
     }
 
     /// Volume (and area under projection) held; F_eff (at the σ of the update) must not rise

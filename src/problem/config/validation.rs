@@ -241,8 +241,8 @@ impl Scene {
     }
 
     /// `dynamics: "stokes"` needs `flow` with η > 0 and M > 0, the spectral CPU engine on the
-    /// periodic box with its spectral Laplacian, a fixed tension (or none) and no area-difference
-    /// term; `flow` belongs to it alone.
+    /// periodic box with its spectral Laplacian, and no area-difference term; `flow` belongs to
+    /// it alone.
     fn validate_flow(&self) -> Result<()> {
         let Some(flow) = self.flow else {
             if self.dynamics == Dynamics::Stokes {
@@ -284,15 +284,6 @@ impl Scene {
                      transforms for the velocity normal to it; drop the mirror axes",
                 ));
             }
-        }
-        if !matches!(self.area_method(), AreaMethod::Fixed | AreaMethod::None) {
-            return Err(Error::config(
-                "area.method",
-                "stokes dynamics holds a fixed tension (\"area\": {\"method\": \"fixed\", \"sigma\": σ}) \
-                 or none: the area projection does not yet take the flow's response to σ into \
-                 its step (with σ lagged in the force it holds the area only through the \
-                 diffusive channel, and σ runs away)",
-            ));
         }
         if self.ade.is_some() || self.bilayer_couple.is_some() {
             return Err(Error::config(
