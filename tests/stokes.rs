@@ -8,8 +8,21 @@ use common::{relax, scene, simulation};
 use serde_json::{json, Value};
 use vesicle::commands::study::rates::measure::{self, Case, Kind};
 use vesicle::commands::study::rates::{value_at_zero, Spec};
-use vesicle::driver::simulation::StopRules;
+use vesicle::driver::record::Record;
+use vesicle::driver::simulation::{Flow, Now, Probe, StopRules};
 use vesicle::problem::setup;
+
+/// The record of every state of a run of `s`, the prepared start first.
+fn recorded(s: &vesicle::problem::config::Scene) -> Vec<Record> {
+    let (_, mut sim) = simulation(s);
+    let mut rows = vec![sim.record()];
+    let mut probe = Probe(|now: &Now| {
+        rows.push(now.record);
+        Ok(Flow::Continue)
+    });
+    sim.run(&StopRules::of(s), &mut [&mut probe]).expect("runs");
+    rows
+}
 
 /// An ellipse in a 64² box at h = ε/2, with the entries of `extra`.
 fn ellipse(extra: Value) -> Value {
@@ -53,16 +66,9 @@ fn the_flow_lowers_the_energy_at_fixed_tension() {
         "dynamics": "stokes", "flow": {"viscosity": 1.0, "mobility": 0.01},
         "dt": 0.5, "max_steps": 60
     })));
-    let (_, mut sim) = simulation(&s);
-    let first = sim.record();
-    let mut rows = vec![first];
-    let mut probe = vesicle::driver::simulation::Probe(|now: &vesicle::driver::simulation::Now| {
-        rows.push(now.record);
-        Ok(vesicle::driver::simulation::Flow::Continue)
-    });
-    sim.run(&StopRules::of(&s), &mut [&mut probe])
-        .expect("runs");
-    let f = |r: &vesicle::driver::record::Record| r.energy + 0.02 * r.area;
+    let rows = recorded(&s);
+    let first = rows[0];
+    let f = |r: &Record| r.energy + 0.02 * r.area;
     for w in rows.windows(2) {
         assert!(f(&w[1]) <= f(&w[0]) * (1.0 + 1e-12), "step {}", w[1].step);
     }
@@ -186,15 +192,8 @@ fn a_vesicle_in_the_fluid_keeps_its_area() {
         "initial": {"shape": "spheroid", "reduced_volume": 0.8, "r0": 8.0, "kind": "prolate",
                     "axis": "x"}
     }));
-    let (_, mut sim) = simulation(&s);
-    let first = sim.record();
-    let mut rows = vec![first];
-    let mut probe = vesicle::driver::simulation::Probe(|now: &vesicle::driver::simulation::Now| {
-        rows.push(now.record);
-        Ok(vesicle::driver::simulation::Flow::Continue)
-    });
-    sim.run(&StopRules::of(&s), &mut [&mut probe])
-        .expect("runs");
+    let rows = recorded(&s);
+    let first = rows[0];
     let kappa = vesicle::problem::flow::bending_modulus(1.0);
     for r in &rows[1..] {
         assert!(
