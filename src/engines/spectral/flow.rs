@@ -142,10 +142,10 @@ impl Flow {
         let c_sigma = TENSION_FACTOR * eps;
         // μ̂_b = −N̂/|k|² + 2ε⁴|k|⁴φ̂ (k ≠ 0; a constant in μ exerts a gradient, which the
         // projection removes), and μ̂_σ = c_σ|k|²φ̂.
-        let nonlinear_in: &Array3<Complex64> = nonlinear;
+        let (hat, nonlinear_in) = (flat(hat), flat(nonlinear));
         modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
             *out = if k > 0.0 {
-                -at(nonlinear_in, i) / k + at(hat, i) * (e4x2 * k * k)
+                -nonlinear_in[i] / k + hat[i] * (e4x2 * k * k)
             } else {
                 Complex64::default()
             };
@@ -153,14 +153,14 @@ impl Flow {
         });
         transform.inverse(&mut self.spectrum, &mut self.mu[0]);
         modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
-            *out = at(hat, i) * (c_sigma * k);
+            *out = hat[i] * (c_sigma * k);
             0.0
         });
         transform.inverse(&mut self.spectrum, &mut self.mu[1]);
         for (c, &a) in self.axes.iter().enumerate() {
             let kappa = &self.kappa[a];
             modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
-                *out = at(hat, i) * Complex64::new(0.0, kappa[idx[a]]);
+                *out = hat[i] * Complex64::new(0.0, kappa[idx[a]]);
                 0.0
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
@@ -223,13 +223,14 @@ impl Flow {
     /// The Oseen projection in place on the force's spectra of `part` (0: σ = 0, 1: per unit
     /// σ): s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a.
     fn project(&mut self, sym: &Symbols, part: usize) {
-        let (axes, kappa, components) = (&self.axes, &self.kappa, &self.components[part]);
+        let (axes, kappa) = (&self.axes, &self.kappa);
+        let components = slices(&self.components[part]);
         modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
             let mut dot = Complex64::default();
             let mut norm = 0.0;
             for (c, &a) in axes.iter().enumerate() {
                 let k = kappa[a][idx[a]];
-                dot += at(&components[c], i) * k;
+                dot += components[c][i] * k;
                 norm += k * k;
             }
             *out = if norm > 0.0 {
@@ -241,14 +242,14 @@ impl Flow {
         });
         let eta = self.viscosity;
         for (c, &a) in self.axes.iter().enumerate() {
-            let (kappa, s) = (&self.kappa[a], &self.spectrum);
+            let (kappa, s) = (&self.kappa[a], flat(&self.spectrum));
             modes_mut(
                 &mut self.components[part][c],
                 self.shape,
                 sym,
                 |i, idx, (k2, _), u| {
                     *u = if k2 > 0.0 {
-                        (*u - at(s, i) * kappa[idx[a]]) / (eta * k2)
+                        (*u - s[i] * kappa[idx[a]]) / (eta * k2)
                     } else {
                         Complex64::default()
                     };
@@ -259,17 +260,22 @@ impl Flow {
     }
 
     /// η Σ_k w |k|² |û_b + σû_σ|² over the components: the power the fluid dissipates at σ.
-    fn dissipation(&mut self, sym: &Symbols, sigma: f64) -> f64 {
+    fn dissipation(&self, sym: &Symbols, sigma: f64) -> f64 {
         let [base, per_sigma] = &self.components;
-        let eta = self.viscosity;
-        // The scratch spectrum receives nothing: the pass only sums.
-        eta * modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k2, w), _| {
-            let mut sum = 0.0;
-            for (b, t) in base.iter().zip(per_sigma) {
-                sum += (at(b, i) + at(t, i) * sigma).norm_sqr();
-            }
-            w * k2 * sum
-        })
+        let (base, per_sigma, d) = (slices(base), slices(per_sigma), self.axes.len());
+        let partials = (0..self.spectrum.len().div_ceil(PAR_CHUNK))
+            .into_par_iter()
+            .map(|t| {
+                let modes = t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(self.spectrum.len());
+                modes
+                    .map(|i| {
+                        let (k2, w) = mode_symbols(sym, index_of(i, self.shape));
+                        let u = (0..d).map(|c| (base[c][i] + per_sigma[c][i] * sigma).norm_sqr());
+                        w * k2 * u.sum::<f64>()
+                    })
+                    .sum::<f64>()
+            });
+        self.viscosity * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
     }
 }
 
@@ -314,10 +320,16 @@ fn mode_symbols(sym: &Symbols, [i0, i1, i2]: [usize; 3]) -> (f64, f64) {
     )
 }
 
-/// The coefficient at flat position `i` of a spectrum.
+/// A spectrum's coefficients in flat order.
 #[inline]
-fn at(a: &Array3<Complex64>, i: usize) -> Complex64 {
-    a.as_slice().expect("standard layout")[i]
+fn flat(a: &Array3<Complex64>) -> &[Complex64] {
+    a.as_slice().expect("standard layout")
+}
+
+/// The coefficients of each velocity component's spectrum (up to three; the missing ones
+/// empty), taken once per pass instead of once per mode.
+fn slices(components: &[Array3<Complex64>]) -> [&[Complex64]; 3] {
+    std::array::from_fn(|c| components.get(c).map_or(&[][..], flat))
 }
 
 #[cfg(test)]

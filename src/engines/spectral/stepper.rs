@@ -300,10 +300,22 @@ impl<P: Passes> Stepper<P> {
             AreaMethod::None => Some(0.0),
             AreaMethod::Lagrangian | AreaMethod::Fixed => Some(self.sigma),
             AreaMethod::Projection => {
-                let [app, apq, aqq] = self.passes.area_quadratic(u)?;
+                let [app, apq, aqq] = self.area_quadratic(u)?;
                 nearest_root(aqq, apq, app - self.area.target, self.sigma)
             }
         })
+    }
+
+    /// (A_PP, A_PQ, A_QQ) of the update `u` as affine in σ: of P̂ + σQ̂, or under the Stokes flow
+    /// of P̂ + σ(Q̂ + R̂) with R̂ the advection per unit σ ([`super::flow`]), A(σ) = A_PP +
+    /// 2σ(A_PQ + A_PR) + σ²(A_QQ + 2A_QR + A_RR): σ then acts through the flow as well as
+    /// through the diffusive channel.
+    fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure> {
+        if !self.tension_flow {
+            return self.passes.area_quadratic(u);
+        }
+        let [app, apq, aqq, apr, aqr, arr] = self.passes.couple_sums(u)?.area;
+        Ok([app, apq + apr, aqq + 2.0 * aqr + arr])
     }
 
     /// σ and λ of this step's update with the area-difference term `term`, from its sums `s`
@@ -404,16 +416,15 @@ impl<P: Passes> Stepper<P> {
     fn attempt(&mut self, t: f64, dt: f64) -> Result<Result<(f64, f64), Rejection>, DeviceFailure> {
         let u = self.update(dt);
         let t_new = t + dt;
-        if self.tension_flow {
-            return self.attempt_with_flow(&u, t, t_new);
-        }
         let Some(term) = self.couple else {
             let Some(sigma) = self.choose_sigma(&u)? else {
                 return Ok(Err(Rejection::NoRealRoot));
             };
             let sigma_after =
                 control::sigma_after(&self.area, self.sigma, self.current().area, sigma);
-            if let Err(r) = self.write_and_finish(&u, (sigma, 0.0), t_new, sigma_after)? {
+            // Under the Stokes flow the second term's multiplier is σ itself.
+            let lambda = if self.tension_flow { sigma } else { 0.0 };
+            if let Err(r) = self.write_and_finish(&u, (sigma, lambda), t_new, sigma_after)? {
                 return Ok(Err(r));
             }
             return Ok(self
@@ -468,42 +479,6 @@ impl<P: Passes> Stepper<P> {
         Ok(self
             .check_constraints(multipliers, t, t_new)
             .map(|()| (sigma_after, lambda_after)))
-    }
-
-    /// [`Stepper::attempt`] under the Stokes flow: φ̂^{n+1} = P̂ + σ(Q̂ + R̂) with R̂ the
-    /// advection of the flow per unit σ ([`super::flow`]), so that σ acts through the flow as
-    /// well as through the diffusive channel; the projection takes the root of
-    /// A(σ) = A_PP + 2σ(A_PQ + A_PR) + σ²(A_QQ + 2A_QR + A_RR) nearest the last σ.
-    fn attempt_with_flow(
-        &mut self,
-        u: &Update,
-        t: f64,
-        t_new: f64,
-    ) -> Result<Result<(f64, f64), Rejection>, DeviceFailure> {
-        let sigma = match self.area.method {
-            AreaMethod::None => 0.0,
-            AreaMethod::Lagrangian | AreaMethod::Fixed => self.sigma,
-            AreaMethod::Projection => {
-                let [app, apq, aqq, apr, aqr, arr] = self.passes.couple_sums(u)?.area;
-                let root = nearest_root(
-                    aqq + 2.0 * aqr + arr,
-                    apq + apr,
-                    app - self.area.target,
-                    self.sigma,
-                );
-                let Some(sigma) = root else {
-                    return Ok(Err(Rejection::NoRealRoot));
-                };
-                sigma
-            }
-        };
-        let sigma_after = control::sigma_after(&self.area, self.sigma, self.current().area, sigma);
-        if let Err(r) = self.write_and_finish(u, (sigma, sigma), t_new, sigma_after)? {
-            return Ok(Err(r));
-        }
-        Ok(self
-            .check_constraints((sigma, 0.0), t, t_new)
-            .map(|()| (sigma_after, 0.0)))
     }
 
     /// Volume (and area under projection) held; F_eff (at the σ of the update) must not rise
