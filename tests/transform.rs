@@ -283,6 +283,7 @@ fn mirror_transform_equals_unfolded_periodic_transform() {
                 shape,
                 kinds: *kinds,
                 h: 1.0,
+                walls: [false; 3],
             };
             let reduced = random_field(shape, 17);
             let full = grid.unfold(&reduced);

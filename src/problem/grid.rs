@@ -11,6 +11,11 @@
 //! ghost values are `φ_{−1} = φ_0` and `φ_m = φ_{m−1}` (Neumann walls), and the matching spectral
 //! transform is the DCT-II. Reduced-box sums are multiplied by `2^(mirrored axes)` to report the
 //! full-box integrals.
+//!
+//! A wall axis is transformed like a mirrored axis (the same DCT-II and Neumann ghosts), but its
+//! walls bound the domain: they lie half-way outside the box's first and last points, the box is
+//! not halved, its sums are not doubled and its fields are not unfolded. The even extension
+//! beyond a wall is only the image that makes the wall a Neumann (free-slip) boundary.
 
 use ndarray::Array3;
 use std::borrow::Cow;
@@ -29,6 +34,8 @@ pub struct Grid {
     pub kinds: [AxisKind; 3],
     /// Grid spacing.
     pub h: f64,
+    /// Internal axes bounded by walls (their kind is `Mirror`; see the module documentation).
+    pub walls: [bool; 3],
 }
 
 impl Grid {
@@ -57,7 +64,34 @@ impl Grid {
             shape,
             kinds,
             h,
+            walls: [false; 3],
         }
+    }
+
+    /// This grid with walls on the scene axes flagged in `walls` (not mirrored ones): each such
+    /// axis keeps its points and becomes a `Mirror` axis of the transforms.
+    ///
+    /// # Panics
+    /// If `walls` has not one flag per scene axis or flags a mirrored axis (validated earlier).
+    pub fn with_walls(mut self, walls: &[bool]) -> Self {
+        assert_eq!(walls.len(), self.dim);
+        let offset = 3 - self.dim;
+        for (s, _) in walls.iter().enumerate().filter(|(_, &w)| w) {
+            let a = s + offset;
+            assert_eq!(
+                self.kinds[a],
+                AxisKind::Periodic,
+                "a wall axis is not mirrored"
+            );
+            self.kinds[a] = AxisKind::Mirror;
+            self.walls[a] = true;
+        }
+        self
+    }
+
+    /// Whether internal axis `a` is a mirror reduction (a `Mirror` axis that is not a wall).
+    pub fn mirrored(&self, a: usize) -> bool {
+        self.kinds[a] == AxisKind::Mirror && !self.walls[a]
     }
 
     /// Number of computed points.
@@ -75,13 +109,10 @@ impl Grid {
         self.h.powi(self.dim as i32)
     }
 
-    /// Factor from reduced-box sums to full-box integrals: `2^(number of mirrored axes)`.
+    /// Factor from reduced-box sums to full-box integrals: `2^(number of mirrored axes)` (walls
+    /// not counted).
     pub fn mirror_factor(&self) -> f64 {
-        let m = self
-            .kinds
-            .iter()
-            .filter(|k| **k == AxisKind::Mirror)
-            .count();
+        let m = (0..3).filter(|&a| self.mirrored(a)).count();
         (1u32 << m) as f64
     }
 
@@ -93,8 +124,8 @@ impl Grid {
     /// Points of the full (unreduced) box along each internal axis.
     pub fn full_shape(&self) -> [usize; 3] {
         let mut s = self.shape;
-        for (len, kind) in s.iter_mut().zip(self.kinds) {
-            if kind == AxisKind::Mirror {
+        for (a, len) in s.iter_mut().enumerate() {
+            if self.mirrored(a) {
                 *len *= 2;
             }
         }
@@ -151,7 +182,7 @@ impl Grid {
     /// one new array: full-box index i of a mirrored axis of computed length n reads computed
     /// index n − 1 − i below the mirror plane (i < n) and i − n above it.
     pub fn unfold<'a>(&self, field: &'a Array3<f64>) -> Cow<'a, Array3<f64>> {
-        if !self.kinds.contains(&AxisKind::Mirror) {
+        if !(0..3).any(|a| self.mirrored(a)) {
             return Cow::Borrowed(field);
         }
         let full = self.full_shape();
@@ -159,10 +190,10 @@ impl Grid {
         let [s0, s1, s2]: [Vec<usize>; 3] = std::array::from_fn(|a| {
             let n = self.shape[a];
             (0..full[a])
-                .map(|i| match self.kinds[a] {
-                    AxisKind::Mirror if i < n => n - 1 - i,
-                    AxisKind::Mirror => i - n,
-                    AxisKind::Periodic => i,
+                .map(|i| match self.mirrored(a) {
+                    true if i < n => n - 1 - i,
+                    true => i - n,
+                    false => i,
                 })
                 .collect()
         });

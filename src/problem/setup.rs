@@ -41,7 +41,7 @@ pub fn build(scene: &Scene) -> Result<Problem> {
     check_fits(&full_grid, &full_phi, runs_through(scene))?;
     let full_c0 = C0::new(&scene.c0, &full_grid, scene.eps)?;
     let mirror = mirror_axes(scene, &full_grid, &full_phi, &full_c0)?;
-    let grid = Grid::new(&scene.n, scene.h, &mirror);
+    let grid = Grid::new(&scene.n, scene.h, &mirror).with_walls(&scene.wall_flags());
     let phi = grid.restrict(&full_phi);
     let c0 = C0::new(&scene.c0, &grid, scene.eps)?;
     Ok(Problem {
@@ -68,7 +68,7 @@ pub fn frame(scene: &Scene) -> Result<Problem> {
     let mirror: Vec<bool> = (0..scene.dim)
         .map(|a| axes.iter().any(|n| axis_index(n, scene.dim) == Some(a)))
         .collect();
-    let grid = Grid::new(&scene.n, scene.h, &mirror);
+    let grid = Grid::new(&scene.n, scene.h, &mirror).with_walls(&scene.wall_flags());
     let c0 = C0::new(&scene.c0, &grid, scene.eps)?;
     Ok(Problem {
         phi: grid.zeros(),
@@ -176,14 +176,15 @@ fn mirror_axes(scene: &Scene, grid: &Grid, phi: &Array3<f64>, c0: &C0) -> Result
     let internal = |scene_axis: usize| scene_axis + 3 - scene.dim;
     let mut mirror = vec![false; scene.dim];
     match &scene.symmetry {
-        // The flow is solved on the periodic box (mirrors would need sine transforms).
-        Symmetry::Auto(_) if scene.stokes_flow().is_some() => {}
-        // The flow is solved on the periodic box (mirrors would need sine transforms).
-        Symmetry::Auto(_) if scene.stokes_flow().is_some() => {}
         Symmetry::Auto(_) => {
+            let walls = scene.wall_flags();
+            // An imposed shear along x varying along y is even about neither plane.
+            let sheared = scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some());
             for (s, m) in mirror.iter_mut().enumerate() {
                 let a = internal(s);
-                *m = grid.shape[a].is_multiple_of(2)
+                *m = !walls[s]
+                    && !(sheared && s < 2)
+                    && grid.shape[a].is_multiple_of(2)
                     && asymmetry(phi, a) <= SYMMETRY_TOL
                     && c0_asymmetry(c0, a) <= SYMMETRY_TOL;
             }

@@ -48,6 +48,9 @@ pub fn supports(scene: &Scene) -> Result<(), Unsupported> {
     if !matches!(&scene.symmetry, Symmetry::Axes(a) if a.is_empty()) {
         return refuse("symmetry", "the GPU engine has no mirror-reduced boxes");
     }
+    if !scene.walls.is_empty() {
+        return refuse("walls", "the GPU engine has the periodic box only");
+    }
     if scene.n.iter().any(|m| m % 2 != 0) {
         return refuse("n", "the GPU engine needs even lengths");
     }

@@ -232,7 +232,7 @@ impl Evaluator {
 
     /// The evaluator with the Stokes flow `spec` in the explicit term ([`super::flow`]).
     pub fn with_flow(mut self, spec: FlowSpec) -> Self {
-        self.flow = Some(Flow::new(spec, &self.transform, self.grid.h));
+        self.flow = Some(Flow::new(spec, &self.transform, &self.grid));
         self
     }
 

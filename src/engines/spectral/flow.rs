@@ -16,9 +16,28 @@
 //! advection of u_b in the explicit term and that of u_σ apart (T̂), so that the step can
 //! advect with the σ it solves for, and the area projection sees the flow's response to σ.
 //!
-//! With `flow.shear_rate` γ̇ the fluid also carries the imposed shear u_x = (γ̇/k₀) sin(k₀y)
-//! (k₀ = 2π/L_y), the exact Stokes flow of a periodic (Kolmogorov) body force: added to u_b
-//! before the advection, it does work on the membrane, so the energy law then has a source.
+//! With `flow.shear_rate` γ̇ the fluid also carries an imposed shear, added to u_b before the
+//! advection (it does work on the membrane, so the energy law then has a source): between walls
+//! across y, plane Couette flow u_x = γ̇y (y from the channel's centre line); on a periodic y
+//! axis, u_x = (γ̇/k₀) sin(k₀y) (k₀ = 2π/L_y), the exact Stokes flow of a periodic (Kolmogorov)
+//! body force.
+//!
+//! **Mirror and wall axes** (DCT axes of the transform). On such an axis a even field is a
+//! cosine series; the velocity component and the force component normal to the plane, and ∂φ
+//! along it, are odd: sine series, S_j = Σ_i g_i sin(q_j(i + ½)h), g_i = (2/m) Σ_j S_j
+//! sin(q_j(i + ½)h), q_j = πj/(mh), j = 1..m. Since
+//! sin(q_j(i + ½)h) = (−1)^i cos(q_{m−j}(i + ½)h), the DCT of (−1)^i g holds S_j at index
+//! m − j: an odd component is kept *twisted* — its spectrum at the reversed index, its grid
+//! values times (−1)^i — and every grid product the flow forms is of two twisted factors of the
+//! same component (u_a ∂_aφ, |u_a|²) or of a twisted and an even one whose result is again
+//! twisted (μ ∂_aφ), so the signs never have to be applied. In the projection an odd
+//! coefficient S enters as the periodic picture's −iS (∂_a of the cosine X is the sine −q_jX,
+//! the periodic derivative iκX), so the same formulas hold with that factor. The top sine mode
+//! j = m (stored at index 0) is the unfolded box's Nyquist mode: κ = 0 there, as on a periodic
+//! axis, so it is not projected, û = Ŝ/(η|k|²) with |k|² holding (π/h)² along the axis, and the
+//! reduced box reproduces the unfolded periodic one to round-off. A wall is then
+//! free-slip for the disturbance flow (u normal = 0, ∂u_tangential/∂n = 0), and a mirror plane
+//! through the vesicle keeps the flow's symmetry.
 //!
 //! Cost: 5d + 4 transforms per evaluation (μ_b, μ_σ and the d components of ∇φ back, both
 //! forces forward, both velocities back, both advections forward).
@@ -27,6 +46,7 @@ use super::evaluator::Symbols;
 use super::transform::Transform;
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::problem::config::FlowSpec;
+use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::TENSION_FACTOR;
 use ndarray::{Array3, Axis, Zip};
 use num_complex::Complex64;
@@ -48,8 +68,13 @@ pub struct Flow {
     mobility: f64,
     /// The axes of the box longer than 1 (the velocity's components).
     axes: Vec<usize>,
-    /// κ per axis, over the spectral indices (Nyquist 0).
+    /// Per component: the length of its axis when that axis is a mirror or wall axis (the
+    /// component is odd there and kept twisted, see the module documentation), else `None`.
+    odd: Vec<Option<usize>>,
+    /// κ per axis, over the spectral indices (periodic Nyquist 0).
     kappa: [Vec<f64>; 3],
+    /// |k|² of a mirror axis's top sine mode, (π/h)².
+    top_k2: f64,
     /// The spectral shape.
     shape: [usize; 3],
     /// μ̂, then iκ_aφ̂, then κ·f̂/|κ|², then FT[u·∇φ].
@@ -69,25 +94,27 @@ pub struct Flow {
 }
 
 impl Flow {
-    /// The flow `spec` on the box of `transform` with spacing `h`, whose real fields have the
-    /// shape of `zeros`.
+    /// The flow `spec` on `grid`, transformed by `transform`.
     ///
     /// # Panics
-    /// If the box has a mirror axis (the flow is solved on the periodic box only).
-    pub fn new(spec: FlowSpec, transform: &Transform, h: f64) -> Self {
+    /// If every axis longer than 1 is a mirror or wall axis (a packed spectrum; refused when the
+    /// scene is validated).
+    pub fn new(spec: FlowSpec, transform: &Transform, grid: &Grid) -> Self {
         assert!(
             !transform.packed() && transform.index_shape() == transform.spectral_shape(),
-            "the flow is solved on the periodic box"
+            "the flow needs one periodic axis"
         );
+        let h = grid.h;
         let real = transform.shape();
         let shape = transform.spectral_shape();
         let ks = transform.wavenumbers(h);
+        let periodic = |a: usize| grid.kinds[a] == AxisKind::Periodic;
         let kappa = std::array::from_fn(|a| {
             ks[a]
                 .iter()
                 .enumerate()
                 .map(|(j, &k)| {
-                    let nyquist = real[a].is_multiple_of(2) && j == real[a] / 2;
+                    let nyquist = periodic(a) && real[a].is_multiple_of(2) && j == real[a] / 2;
                     if nyquist {
                         0.0
                     } else {
@@ -97,19 +124,29 @@ impl Flow {
                 .collect()
         });
         let axes: Vec<usize> = (0..3).filter(|&a| real[a] > 1).collect();
+        let odd = axes
+            .iter()
+            .map(|&a| (!periodic(a)).then_some(real[a]))
+            .collect();
         let zeros = || Array3::<f64>::zeros(real);
-        // u_x(y) = (γ̇/k₀) sin(k₀y), y from the box centre along the second axis.
+        // u_x(y), y from the box centre along the second axis: γ̇y between walls, else
+        // (γ̇/k₀) sin(k₀y).
         let shear = spec.shear_rate.map(|rate| {
-            let n = real[axes[1]];
+            let (y, n) = (axes[1], real[axes[1]]);
             let k0 = 2.0 * std::f64::consts::PI / (n as f64 * h);
-            (0..n)
-                .map(|j| rate / k0 * (k0 * (j as f64 + 0.5 - n as f64 / 2.0) * h).sin())
-                .collect()
+            let coords = (0..n).map(|j| (j as f64 + 0.5 - n as f64 / 2.0) * h);
+            if grid.walls[y] {
+                coords.map(|y| rate * y).collect()
+            } else {
+                coords.map(|y| rate / k0 * (k0 * y).sin()).collect()
+            }
         });
         Flow {
             viscosity: spec.viscosity,
             mobility: spec.mobility,
+            odd,
             kappa,
+            top_k2: (std::f64::consts::PI / h).powi(2),
             shape,
             spectrum: Array3::zeros(shape),
             components: [0, 1].map(|_| axes.iter().map(|_| Array3::zeros(shape)).collect()),
@@ -157,10 +194,17 @@ impl Flow {
             0.0
         });
         transform.inverse(&mut self.spectrum, &mut self.mu[1]);
+        let shape = self.shape;
         for (c, &a) in self.axes.iter().enumerate() {
-            let kappa = &self.kappa[a];
-            modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
-                *out = hat[i] * Complex64::new(0.0, kappa[idx[a]]);
+            let (kappa, odd) = (&self.kappa[a], self.odd[c]);
+            // iκ_aX, or on a mirror axis the sine coefficient −q_jX stored twisted.
+            modes_mut(&mut self.spectrum, shape, sym, |i, idx, _, out| {
+                *out = match odd {
+                    None => hat[i] * Complex64::new(0.0, kappa[idx[a]]),
+                    Some(n) => twisted(idx, a, n).map_or_else(Complex64::default, |l| {
+                        -hat[flat_of(l, shape)] * kappa[l[a]]
+                    }),
+                };
                 0.0
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
@@ -221,16 +265,17 @@ impl Flow {
     }
 
     /// The Oseen projection in place on the force's spectra of `part` (0: σ = 0, 1: per unit
-    /// σ): s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a.
+    /// σ): s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a; an odd
+    /// component's coefficient S enters as −iS, so it becomes (S − iκ_a s)/(η|k|²).
     fn project(&mut self, sym: &Symbols, part: usize) {
-        let (axes, kappa) = (&self.axes, &self.kappa);
+        let (axes, kappa, odd, shape) = (&self.axes, &self.kappa, &self.odd, self.shape);
         let components = slices(&self.components[part]);
-        modes_mut(&mut self.spectrum, self.shape, sym, |i, idx, _, out| {
+        modes_mut(&mut self.spectrum, shape, sym, |i, idx, _, out| {
             let mut dot = Complex64::default();
             let mut norm = 0.0;
             for (c, &a) in axes.iter().enumerate() {
                 let k = kappa[a][idx[a]];
-                dot += components[c][i] * k;
+                dot += periodic_picture(components[c], i, idx, (a, odd[c]), shape) * k;
                 norm += k * k;
             }
             *out = if norm > 0.0 {
@@ -240,18 +285,24 @@ impl Flow {
             };
             0.0
         });
-        let eta = self.viscosity;
+        let (eta, top_k2) = (self.viscosity, self.top_k2);
         for (c, &a) in self.axes.iter().enumerate() {
-            let (kappa, s) = (&self.kappa[a], flat(&self.spectrum));
+            let (kappa, s, odd) = (&self.kappa[a], flat(&self.spectrum), self.odd[c]);
             modes_mut(
                 &mut self.components[part][c],
-                self.shape,
+                shape,
                 sym,
                 |i, idx, (k2, _), u| {
-                    *u = if k2 > 0.0 {
-                        (*u - s[i] * kappa[idx[a]]) / (eta * k2)
-                    } else {
-                        Complex64::default()
+                    *u = match odd {
+                        None if k2 > 0.0 => (*u - s[i] * kappa[idx[a]]) / (eta * k2),
+                        None => Complex64::default(),
+                        // The top sine mode (κ_a = 0, no other component there).
+                        Some(_) if idx[a] == 0 => *u / (eta * (k2 + top_k2)),
+                        Some(n) => twisted(idx, a, n).map_or_else(Complex64::default, |l| {
+                            let (k2, _) = mode_symbols(sym, l);
+                            let s = s[flat_of(l, shape)] * kappa[l[a]];
+                            (*u - Complex64::new(-s.im, s.re)) / (eta * k2)
+                        }),
                     };
                     0.0
                 },
@@ -262,16 +313,29 @@ impl Flow {
     /// η Σ_k w |k|² |û_b + σû_σ|² over the components: the power the fluid dissipates at σ.
     fn dissipation(&self, sym: &Symbols, sigma: f64) -> f64 {
         let [base, per_sigma] = &self.components;
-        let (base, per_sigma, d) = (slices(base), slices(per_sigma), self.axes.len());
+        let (base, per_sigma, shape) = (slices(base), slices(per_sigma), self.shape);
         let partials = (0..self.spectrum.len().div_ceil(PAR_CHUNK))
             .into_par_iter()
             .map(|t| {
                 let modes = t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(self.spectrum.len());
                 modes
                     .map(|i| {
-                        let (k2, w) = mode_symbols(sym, index_of(i, self.shape));
-                        let u = (0..d).map(|c| (base[c][i] + per_sigma[c][i] * sigma).norm_sqr());
-                        w * k2 * u.sum::<f64>()
+                        let idx = index_of(i, shape);
+                        let (k2, w) = mode_symbols(sym, idx);
+                        let u = self.axes.iter().enumerate().map(|(c, &a)| {
+                            let at = (a, self.odd[c]);
+                            let b = periodic_picture(base[c], i, idx, at, shape);
+                            let s = periodic_picture(per_sigma[c], i, idx, at, shape);
+                            // The top sine mode, stored where this mode's j_a = 0.
+                            let top = if at.1.is_some() && idx[a] == 0 {
+                                let u = base[c][i] + per_sigma[c][i] * sigma;
+                                (k2 + self.top_k2) * u.norm_sqr()
+                            } else {
+                                0.0
+                            };
+                            k2 * (b + s * sigma).norm_sqr() + top
+                        });
+                        w * u.sum::<f64>()
                     })
                     .sum::<f64>()
             });
@@ -311,6 +375,43 @@ fn index_of(i: usize, [_, s1, s2]: [usize; 3]) -> [usize; 3] {
     [i / (s1 * s2), (i / s2) % s1, i % s2]
 }
 
+/// The flat position of index `idx` in a spectrum of shape `shape`.
+#[inline]
+fn flat_of([j0, j1, j2]: [usize; 3], [_, s1, s2]: [usize; 3]) -> usize {
+    (j0 * s1 + j1) * s2 + j2
+}
+
+/// The partner of index `idx` under the twist of an odd component on mirror axis `a` of `n`
+/// points (j ↔ n − j; `None` for j = 0, which holds no sine mode). The map is its own
+/// inverse: it takes a logical mode to its storage and a storage index to its mode.
+#[inline]
+fn twisted(mut idx: [usize; 3], a: usize, n: usize) -> Option<[usize; 3]> {
+    (idx[a] > 0).then(|| {
+        idx[a] = n - idx[a];
+        idx
+    })
+}
+
+/// Component `values`' coefficient at the logical mode `i` (index `idx`) in the periodic
+/// picture: the stored value on a periodic axis, −iS from the twisted storage on mirror axis
+/// `a` of `n` points (`odd = Some(n)`; 0 at j = 0).
+#[inline]
+fn periodic_picture(
+    values: &[Complex64],
+    i: usize,
+    idx: [usize; 3],
+    (a, odd): (usize, Option<usize>),
+    shape: [usize; 3],
+) -> Complex64 {
+    match odd {
+        None => values[i],
+        Some(n) => twisted(idx, a, n).map_or_else(Complex64::default, |l| {
+            let v = values[flat_of(l, shape)];
+            Complex64::new(v.im, -v.re)
+        }),
+    }
+}
+
 /// |k|² and the Parseval weight w of the mode at `idx`.
 #[inline]
 fn mode_symbols(sym: &Symbols, [i0, i1, i2]: [usize; 3]) -> (f64, f64) {
@@ -340,8 +441,9 @@ mod tests {
     use crate::problem::grid::Grid;
     use crate::problem::model::{SpontaneousCurvature, C0};
 
-    /// The semi-discrete energy law term by term (module documentation), on a 2D and a 3D
-    /// field with odd and even lengths, at σ = 0.3: with FT[u·∇φ] = M N̂_conserved − N̂_flow +
+    /// The semi-discrete energy law term by term (module documentation), on 2D and 3D fields
+    /// with odd and even lengths, periodic, mirrored (a velocity component twisted, with its top
+    /// sine mode) and walled, at σ = 0.3: with FT[u·∇φ] = M N̂_conserved − N̂_flow +
     /// σT̂ (the same state evaluated without and with the flow; N̂_flow holds the advection at
     /// σ = 0, T̂ the advection per unit σ) and μ̂ = −N̂_conserved/|k|² +
     /// 2ε⁴|k|⁴φ̂ + c_σσ|k|²φ̂, Σ_x μ u·∇φ = Σ_k w Re(μ̂ FT[u·∇φ]*) equals the reported
@@ -357,8 +459,15 @@ mod tests {
                 shear_rate: None,
             },
         );
-        for n in [&[24, 19][..], &[12, 11, 10]] {
-            let grid = Grid::new(n, 0.8, &vec![false; n.len()]);
+        let boxes: [(&[usize], &[bool], &[bool]); 5] = [
+            (&[24, 19], &[false, false], &[false, false]),
+            (&[12, 11, 10], &[false; 3], &[false; 3]),
+            (&[24, 20], &[false, true], &[false, false]),
+            (&[12, 11, 10], &[false; 3], &[true, false, false]),
+            (&[12, 10, 10], &[false, true, false], &[false, false, true]),
+        ];
+        for (n, mirror, walls) in boxes {
+            let grid = Grid::new(n, 0.8, mirror).with_walls(walls);
             let phi = Array3::from_shape_fn(grid.shape, |(i, j, k)| {
                 let (x, y, z) = (i as f64 - 5.5, j as f64 - 10.0, k as f64 - 9.0);
                 (2.2 - (0.04 * x * x + 0.03 * y * y + 0.05 * z * z + 0.01 * x * y).sqrt()).tanh()
@@ -409,7 +518,7 @@ mod tests {
             assert!(d > 0.0);
             assert!(
                 (power - d).abs() <= 1e-10 * d,
-                "{n:?}: Σ μ u·∇φ = {power:e}, dissipation {d:e}"
+                "{n:?} {mirror:?} {walls:?}: Σ μ u·∇φ = {power:e}, dissipation {d:e}"
             );
         }
     }

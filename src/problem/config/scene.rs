@@ -76,6 +76,11 @@ pub struct Scene {
     /// Mirror planes through the box centre: e.g. `["x","y","z"]`, `[]`, or `"auto"`.
     #[serde(default)]
     pub symmetry: Symmetry,
+    /// Walls across the named axes (e.g. `["y"]`), half a cell outside the box's first and last
+    /// points: Neumann for φ, free-slip for the fluid; the imposed shear between them is plane
+    /// Couette flow (docs/src/theory/flow.md).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub walls: Vec<String>,
     /// Allow a Δt beyond the method's stability bound (stability studies).
     #[serde(default)]
     pub allow_unstable: bool,
@@ -494,6 +499,17 @@ impl Scene {
     /// α of the Lagrangian area update (default 1e-3).
     pub fn alpha(&self) -> f64 {
         self.area.alpha.unwrap_or(1e-3)
+    }
+
+    /// Whether each scene axis is bounded by walls.
+    pub fn wall_flags(&self) -> Vec<bool> {
+        (0..self.dim)
+            .map(|a| {
+                self.walls
+                    .iter()
+                    .any(|n| axis_index(n, self.dim) == Some(a))
+            })
+            .collect()
     }
 
     /// The flow of the Stokes dynamics, if the scene runs it.

@@ -64,6 +64,7 @@ impl Scene {
         self.validate_c0()?;
         self.validate_area_difference()?;
         self.validate_symmetry()?;
+        self.validate_walls()?;
         self.validate_flow()?;
         if let Initial::Shape(s) = &self.initial {
             validate_shape(s, "initial", self.dim)?;
@@ -276,14 +277,29 @@ impl Scene {
                 "stokes dynamics takes the spectral Laplacian (the flow's derivatives are spectral)",
             ));
         }
-        if let Symmetry::Axes(axes) = &self.symmetry {
-            if !axes.is_empty() {
+        if let (Some(_), Symmetry::Axes(axes)) = (flow.shear_rate, &self.symmetry) {
+            if let Some(a) = axes.iter().find(|a| matches!(a.as_str(), "x" | "y")) {
                 return Err(Error::config(
                     "symmetry",
-                    "stokes dynamics runs on the periodic box: a mirror plane would need sine \
-                     transforms for the velocity normal to it; drop the mirror axes",
+                    format!(
+                        "the imposed shear (u_x varying along y) is not even about the plane \
+                         {a} = 0; drop {a:?} (walls across y bound a Couette flow: \"walls\": [\"y\"])"
+                    ),
                 ));
             }
+        }
+        if self.walls.iter().any(|w| w == "x") && flow.shear_rate.is_some() {
+            return Err(Error::config(
+                "walls",
+                "the imposed shear flows along x: walls across x would stop it; put the walls \
+                 across y",
+            ));
+        }
+        if (0..self.dim).all(|a| self.mirrored_or_walled(a)) {
+            return Err(Error::config(
+                "symmetry",
+                "stokes dynamics needs one periodic axis (every axis is mirrored or walled)",
+            ));
         }
         if self.ade.is_some() || self.bilayer_couple.is_some() {
             return Err(Error::config(
@@ -417,6 +433,45 @@ impl Scene {
             }
             C0Field::File(_) => Ok(()),
         }
+    }
+
+    /// Whether scene axis `a` is a declared mirror axis or bounded by walls.
+    fn mirrored_or_walled(&self, a: usize) -> bool {
+        let mirrored = match &self.symmetry {
+            Symmetry::Axes(axes) => axes.iter().any(|n| axis_index(n, self.dim) == Some(a)),
+            Symmetry::Auto(_) => false,
+        };
+        mirrored || self.wall_flags()[a]
+    }
+
+    /// `walls`: known axes, each once, none of them also a mirror axis.
+    fn validate_walls(&self) -> Result<()> {
+        let mut seen = Vec::new();
+        for a in &self.walls {
+            let i = axis_index(a, self.dim).ok_or_else(|| {
+                Error::config(
+                    "walls",
+                    format!(
+                        "unknown axis {a:?} for dim {} (use x, y{})",
+                        self.dim,
+                        if self.dim == 3 { ", z" } else { "" }
+                    ),
+                )
+            })?;
+            if seen.contains(&i) {
+                return Err(Error::config("walls", format!("axis {a:?} given twice")));
+            }
+            seen.push(i);
+            if let Symmetry::Axes(axes) = &self.symmetry {
+                if axes.contains(a) {
+                    return Err(Error::config(
+                        "walls",
+                        format!("axis {a:?} has walls and a mirror plane; give one or the other"),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     fn validate_symmetry(&self) -> Result<()> {
