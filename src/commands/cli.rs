@@ -291,6 +291,13 @@ enum Study {
         after_help = "Example:\n  vesicle study rates runs/studies/rates.json --out runs/results/rates [--quick]"
     )]
     Rates(StudyArgs),
+    /// 2D vesicles tank-treading in a steady shear (Couette flow between walls or Kolmogorov
+    /// flow) with their area held: the inclination, deformation and tank-treading rate against
+    /// the reduced area, the departure from the linear theory extrapolated in ε/R0.
+    #[command(
+        after_help = "Example:\n  vesicle study shear runs/studies/shear.json --out runs/results/shear [--quick]"
+    )]
+    Shear(StudyArgs),
     /// Non-axisymmetric ADE shapes (triaxial, starfish): a seeded scene relaxed by L-BFGS per
     /// h/ε and Δa0, its w, Δa, e and semi-axes against the axisymmetric starts relaxed in the
     /// same box (interpolated to its v) and the sharp axisymmetric branches at its v.
@@ -459,6 +466,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Rates(args)) => {
             args.run(crate::commands::study::rates::RatesStudy::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Shear(args)) => {
+            args.run(crate::commands::study::shear::ShearStudy::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Nonaxisymmetric(args)) => {

@@ -406,11 +406,16 @@ pub fn describe(scene: &Scene, problem: &Problem, engine: &str) -> String {
     let g = &problem.grid;
     let bound = stability_bound(scene, g);
     let mut s = format!(
-        "vesicle {engine}: dim {} n {:?} (computed {:?}, mirror {:?}) h {} eps {}\n",
+        "vesicle {engine}: dim {} n {:?} (computed {:?}, mirror {:?}{}) h {} eps {}\n",
         scene.dim,
         scene.n,
         &g.shape[3 - scene.dim..],
         problem.mirror,
+        if scene.walls.is_empty() {
+            String::new()
+        } else {
+            format!(", walls across {}", scene.walls.join(", "))
+        },
         scene.h,
         scene.eps
     );

@@ -15,6 +15,7 @@ use crate::commands::study::pinning::PinningStudy;
 use crate::commands::study::precision::Precision;
 use crate::commands::study::rates::RatesStudy;
 use crate::commands::study::resolution::ResolutionStudy;
+use crate::commands::study::shear::ShearStudy;
 use crate::commands::study::stability::{AdeStability, Stability};
 use crate::commands::study::stationary::{self, Stationary};
 use crate::error::{Error, Result};
@@ -94,6 +95,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
         AdeStability::NAME => run_file::<AdeStability>(args),
         RatesStudy::NAME => run_file::<RatesStudy>(args),
+        ShearStudy::NAME => run_file::<ShearStudy>(args),
         Nonaxisymmetric::NAME => run_file::<Nonaxisymmetric>(args),
         "stationary" => run_stationary(args),
         _ => Err(Error::config(
@@ -185,6 +187,7 @@ mod tests {
             "resolution",
             "ade",
             "rates",
+            "shear",
             "nonaxisymmetric",
         ] {
             assert!(

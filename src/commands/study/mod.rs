@@ -30,6 +30,7 @@ pub mod precision;
 pub mod rates;
 pub mod resolution;
 pub mod shape_case;
+pub mod shear;
 pub mod stability;
 pub mod stationary;
 pub mod table;

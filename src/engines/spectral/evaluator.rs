@@ -269,6 +269,23 @@ impl Evaluator {
         Ok(s)
     }
 
+    /// The Stokes velocity of the real field `phi` at multiplier `sigma` ([`Flow::velocity`]):
+    /// one field per component along the box's axes longer than 1; `None` without a flow.
+    ///
+    /// # Errors
+    /// [`Diverged`] if `phi` is not finite.
+    pub fn velocity_at(
+        &mut self,
+        phi: &Array3<f64>,
+        sigma: f64,
+    ) -> Result<Option<Vec<Array3<f64>>>, Diverged> {
+        self.state_at(phi, 0.0, sigma)?;
+        Ok(self
+            .flow
+            .as_mut()
+            .map(|f| f.velocity(&mut self.transform, sigma)))
+    }
+
     /// A state of the right shapes, all zeros.
     pub fn blank(&self) -> State {
         State {

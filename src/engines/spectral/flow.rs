@@ -264,6 +264,35 @@ impl Flow {
         }
     }
 
+    /// The velocity u = u_b + σu_σ of the last [`Flow::advect`] on the grid, the imposed shear
+    /// included: one field per component, along the box's axes longer than 1 (x, y[, z] of
+    /// the scene), with an odd component's twist undone (its grid values times (−1)^i).
+    pub fn velocity(&mut self, transform: &mut Transform, sigma: f64) -> Vec<Array3<f64>> {
+        let mut out = Vec::with_capacity(self.axes.len());
+        for (c, &a) in self.axes.iter().enumerate() {
+            Zip::from(&mut self.spectrum)
+                .and(&self.components[0][c])
+                .and(&self.components[1][c])
+                .par_for_each(|u, &b, &s| *u = b + s * sigma);
+            let mut field = Array3::zeros(transform.shape());
+            transform.inverse(&mut self.spectrum, &mut field);
+            if self.odd[c].is_some() {
+                for (i, mut plane) in field.axis_iter_mut(Axis(a)).enumerate() {
+                    if i % 2 == 1 {
+                        plane.mapv_inplace(|v| -v);
+                    }
+                }
+            }
+            if let (0, Some(profile)) = (c, &self.shear) {
+                for (j, mut plane) in field.axis_iter_mut(Axis(self.axes[1])).enumerate() {
+                    plane += profile[j];
+                }
+            }
+            out.push(field);
+        }
+        out
+    }
+
     /// The Oseen projection in place on the force's spectra of `part` (0: σ = 0, 1: per unit
     /// σ): s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a; an odd
     /// component's coefficient S enters as −iS, so it becomes (S − iκ_a s)/(η|k|²).
@@ -440,6 +469,50 @@ mod tests {
     use crate::problem::config::Laplacian;
     use crate::problem::grid::Grid;
     use crate::problem::model::{SpontaneousCurvature, C0};
+
+    /// With no membrane (φ ≡ −1: μ = 0, no force) the velocity is the imposed shear alone, at
+    /// every point to 1e-14: γ̇y between walls across y, (γ̇/k₀) sin(k₀y) on the periodic box
+    /// (y from the box's centre), and u_y = 0.
+    #[test]
+    fn an_empty_box_carries_the_imposed_shear() {
+        let rate = 0.01;
+        for walls in [false, true] {
+            let grid = Grid::new(&[12, 16], 0.5, &[false, false]).with_walls(&[false, walls]);
+            let mut ev = Evaluator::new(
+                grid.clone(),
+                1.0,
+                C0 {
+                    shape: SpontaneousCurvature::Zero,
+                    ramp_time: None,
+                },
+                Laplacian::Spectral,
+                ExplicitTerm::ConservedRhs,
+                1,
+            )
+            .with_flow(FlowSpec {
+                viscosity: 1.0,
+                mobility: 0.01,
+                shear_rate: Some(rate),
+            });
+            let u = ev
+                .velocity_at(&Array3::from_elem(grid.shape, -1.0), 0.0)
+                .expect("finite")
+                .expect("a flow");
+            let k0 = 2.0 * std::f64::consts::PI / 8.0;
+            for (((_, _, j), &ux), &uy) in u[0].indexed_iter().zip(u[1].iter()) {
+                let y = grid.coords(2)[j];
+                let expected = if walls {
+                    rate * y
+                } else {
+                    rate / k0 * (k0 * y).sin()
+                };
+                assert!(
+                    (ux - expected).abs() < 1e-14 && uy.abs() < 1e-14,
+                    "walls {walls}: {ux} {uy}"
+                );
+            }
+        }
+    }
 
     /// The semi-discrete energy law term by term (module documentation), on 2D and 3D fields
     /// with odd and even lengths, periodic, mirrored (a velocity component twisted, with its top

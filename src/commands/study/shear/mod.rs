@@ -1,0 +1,366 @@
+//! `vesicle study shear FILE`: 2D vesicles tank-treading in a steady shear, their inclination,
+//! deformation and tank-treading rate against the reduced area, beside the linear theory of
+//! this model (docs/src/theory/flow.md, "Shear"; docs/src/validation/flow.md).
+//!
+//! Each case runs a vesicle with its area held in plane Couette flow between walls (or the
+//! periodic Kolmogorov flow) at one capillary number until it is steady ([`measure`]). Per
+//! reduced area the sizes' departures ψ − ψ_lin(v) from the linear theory cos 2ψ = 2b (taken
+//! at each run's own reduced area, which the phase field measures slightly differently from the
+//! start's) are extrapolated to ε/R0 = 0 by the polynomial through them.
+//!
+//! Writes `shear.txt`, `cases.csv` (every run), `angles.csv` (per reduced area), the chart
+//! `inclination` (ψ against v with the theory) and `shapes.png` (the finest size's steady shapes).
+
+pub mod measure;
+pub mod spec;
+
+use super::harness::{Report, Study};
+use super::rates::value_at_zero;
+use super::table::{self, Column, Format, Row};
+use crate::error::Result;
+use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
+use crate::output::image::slices_image;
+use measure::{linear_inclination, Case, Measured};
+pub use spec::Spec;
+use std::path::Path;
+
+impl Row for Measured {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("start_v", "start v", Format::Plain, |r: &Self| {
+                r.case.reduced_area.into()
+            }),
+            Column::both("r0", "R0", Format::Plain, |r: &Self| r.case.r0.into()).unit("eps"),
+            Column::both("capillary", "Ca", Format::Plain, |r: &Self| {
+                r.case.capillary.into()
+            }),
+            Column::both("channel", "W/R0", Format::Plain, |r: &Self| {
+                r.case.channel.into()
+            }),
+            Column::both("profile", "profile", Format::Plain, |r: &Self| {
+                r.case.profile.name().into()
+            }),
+            Column::csv("points", |r: &Self| {
+                r.points.iter().product::<usize>().into()
+            }),
+            Column::both("reduced_area", "v", Format::Fixed(4), |r: &Self| {
+                r.reduced_area.into()
+            }),
+            Column::both("inclination", "psi", Format::Fixed(2), |r: &Self| {
+                r.inclination.into()
+            })
+            .unit("deg"),
+            Column::both("linear", "psi linear", Format::Fixed(2), |r: &Self| {
+                r.linear.into()
+            })
+            .unit("deg"),
+            Column::both("drift", "drift", Format::Fixed(3), |r: &Self| {
+                r.drift.into()
+            })
+            .unit("deg"),
+            Column::both("deformation", "D", Format::Fixed(4), |r: &Self| {
+                r.deformation.into()
+            }),
+            Column::both("linear_deformation", "b", Format::Fixed(4), |r: &Self| {
+                r.linear_deformation.into()
+            }),
+            Column::both(
+                "tank_treading",
+                "omega/(rate/2)",
+                Format::Fixed(4),
+                |r: &Self| r.tank_treading.into(),
+            ),
+            Column::both("sigma_bar", "sigma_bar", Format::Fixed(2), |r: &Self| {
+                r.sigma_bar.into()
+            }),
+            Column::both("steps", "steps", Format::Plain, |r: &Self| r.steps.into()),
+            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| {
+                r.wall.into()
+            })
+            .unit("s"),
+        ]
+    }
+}
+
+/// One reduced area's sizes and their extrapolation; a row of `angles.csv`.
+#[derive(Clone, Debug)]
+pub struct Angle {
+    /// The start's reduced area.
+    pub start: f64,
+    /// The reduced area at the finest size.
+    pub reduced_area: f64,
+    /// ψ_lin at it, degrees.
+    pub linear: f64,
+    /// ψ − ψ_lin per size, coarse to fine: "−0.41 −0.32".
+    pub departures: String,
+    /// ψ − ψ_lin extrapolated to ε/R0 = 0, degrees.
+    pub extrapolated: f64,
+    /// ψ_lin + the extrapolated departure, degrees.
+    pub inclination: f64,
+    /// cos 2ψ/(2b) of that ψ: 1 where the linear theory holds.
+    pub cos_ratio: f64,
+    /// Ω/(γ̇/2) at the finest size.
+    pub tank_treading: f64,
+}
+
+impl Row for Angle {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("start_v", "start v", Format::Plain, |r: &Self| {
+                r.start.into()
+            }),
+            Column::both(
+                "reduced_area",
+                "v (finest)",
+                Format::Fixed(4),
+                |r: &Self| r.reduced_area.into(),
+            ),
+            Column::both("linear", "psi linear", Format::Fixed(2), |r: &Self| {
+                r.linear.into()
+            })
+            .unit("deg"),
+            Column::both(
+                "departures",
+                "psi - psi linear per size (coarse to fine)",
+                Format::Plain,
+                |r| r.departures.as_str().into(),
+            ),
+            Column::both(
+                "extrapolated",
+                "extrapolated",
+                Format::Fixed(2),
+                |r: &Self| r.extrapolated.into(),
+            )
+            .unit("deg"),
+            Column::both("inclination", "psi", Format::Fixed(2), |r: &Self| {
+                r.inclination.into()
+            })
+            .unit("deg"),
+            Column::both(
+                "cos_ratio",
+                "cos 2psi/(2b)",
+                Format::Fixed(3),
+                |r: &Self| r.cos_ratio.into(),
+            ),
+            Column::both(
+                "tank_treading",
+                "omega/(rate/2)",
+                Format::Fixed(4),
+                |r: &Self| r.tank_treading.into(),
+            ),
+        ]
+    }
+}
+
+/// Every case and every reduced area's extrapolation.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// Every run (the main grid's, then the variations).
+    pub cases: Vec<Measured>,
+    /// Per reduced area of the main grid.
+    pub angles: Vec<Angle>,
+}
+
+/// The study.
+pub struct ShearStudy;
+
+impl Study for ShearStudy {
+    const NAME: &'static str = "shear";
+    type Spec = Spec;
+    type Output = Output;
+
+    fn measure(spec: &Spec, _dir: &Path) -> Result<(Output, Report)> {
+        spec.validate()?;
+        let (groups, variations) = cases(spec);
+        let total = groups.iter().map(Vec::len).sum::<usize>() + variations.len();
+        let mut done = 0;
+        let mut run = |case: &Case| {
+            let m = measure::run(spec, case)?;
+            done += 1;
+            eprintln!(
+                "shear [{done}/{total}] v {:.4} R0 {} Ca {} W/R0 {} {}: psi {:.2} deg (linear {:.2}), \
+                 D {:.4}, omega/(rate/2) {:.4}, {} steps, {:.0} s",
+                m.reduced_area,
+                case.r0,
+                case.capillary,
+                case.channel,
+                case.profile.name(),
+                m.inclination,
+                m.linear,
+                m.deformation,
+                m.tank_treading,
+                m.steps,
+                m.wall
+            );
+            Ok::<_, crate::error::Error>(m)
+        };
+        let mut cases = Vec::new();
+        let mut angles = Vec::new();
+        for group in &groups {
+            let measured = group.iter().map(&mut run).collect::<Result<Vec<_>>>()?;
+            angles.push(extrapolate(&measured));
+            cases.extend(measured);
+        }
+        for case in &variations {
+            cases.push(run(case)?);
+        }
+        let mut text = String::from("== every case ==\n");
+        text.push_str(&table::text(&cases));
+        text.push_str(
+            "\n== per reduced area: the departure from the linear theory cos 2psi = 2b, b = \
+             sqrt(2(1 - v)/3), extrapolated to eps/R0 = 0 ==\n",
+        );
+        text.push_str(&table::text(&angles));
+        let mut report = Report {
+            text,
+            ..Report::default()
+        };
+        report.table("cases.csv", &cases)?;
+        report.table("angles.csv", &angles)?;
+        report.chart("inclination", chart(&cases, &angles));
+        let finest: Vec<&Measured> = groups
+            .iter()
+            .filter_map(|g| {
+                let last = g.last()?;
+                cases
+                    .iter()
+                    .find(|m| m.case.r0 == last.r0 && m.case.reduced_area == last.reduced_area)
+            })
+            .collect();
+        for m in finest {
+            let title = format!(
+                "v {:.3}, R0 {} eps, Ca {}: psi {:.1} deg",
+                m.reduced_area, m.case.r0, m.case.capillary, m.inclination
+            );
+            let name = format!("shape_v{:.2}.png", m.case.reduced_area);
+            let image = slices_image(Path::new(&name), &m.phi, 2, &title)?;
+            report.images.push((name, image));
+        }
+        Ok((Output { cases, angles }, report))
+    }
+}
+
+/// The main grid's cases grouped by reduced area (sizes coarse to fine), and the variations.
+fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
+    let mut sizes = spec.r0.clone();
+    sizes.sort_by(f64::total_cmp);
+    let case = |reduced_area, r0| Case {
+        reduced_area,
+        r0,
+        capillary: spec.capillary,
+        channel: spec.channel,
+        profile: spec.profile,
+    };
+    let groups = spec
+        .reduced_areas
+        .iter()
+        .map(|&v| sizes.iter().map(|&r| case(v, r)).collect())
+        .collect();
+    let variations = spec
+        .variations
+        .iter()
+        .map(|v| Case {
+            capillary: v.capillary.unwrap_or(spec.capillary),
+            channel: v.channel.unwrap_or(spec.channel),
+            profile: v.profile.unwrap_or(spec.profile),
+            ..case(v.reduced_area, v.r0)
+        })
+        .collect();
+    (groups, variations)
+}
+
+/// One reduced area's departures ψ − ψ_lin(v) and their extrapolation to ε/R0 = 0 through the
+/// last three sizes (the finest).
+fn extrapolate(group: &[Measured]) -> Angle {
+    let finest = group.last().expect("at least two sizes");
+    let points: Vec<(f64, f64)> = group
+        .iter()
+        .map(|m| (1.0 / m.case.r0, m.inclination - m.linear))
+        .collect();
+    let extrapolated = value_at_zero(&points[points.len().saturating_sub(3)..]);
+    let inclination = finest.linear + extrapolated;
+    Angle {
+        start: finest.case.reduced_area,
+        reduced_area: finest.reduced_area,
+        linear: finest.linear,
+        departures: points
+            .iter()
+            .map(|p| format!("{:+.2}", p.1))
+            .collect::<Vec<_>>()
+            .join(" "),
+        extrapolated,
+        inclination,
+        cos_ratio: (2.0 * inclination.to_radians()).cos()
+            / (2.0 * measure::amplitude(finest.reduced_area)),
+        tank_treading: finest.tank_treading,
+    }
+}
+
+/// ψ against v: every size of the main grid, the extrapolation, and the linear theory.
+fn chart(cases: &[Measured], angles: &[Angle]) -> Figure {
+    let mut fig = Figure::new(
+        "Inclination of a vesicle tank-treading in shear (2D, area held, equal viscosities)",
+        Axis::linear("reduced area v"),
+        Axis::linear("inclination psi (degrees)"),
+    );
+    fig.legend = Corner::LowerRight;
+    let marks = [
+        Shape::Circle,
+        Shape::Square,
+        Shape::Triangle,
+        Shape::Diamond,
+    ];
+    let mut sizes: Vec<f64> = angles
+        .iter()
+        .flat_map(|a| {
+            cases
+                .iter()
+                .filter(move |m| m.case.reduced_area == a.start)
+                .map(|m| m.case.r0)
+        })
+        .collect();
+    sizes.sort_by(f64::total_cmp);
+    sizes.dedup();
+    for (i, &r0) in sizes.iter().enumerate() {
+        let pts = angles
+            .iter()
+            .filter_map(|a| {
+                cases
+                    .iter()
+                    .find(|m| m.case.reduced_area == a.start && m.case.r0 == r0)
+            })
+            .map(|m| (m.reduced_area, m.inclination))
+            .collect();
+        fig.push(Series::new(
+            format!("R0 = {r0} eps"),
+            pts,
+            colour(i),
+            Mark::LinePoints(marks[i % marks.len()]),
+        ));
+    }
+    fig.push(Series::new(
+        "extrapolated to eps/R0 = 0",
+        angles
+            .iter()
+            .map(|a| (a.reduced_area, a.inclination))
+            .collect(),
+        [0, 0, 0],
+        Mark::LinePoints(Shape::Diamond),
+    ));
+    let lo = angles
+        .iter()
+        .map(|a| a.reduced_area)
+        .fold(1.0, f64::min)
+        .max(0.625);
+    let theory = (0..=50)
+        .map(|i| lo + (1.0 - lo) * i as f64 / 50.0)
+        .map(|v| (v, linear_inclination(v)))
+        .collect();
+    fig.push(Series::new(
+        "linear theory cos 2psi = 2b",
+        theory,
+        [0, 0, 0],
+        Mark::Dashed,
+    ));
+    fig
+}

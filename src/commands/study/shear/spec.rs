@@ -1,0 +1,174 @@
+//! The shear study file (`runs/studies/shear.json`): the vesicles' reduced areas and sizes, the
+//! capillary number, the channel and the fluid, and single cases that vary one of them. Strict:
+//! unknown keys are refused, every value checked, errors name the key.
+
+use crate::error::{Error, Result};
+use serde::Deserialize;
+
+/// How the shear is imposed.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Profile {
+    /// Plane Couette flow u_x = γ̇y between free-slip walls across y.
+    Walls,
+    /// The periodic Kolmogorov flow u_x = (γ̇/k₀) sin(k₀y), of local shear rate γ̇ at y = 0.
+    Kolmogorov,
+}
+
+impl Profile {
+    /// The name in the tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Profile::Walls => "walls",
+            Profile::Kolmogorov => "kolmogorov",
+        }
+    }
+}
+
+/// The study file's keys.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    /// `"shear"`.
+    pub study: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// h/ε of every case.
+    pub h_over_eps: f64,
+    /// η.
+    pub viscosity: f64,
+    /// M of the diffusive channel.
+    pub mobility: f64,
+    /// Ca = ηγ̇R0³/κ.
+    pub capillary: f64,
+    /// The vesicles' reduced areas (each started as an ellipse of that reduced area).
+    pub reduced_areas: Vec<f64>,
+    /// R0/ε of each size (at least two: the angle is extrapolated in ε/R0).
+    pub r0: Vec<f64>,
+    /// The channel's width (wall to wall, or the Kolmogorov period) over R0.
+    pub channel: f64,
+    /// The periodic box's length along the flow over R0.
+    pub length: f64,
+    /// How the shear is imposed.
+    pub profile: Profile,
+    /// The run's length in strain units γ̇t.
+    pub strains: f64,
+    /// The largest Δt of the adaptive SBDF2 steps.
+    pub dt_max: f64,
+    /// Single cases, each at one reduced area and size, varying the capillary number, the
+    /// channel or the profile (what the angle does not depend on, or how much it does).
+    #[serde(default)]
+    pub variations: Vec<Variation>,
+}
+
+/// One case beside the main grid.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct Variation {
+    /// Its reduced area.
+    pub reduced_area: f64,
+    /// Its R0/ε.
+    pub r0: f64,
+    /// Ca, else the spec's.
+    #[serde(default)]
+    pub capillary: Option<f64>,
+    /// W/R0, else the spec's.
+    #[serde(default)]
+    pub channel: Option<f64>,
+    /// The profile, else the spec's.
+    #[serde(default)]
+    pub profile: Option<Profile>,
+}
+
+impl Spec {
+    /// Check every value.
+    ///
+    /// # Errors
+    /// `Error::Config` naming the key.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.h_over_eps > 0.0 && self.h_over_eps <= 1.0) {
+            return Err(Error::config("h_over_eps", "need 0 < h/ε ≤ 1"));
+        }
+        for (key, v) in [
+            ("viscosity", self.viscosity),
+            ("mobility", self.mobility),
+            ("capillary", self.capillary),
+            ("strains", self.strains),
+            ("dt_max", self.dt_max),
+        ] {
+            positive(key, v)?;
+        }
+        if self.reduced_areas.is_empty() {
+            return Err(Error::config("reduced_areas", "need at least one"));
+        }
+        for &v in &self.reduced_areas {
+            reduced_area("reduced_areas", v)?;
+        }
+        if self.r0.len() < 2 || self.r0.iter().any(|r| !at_least(*r, 6.0)) {
+            return Err(Error::config(
+                "r0",
+                "need at least two R0/ε ≥ 6 (the angle is extrapolated in ε/R0)",
+            ));
+        }
+        channel("channel", self.channel)?;
+        if !at_least(self.length, 3.0) {
+            return Err(Error::config(
+                "length",
+                "need L/R0 ≥ 3 (the vesicle apart from its periodic images)",
+            ));
+        }
+        for (i, v) in self.variations.iter().enumerate() {
+            let key = |k: &str| format!("variations[{i}].{k}");
+            reduced_area(&key("reduced_area"), v.reduced_area)?;
+            if !at_least(v.r0, 6.0) {
+                return Err(Error::config(key("r0"), "need R0/ε ≥ 6"));
+            }
+            if let Some(c) = v.capillary {
+                positive(&key("capillary"), c)?;
+            }
+            if let Some(w) = v.channel {
+                channel(&key("channel"), w)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A finite value > 0.
+fn positive(key: &str, v: f64) -> Result<()> {
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::config(
+            key,
+            format!("must be finite and > 0, got {v}"),
+        ))
+    }
+}
+
+/// A reduced area the ellipse start can take and the tank-treading regime holds.
+fn reduced_area(key: &str, v: f64) -> Result<()> {
+    if v > 0.3 && v < 1.0 {
+        Ok(())
+    } else {
+        Err(Error::config(key, format!("need 0.3 < v < 1, got {v}")))
+    }
+}
+
+/// A channel wide enough for the vesicle and its walls' layers.
+fn channel(key: &str, w: f64) -> Result<()> {
+    if at_least(w, 3.0) {
+        Ok(())
+    } else {
+        Err(Error::config(
+            key,
+            format!("need W/R0 ≥ 3 (the vesicle clear of the walls), got {w}"),
+        ))
+    }
+}
+
+/// x ≥ `lo` (false for NaN).
+fn at_least(x: f64, lo: f64) -> bool {
+    x >= lo
+}
