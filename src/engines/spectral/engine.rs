@@ -202,14 +202,17 @@ impl SpectralEngine {
         if scene.ade.is_some() || scene.bilayer_couple.is_some() {
             ev = ev.with_curvature();
         }
-        if let Some(flow) = scene.stokes_flow() {
-            ev = ev.with_flow(flow);
-        }
         // A fixed tension acts from the first step (the flow's force holds it).
         let sigma = match scene.area_method() {
             AreaMethod::Fixed => scene.area.sigma.unwrap_or(0.0),
             _ => 0.0,
         };
+        if let Some(flow) = scene.stokes_flow() {
+            ev = ev.with_flow(flow);
+            if scene.area_method() == AreaMethod::Fixed {
+                ev = ev.with_fixed_tension(sigma);
+            }
+        }
         let cur = ev.state_at(&phi, 0.0, sigma)?;
         let passes = CpuPasses {
             states: States::new(cur, ev.blank()),

@@ -241,10 +241,20 @@ impl Evaluator {
         self.flow.is_some()
     }
 
+    /// The evaluator's flow at the fixed tension `sigma` ([`Flow::at_fixed_tension`]): no T̂.
+    ///
+    /// # Panics
+    /// Without a flow.
+    pub fn with_fixed_tension(mut self, sigma: f64) -> Self {
+        let flow = self.flow.take().expect("a flow");
+        self.flow = Some(flow.at_fixed_tension(sigma));
+        self
+    }
+
     /// Whether a state carries the spectrum of a second affine term (`State::curvature_hat`):
-    /// the area-difference term's m̂ or the Stokes flow's T̂.
+    /// the area-difference term's m̂ or the Stokes flow's T̂ (not at a fixed tension).
     pub fn has_second_term(&self) -> bool {
-        self.curvature.is_some() || self.flow.is_some()
+        self.curvature.is_some() || self.flow.as_ref().is_some_and(Flow::splits_tension)
     }
 
     /// The state holding the real field `phi`, evaluated at time `t` with multiplier 0.

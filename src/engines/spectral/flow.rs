@@ -39,8 +39,12 @@
 //! free-slip for the disturbance flow (u normal = 0, ∂u_tangential/∂n = 0), and a mirror plane
 //! through the vesicle keeps the flow's symmetry.
 //!
+//! At a fixed tension σ_f (area method `fixed`) nothing is split: μ = μ_b + σ_fμ_σ drives one
+//! flow, its whole advection goes into the explicit term and no T̂ is kept
+//! ([`Flow::at_fixed_tension`]).
+//!
 //! Cost: 5d + 4 transforms per evaluation (μ_b, μ_σ and the d components of ∇φ back, both
-//! forces forward, both velocities back, both advections forward).
+//! forces forward, both velocities back, both advections forward); 3d + 2 at a fixed tension.
 
 use super::evaluator::Symbols;
 use super::transform::Transform;
@@ -91,6 +95,8 @@ pub struct Flow {
     speed_sq: Array3<f64>,
     /// The imposed shear flow u_x(y) along the y axis's points (`None`: no imposed flow).
     shear: Option<Vec<f64>>,
+    /// σ_f of a fixed tension: one flow at μ_b + σ_fμ_σ, no part per unit σ (`None`: split).
+    fixed_tension: Option<f64>,
 }
 
 impl Flow {
@@ -156,7 +162,23 @@ impl Flow {
             speed_sq: zeros(),
             shear,
             axes,
+            fixed_tension: None,
         }
+    }
+
+    /// This flow at the fixed tension `sigma`: [`Flow::advect`] drives one flow with
+    /// μ = μ_b + σμ_σ whatever σ it is given, and writes no T̂ (the scratch of the part per
+    /// unit σ is dropped).
+    pub fn at_fixed_tension(mut self, sigma: f64) -> Self {
+        self.fixed_tension = Some(sigma);
+        self.components[1] = Vec::new();
+        self
+    }
+
+    /// Whether [`Flow::advect`] keeps the advection per unit σ apart (T̂): not at a fixed
+    /// tension.
+    pub fn splits_tension(&self) -> bool {
+        self.fixed_tension.is_none()
     }
 
     /// Split the flow's advection into its part at σ = 0 and its part per unit σ, both of
@@ -166,7 +188,9 @@ impl Flow {
     /// μ̂_σ = c_σ|k|²φ̂, the tension's part of μ per unit σ. The step then advects with
     /// u_b + σu_σ at the σ it solves for (docs/src/theory/flow.md, "The step"). Returns max|u|
     /// and η∫|∇u|² of u = u_b + σu_σ at `sigma`. `sym` gives |k|² and the Parseval weights,
-    /// `eps` the interface width.
+    /// `eps` the interface width. At a fixed tension σ_f the flow is that of μ_b + σ_fμ_σ, all
+    /// of its advection goes into `nonlinear`, `tension` is not touched, and `sigma` is not
+    /// read.
     pub fn advect(
         &mut self,
         transform: &mut Transform,
@@ -177,23 +201,30 @@ impl Flow {
     ) -> FlowStats {
         let e4x2 = 2.0 * eps.powi(4);
         let c_sigma = TENSION_FACTOR * eps;
+        // The flows: at σ = 0 and per unit σ, or the one at the fixed tension.
+        let (parts, fixed, sigma) = match self.fixed_tension {
+            None => (2, 0.0, sigma),
+            Some(f) => (1, f, f),
+        };
         // μ̂_b = −N̂/|k|² + 2ε⁴|k|⁴φ̂ (k ≠ 0; a constant in μ exerts a gradient, which the
-        // projection removes), and μ̂_σ = c_σ|k|²φ̂.
+        // projection removes; plus σ_f c_σ|k|²φ̂ at a fixed tension), and μ̂_σ = c_σ|k|²φ̂.
         let (hat, nonlinear_in) = (flat(hat), flat(nonlinear));
         modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
             *out = if k > 0.0 {
-                -nonlinear_in[i] / k + hat[i] * (e4x2 * k * k)
+                -nonlinear_in[i] / k + hat[i] * (e4x2 * k * k + fixed * c_sigma * k)
             } else {
                 Complex64::default()
             };
             0.0
         });
         transform.inverse(&mut self.spectrum, &mut self.mu[0]);
-        modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
-            *out = hat[i] * (c_sigma * k);
-            0.0
-        });
-        transform.inverse(&mut self.spectrum, &mut self.mu[1]);
+        if parts == 2 {
+            modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
+                *out = hat[i] * (c_sigma * k);
+                0.0
+            });
+            transform.inverse(&mut self.spectrum, &mut self.mu[1]);
+        }
         let shape = self.shape;
         for (c, &a) in self.axes.iter().enumerate() {
             let (kappa, odd) = (&self.kappa[a], self.odd[c]);
@@ -208,7 +239,7 @@ impl Flow {
                 0.0
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
-            for part in 0..2 {
+            for part in 0..parts {
                 Zip::from(&mut self.component[0])
                     .and(&self.mu[part])
                     .and(&self.gradient[c])
@@ -216,14 +247,18 @@ impl Flow {
                 transform.forward(&mut self.component[0], &mut self.components[part][c]);
             }
         }
-        for part in 0..2 {
+        for part in 0..parts {
             self.project(sym, part);
         }
         let dissipation = self.dissipation(sym, sigma);
         for c in 0..self.axes.len() {
             let [ub, us] = &mut self.component;
             transform.inverse(&mut self.components[0][c], ub);
-            transform.inverse(&mut self.components[1][c], us);
+            if parts == 2 {
+                transform.inverse(&mut self.components[1][c], us);
+            } else {
+                us.fill(0.0);
+            }
             if let (0, Some(profile)) = (c, &self.shear) {
                 let y = self.axes[1];
                 for (j, mut plane) in ub.axis_iter_mut(Axis(y)).enumerate() {
@@ -255,9 +290,11 @@ impl Flow {
             .and(&self.spectrum)
             .par_for_each(|n, &a| *n = *n * mobility - a);
         transform.hermitian_symmetrize(nonlinear);
-        transform.forward(&mut self.mu[1], tension);
-        tension[[0, 0, 0]] = Complex64::default();
-        transform.hermitian_symmetrize(tension);
+        if parts == 2 {
+            transform.forward(&mut self.mu[1], tension);
+            tension[[0, 0, 0]] = Complex64::default();
+            transform.hermitian_symmetrize(tension);
+        }
         FlowStats {
             max_speed: max_speed_sq.sqrt(),
             dissipation,
@@ -270,10 +307,13 @@ impl Flow {
     pub fn velocity(&mut self, transform: &mut Transform, sigma: f64) -> Vec<Array3<f64>> {
         let mut out = Vec::with_capacity(self.axes.len());
         for (c, &a) in self.axes.iter().enumerate() {
-            Zip::from(&mut self.spectrum)
-                .and(&self.components[0][c])
-                .and(&self.components[1][c])
-                .par_for_each(|u, &b, &s| *u = b + s * sigma);
+            match self.components[1].get(c) {
+                Some(per_sigma) => Zip::from(&mut self.spectrum)
+                    .and(&self.components[0][c])
+                    .and(per_sigma)
+                    .par_for_each(|u, &b, &s| *u = b + s * sigma),
+                None => self.spectrum.assign(&self.components[0][c]),
+            }
             let mut field = Array3::zeros(transform.shape());
             transform.inverse(&mut self.spectrum, &mut field);
             if self.odd[c].is_some() {
@@ -339,7 +379,8 @@ impl Flow {
         }
     }
 
-    /// η Σ_k w |k|² |û_b + σû_σ|² over the components: the power the fluid dissipates at σ.
+    /// η Σ_k w |k|² |û_b + σû_σ|² over the components: the power the fluid dissipates at σ
+    /// (û_b alone at a fixed tension).
     fn dissipation(&self, sym: &Symbols, sigma: f64) -> f64 {
         let [base, per_sigma] = &self.components;
         let (base, per_sigma, shape) = (slices(base), slices(per_sigma), self.shape);
@@ -353,11 +394,17 @@ impl Flow {
                         let (k2, w) = mode_symbols(sym, idx);
                         let u = self.axes.iter().enumerate().map(|(c, &a)| {
                             let at = (a, self.odd[c]);
+                            let per =
+                                |v: &[Complex64], i: usize| v.get(i).copied().unwrap_or_default();
                             let b = periodic_picture(base[c], i, idx, at, shape);
-                            let s = periodic_picture(per_sigma[c], i, idx, at, shape);
+                            let s = if per_sigma[c].is_empty() {
+                                Complex64::default()
+                            } else {
+                                periodic_picture(per_sigma[c], i, idx, at, shape)
+                            };
                             // The top sine mode, stored where this mode's j_a = 0.
                             let top = if at.1.is_some() && idx[a] == 0 {
-                                let u = base[c][i] + per_sigma[c][i] * sigma;
+                                let u = base[c][i] + per(per_sigma[c], i) * sigma;
                                 (k2 + self.top_k2) * u.norm_sqr()
                             } else {
                                 0.0
@@ -521,7 +568,9 @@ mod tests {
     /// σ = 0, T̂ the advection per unit σ) and μ̂ = −N̂_conserved/|k|² +
     /// 2ε⁴|k|⁴φ̂ + c_σσ|k|²φ̂, Σ_x μ u·∇φ = Σ_k w Re(μ̂ FT[u·∇φ]*) equals the reported
     /// dissipation η Σ_k w |k|²|û|² to 1e-10, and the advection's k = 0 coefficient is 0 (it
-    /// moves no volume). A sign slip, a missing projection or a wrong weight misses by O(1).
+    /// moves no volume). The same at the fixed tension σ_f = σ, where N̂_flow holds the whole
+    /// advection and there is no T̂. A sign slip, a missing projection or a wrong weight misses
+    /// by O(1).
     #[test]
     fn the_advection_dissipates_what_the_fluid_does() {
         let (sigma, spec) = (
@@ -539,7 +588,7 @@ mod tests {
             (&[12, 11, 10], &[false; 3], &[true, false, false]),
             (&[12, 10, 10], &[false, true, false], &[false, false, true]),
         ];
-        for (n, mirror, walls) in boxes {
+        for ((n, mirror, walls), fixed) in boxes.into_iter().flat_map(|b| [(b, false), (b, true)]) {
             let grid = Grid::new(n, 0.8, mirror).with_walls(walls);
             let phi = Array3::from_shape_fn(grid.shape, |(i, j, k)| {
                 let (x, y, z) = (i as f64 - 5.5, j as f64 - 10.0, k as f64 - 9.0);
@@ -557,10 +606,10 @@ mod tests {
                     ExplicitTerm::ConservedRhs,
                     1,
                 );
-                if flow {
-                    ev.with_flow(spec)
-                } else {
-                    ev
+                match (flow, fixed) {
+                    (false, _) => ev,
+                    (true, false) => ev.with_flow(spec),
+                    (true, true) => ev.with_flow(spec).with_fixed_tension(sigma),
                 }
             };
             let plain = evaluator(false).state_at(&phi, 0.0, sigma).expect("finite");
@@ -570,14 +619,16 @@ mod tests {
             let shape = ev.transform.spectral_shape();
             let (e4x2, tension) = (2.0, TENSION_FACTOR * sigma);
             let mut power = 0.0;
-            for (i, (((&n, &nf), &t), &h)) in plain
+            assert_eq!(flowing.curvature_hat.is_empty(), fixed);
+            let per_sigma = |i: usize| flowing.curvature_hat.as_slice().and_then(|t| t.get(i));
+            for (i, ((&n, &nf), &h)) in plain
                 .nonlinear
                 .iter()
                 .zip(flowing.nonlinear.iter())
-                .zip(flowing.curvature_hat.iter())
                 .zip(plain.hat.iter())
                 .enumerate()
             {
+                let t = per_sigma(i).copied().unwrap_or_default();
                 let (k, w) = mode_symbols(sym, index_of(i, shape));
                 let advection = n * spec.mobility - nf + t * sigma;
                 if k == 0.0 {
@@ -591,7 +642,7 @@ mod tests {
             assert!(d > 0.0);
             assert!(
                 (power - d).abs() <= 1e-10 * d,
-                "{n:?} {mirror:?} {walls:?}: Σ μ u·∇φ = {power:e}, dissipation {d:e}"
+                "{n:?} {mirror:?} {walls:?} fixed {fixed}: Σ μ u·∇φ = {power:e}, dissipation {d:e}"
             );
         }
     }

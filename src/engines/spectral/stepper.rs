@@ -219,7 +219,8 @@ pub struct Stepper<P> {
     /// Whether an imposed flow does work on the membrane (F may then rise legitimately).
     driven: bool,
     /// Whether the step advects with the Stokes flow, whose part per unit σ (T̂) enters the
-    /// update as σR̂ beside σQ̂ ([`super::flow`]).
+    /// update as σR̂ beside σQ̂ ([`super::flow`]); not at a fixed tension, where the whole
+    /// advection is explicit.
     tension_flow: bool,
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see [`Stepper::check_constraints`]).
@@ -249,7 +250,7 @@ impl<P: Passes> Stepper<P> {
             volume_ramp: scene.volume,
             c0_ramped,
             driven: scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some()),
-            tension_flow: scene.stokes_flow().is_some(),
+            tension_flow: scene.stokes_flow().is_some() && scene.area_method() != AreaMethod::Fixed,
             dt_next: None,
             energy_guard: true,
             couple: None,
