@@ -116,7 +116,7 @@ fn flow_and_lbfgs_reach_one_ade_state() {
 /// L-BFGS with the bilayer couple as its second constraint holds both at every accepted
 /// iteration, from a start 0.011 off the Δa held (the first iteration retracts it onto Δa):
 /// Δa to 1e-10 (relative; the retraction's Newton iterations stop at 1e-12 of M, measured
-/// 5e-13) and A to 1e-10 (the area's exact quadratic, measured 1e-15), and F_sc never rises
+/// 1.0e-12) and A to 1e-10 (the area's exact quadratic, measured 1e-15), and F_sc never rises
 /// from one accepted iteration to the next (Armijo's condition on the retracted trials: with
 /// both constraints held F_sc is the Lagrangian). It reaches the residual 3e-8 in about 100
 /// iterations (the flow below needs about 700 steps).
