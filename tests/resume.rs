@@ -175,8 +175,9 @@ fn resumed_3d_runs_are_bitwise_identical_to_uninterrupted_ones() {
 
 /// The area-difference term resumed in the middle of a run (3D ellipsoid, 16³, 8 + 8 steps):
 /// ADE on every engine (SBDF2 adaptive with the implicit λ, SBDF1 with the lagged one, FD,
-/// L-BFGS) and the bilayer couple (SBDF2 adaptive). The checkpoint holds λ; SBDF2's m̂ⁿ⁻¹ is
-/// evaluated again from φ̂ⁿ⁻¹, by the same sweeps, so φ and every row (the columns da, w,
+/// L-BFGS) and the bilayer couple (SBDF2 adaptive, L-BFGS). The checkpoint holds λ; SBDF2's
+/// m̂ⁿ⁻¹ is evaluated again from φ̂ⁿ⁻¹, by the same sweeps, and L-BFGS's λ is solved again
+/// from the evaluated state, as after an iteration, so φ and every row (the columns da, w,
 /// c0_eff, lambda included) are bitwise those of the uninterrupted run.
 #[test]
 fn resumed_area_difference_runs_are_bitwise_identical_to_uninterrupted_ones() {
@@ -199,6 +200,10 @@ fn resumed_area_difference_runs_are_bitwise_identical_to_uninterrupted_ones() {
             "bilayer couple sbdf2",
             json!({"scheme": "sbdf2", "adaptive": {"dt_max": 20.0},
             "bilayer_couple": {"da": 1.05}}),
+        ),
+        (
+            "bilayer couple relaxational",
+            json!({"dynamics": "relaxational", "dt": 1.0, "bilayer_couple": {"da": 1.05}}),
         ),
     ];
     for (name, extra) in runs {

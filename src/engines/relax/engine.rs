@@ -1,11 +1,12 @@
 //! The relaxational route as an [`Engine`]: a step is one L-BFGS iteration; saving and
 //! restoring the state and the memory.
 
+use super::couple::Couple;
 use super::lbfgs::{Pair, ARMIJO, MAX_BACKTRACKS, MAX_MEMORY};
 use super::RelaxEngine;
 use crate::engines::spectral::saved;
 use crate::engines::{AreaConstraint, Engine, Saved, SavedArray, StepError, StepReport};
-use crate::problem::area_difference::AreaDifference;
+use crate::problem::area_difference::{AreaDifference, Law};
 use crate::problem::model::Measures;
 use ndarray::Array3;
 
@@ -78,10 +79,15 @@ impl Engine for RelaxEngine {
 
     fn set_area_difference(&mut self, term: AreaDifference) -> Result<(), String> {
         self.ev.area_difference = Some(term);
-        // ĝ of the current state gains λ m̂ (the state's measures and sums are its own).
+        // ADE: ĝ of the current state gains λ m̂ (the state's measures and sums are its own).
+        // The bilayer couple: a second constraint, its λ from the Gram system.
         self.ev
             .evaluate(&mut self.cur, 0.0, None, None)
             .map_err(|d| d.0)?;
+        self.couple = match term.law {
+            Law::Couple { .. } => Some(Couple::new(term.target())),
+            Law::Elastic { .. } => None,
+        };
         self.reset_memory();
         self.refresh_gradient();
         Ok(())
@@ -92,9 +98,11 @@ impl Engine for RelaxEngine {
     }
 
     fn lambda(&self) -> f64 {
-        self.ev
-            .area_difference
-            .map_or(0.0, |t| t.multiplier(self.cur.measures.curvature))
+        match (self.couple, self.ev.area_difference) {
+            (Some(c), _) => c.lambda,
+            (None, Some(t)) => t.multiplier(self.cur.measures.curvature),
+            (None, None) => 0.0,
+        }
     }
 
     fn stalled(&self) -> bool {
@@ -163,6 +171,10 @@ impl Engine for RelaxEngine {
         self.ev
             .evaluate(&mut self.cur, t, None, None)
             .map_err(|d| d.0)?;
+        if let Some(c) = self.couple.as_mut() {
+            // The evaluation's ĝ holds no λm̂ yet.
+            c.lambda = 0.0;
+        }
         self.refresh_gradient();
         Ok(())
     }

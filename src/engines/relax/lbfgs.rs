@@ -1,12 +1,13 @@
 //! The L-BFGS iteration: the stored pairs, the coefficient recursion, the line search with its
 //! retraction onto the area, and the memory's bookkeeping.
 
+use super::couple::Couple;
 use super::sweeps::{area_values, direction_piece, gradient_sweep, pair_dots, trial_values};
 use super::RelaxEngine;
 use crate::engines::numerics::{nearest_root, sum_in_fixed_tree};
 use crate::engines::spectral::evaluator::{Evaluator, ExplicitTerm, Metric};
 use crate::engines::spectral::pieces::{for_each_piece, per_width, reals, reals_mut, PIECE};
-use crate::engines::{AreaConstraint, Diverged};
+use crate::engines::{AreaConstraint, Diverged, Rejection, StepError};
 use crate::problem::config::{AreaMethod, Scene};
 use crate::problem::grid::Grid;
 use crate::problem::model::{Measures, C0};
@@ -171,7 +172,7 @@ impl RelaxEngine {
             explicit,
             scene.threads(),
         );
-        if scene.ade.is_some() {
+        if scene.ade.is_some() || scene.bilayer_couple.is_some() {
             ev = ev.with_curvature();
         }
         let cur = ev.state_of(&phi, 0.0)?;
@@ -205,6 +206,7 @@ impl RelaxEngine {
             sigma: 0.0,
             residual: f64::INFINITY,
             area: AreaConstraint::none(),
+            couple: None,
             stalled: false,
         };
         e.refresh_gradient();
@@ -221,8 +223,9 @@ impl RelaxEngine {
     }
 
     /// Move a current state that is off the area constraint (a start whose area is not A0,
-    /// e.g. a field edited between relaxations) onto it before an iteration: its retraction
-    /// onto A = A0 along q (the trial at α = 0) becomes the current state, the memory is
+    /// e.g. a field edited between relaxations), or off M = M0 with the bilayer couple, onto
+    /// it before an iteration: its retraction onto A = A0 along q (the trial at α = 0; with the
+    /// couple onto both constraints) becomes the current state, the memory is
     /// cleared and its gradient formed. Every trial of the line search is retracted, so
     /// comparing trials with an unretracted state would charge the search with the
     /// retraction's own change of F, σ(A − A0) to first order, which no small step undoes on
@@ -230,12 +233,16 @@ impl RelaxEngine {
     ///
     /// # Errors
     /// `Diverged` if the current state's gradient cannot be formed again after a failed
-    /// retraction.
-    pub(super) fn retract_start(&mut self, t: f64) -> Result<(), Diverged> {
+    /// retraction; [`Rejection::AreaDifferenceDrift`] if a state off M = M0 cannot be retracted
+    /// onto it (a Δa out of reach of the start along q_M: the run would hold another Δa).
+    pub(super) fn retract_start(&mut self, t: f64) -> Result<(), StepError> {
         let target = self.area.target;
         let off = self.area.method != AreaMethod::None
             && (self.cur.measures.area - target).abs() > OFF_CONSTRAINT * target.abs();
-        if !off {
+        let off_couple = self
+            .couple
+            .is_some_and(|c| c.off(self.cur.measures.curvature, OFF_CONSTRAINT));
+        if !off && !off_couple {
             return Ok(());
         }
         let mut d = self.recursion(self.pairs.len());
@@ -248,7 +255,19 @@ impl RelaxEngine {
             self.refresh_gradient();
             Ok(())
         } else {
-            self.take_back_gradient(t)
+            self.take_back_gradient(t)?;
+            match self.couple {
+                Some(c) if off_couple => {
+                    let m = self.cur.measures.curvature;
+                    Err(StepError::Rejected {
+                        check: Rejection::AreaDifferenceDrift((m - c.target).abs() / c.target),
+                        context: " at the start: the retraction onto the bilayer couple's Δa \
+                                  did not converge (start nearer the Δa held, or continue in Δa)"
+                            .into(),
+                    })
+                }
+                _ => Ok(()),
+            }
         }
     }
 
@@ -270,12 +289,21 @@ impl RelaxEngine {
         let kept = (self.cur.measures, self.cur.multiplier_sums);
         self.ev.evaluate(&mut self.cur, t, None, None)?;
         (self.cur.measures, self.cur.multiplier_sums) = kept;
+        self.restore_couple_gradient();
         Ok(())
     }
 
-    /// σ, r, the residual and the inner products of the current state (no pair is formed).
+    /// σ (and λ with the couple), r, the residual and the inner products of the current state
+    /// (no pair is formed).
     pub(super) fn refresh_gradient(&mut self) {
-        let sigma = self.multiplier(self.cur.multiplier_sums);
+        let sigma = match self.couple {
+            Some(c) => {
+                let (sums, sigma, lambda) = self.hold_couple(false, c.lambda);
+                self.couple = Some(Couple { sums, lambda, ..c });
+                sigma
+            }
+            None => self.multiplier(self.cur.multiplier_sums),
+        };
         let sums = gradient_sweep(
             &self.ev.symbols,
             self.metric,
@@ -374,10 +402,14 @@ impl RelaxEngine {
                 acc
             });
         let area = sum_in_fixed_tree(partials, AreaSums::default, AreaSums::add);
+        d.area = area;
+        if self.couple.is_some() {
+            self.project_couple(d);
+            return;
+        }
         let project = self.area.method != AreaMethod::None && area.xq > 0.0;
         d.c_q = if project { -area.xd / area.xq } else { 0.0 };
         d.slope += d.c_q * self.ip.qr;
-        d.area = area;
     }
 
     /// The trial state φ̂ + α d' + β q into `trial.hat`, with the evaluation's inverse inputs
@@ -416,10 +448,13 @@ impl RelaxEngine {
             .sum()
     }
 
-    /// Trial state φ̂ + α d, retracted onto A = A0 along q, evaluated; returns the step's total
-    /// multiple of q (α c_q + τ). `Err` if the retraction has no real root or the evaluation
-    /// diverged.
+    /// Trial state φ̂ + α d, retracted onto A = A0 along q (with the bilayer couple onto both
+    /// constraints: [`RelaxEngine::try_couple_step`]), evaluated. `Err` if the retraction has
+    /// no real root or the evaluation diverged.
     pub(super) fn try_step(&mut self, alpha: f64, t: f64) -> Result<(), ()> {
+        if self.couple.is_some() {
+            return self.try_couple_step(alpha, t);
+        }
         let d = &self.direction;
         let tau = if self.area.method == AreaMethod::None {
             0.0
@@ -439,7 +474,14 @@ impl RelaxEngine {
     /// products, and the pair (s, y) = (x_new − x, r_new − r) kept if ⟨y, s⟩_M > 0 (the oldest
     /// dropped when the memory is full), its Gram row and column from the same sweep.
     pub(super) fn accept(&mut self) {
-        let sigma = self.multiplier(self.trial.multiplier_sums);
+        let sigma = match self.couple {
+            Some(c) => {
+                let (sums, sigma, lambda) = self.hold_couple(true, 0.0);
+                self.couple = Some(Couple { sums, lambda, ..c });
+                sigma
+            }
+            None => self.multiplier(self.trial.multiplier_sums),
+        };
         let reals = 2 * self.cur.hat.len();
         let mut pair = self.spare_pairs.pop().unwrap_or_else(|| Pair::zeros(reals));
         let sums = gradient_sweep(

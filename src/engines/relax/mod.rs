@@ -17,6 +17,10 @@
 //! μ = δF_sc/δφ + σ δA/δφ is constant: the residual reported is the RMS of μ − mean(μ).
 //! `t` advances by the nominal `dt` per iteration and is not physical time.
 //!
+//! **The bilayer couple** ([`couple`]) holds M[φ] = M0 as a second constraint: q = q_A beside
+//! q_M = M⁻¹m̂, σ and λ from their 2×2 Gram system, the direction projected onto both, and each
+//! trial retracted onto both (the area's quadratic for each τ_M, Newton iterations on M).
+//!
 //! **Cost.** The two-loop recursion is run on coefficients, not on vectors (the "vector-free"
 //! form): its inner products are all combinations of ⟨s_i, r⟩, ⟨y_i, r⟩, ⟨q, y_i⟩, ⟨r, r⟩,
 //! ⟨q, r⟩ and of the Gram entries ⟨s_i, y_j⟩, ⟨y_i, y_j⟩, so the direction
@@ -50,6 +54,7 @@
 //! accepted state's written over it), the direction and the evaluator's spare spectrum: 9.9 +
 //! 1.03 m f64 per point measured at 96³ with m pairs ([`crate::problem::memory`]).
 
+mod couple;
 mod engine;
 mod lbfgs;
 mod sweeps;
@@ -58,6 +63,7 @@ mod tests;
 
 use crate::engines::spectral::evaluator::{Evaluator, Metric, State};
 use crate::engines::AreaConstraint;
+use couple::Couple;
 use lbfgs::{Direction, InnerProducts, Pair};
 use ndarray::Array3;
 use num_complex::Complex64;
@@ -93,5 +99,7 @@ pub struct RelaxEngine {
     sigma: f64,
     residual: f64,
     area: AreaConstraint,
+    /// The bilayer couple's second constraint, when the scene holds Δa ([`couple`]).
+    couple: Option<Couple>,
     stalled: bool,
 }

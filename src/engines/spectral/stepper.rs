@@ -188,11 +188,11 @@ fn no_area_difference(device: &str) -> DeviceFailure {
 }
 
 /// Secant iterations of the area-difference multiplier before a step is rejected.
-const COUPLE_ITERATIONS: usize = 12;
+pub(crate) const COUPLE_ITERATIONS: usize = 12;
 
 /// The area-difference multiplier's equation is held each step to this fraction of M0
 /// (round-off of M's sum over the box): |M − M0| for the bilayer couple.
-const COUPLE_TOL: f64 = 1e-12;
+pub(crate) const COUPLE_TOL: f64 = 1e-12;
 
 /// The spectral conserved flow on the device `P` (module documentation).
 pub struct Stepper<P> {

@@ -70,7 +70,7 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ade: Option<AdeSpec>,
     /// The bilayer couple: `{"da": Δa}` holds the reduced integrated mean curvature Δa fixed
-    /// with a second multiplier (3D only; spectral conserved dynamics).
+    /// with a second multiplier (3D only; spectral engine, conserved or relaxational dynamics).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bilayer_couple: Option<BilayerCoupleSpec>,
     /// Mirror planes through the box centre: e.g. `["x","y","z"]`, `[]`, or `"auto"`.

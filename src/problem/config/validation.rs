@@ -339,7 +339,8 @@ impl Scene {
 
     /// `ade` and `bilayer_couple`: one or the other, 3D only (in 2D ∮κ ds = 2π for every
     /// closed curve, so the term is a constant), finite values, α ≥ 0, Δa > 0; the bilayer
-    /// couple's second multiplier is solved by the spectral conserved step only.
+    /// couple's second multiplier is solved by the spectral engine only (the conserved step and
+    /// the relaxational L-BFGS).
     fn validate_area_difference(&self) -> Result<()> {
         let field = match (&self.ade, &self.bilayer_couple) {
             (None, None) => return Ok(()),
@@ -378,12 +379,12 @@ impl Scene {
         }
         if let Some(b) = &self.bilayer_couple {
             positive("bilayer_couple.da", b.da)?;
-            if self.method == Method::Fd || self.dynamics == Dynamics::Relaxational {
+            if self.method == Method::Fd {
                 return Err(Error::config(
                     "bilayer_couple",
-                    "the bilayer couple's second multiplier is solved by the spectral conserved \
-                     step only; use method spectral with conserved dynamics (or ade with a \
-                     large alpha)",
+                    "the bilayer couple's second multiplier is solved by the spectral engine \
+                     only (the conserved step or relaxational dynamics); use method spectral \
+                     (or ade with a large alpha)",
                 ));
             }
         }
