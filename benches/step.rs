@@ -193,14 +193,21 @@ fn bench_relaxation(c: &mut Criterion) {
 }
 
 /// The Stokes dynamics' step (docs/src/theory/flow.md: the conserved step plus 3d + 2
-/// transforms of the flow) beside the conserved step, SBDF2 at fixed tension on the same full
-/// periodic boxes (a quasi-sphere on 64³, a quasi-circle on 512²), 1 and 2 threads.
+/// transforms of the flow at a fixed tension, 5d + 4 with the area held) beside the conserved
+/// step, SBDF2 on the same full periodic boxes (a quasi-sphere on 64³, a quasi-circle on 512²),
+/// 1 and 2 threads: at fixed tension (`conserved`, `stokes`) and with the area held by the
+/// projection (`conserved_area`, `stokes_area`).
 fn bench_stokes(c: &mut Criterion) {
     let mut group = c.benchmark_group("stokes");
     for (dim, n, radius) in [(3usize, 64usize, 16.0), (2, 512, 128.0)] {
-        for dynamics in ["conserved", "stokes"] {
+        for (name, dynamics, area) in [
+            ("conserved", "conserved", json!({"method": "fixed", "sigma": 0.01})),
+            ("stokes", "stokes", json!({"method": "fixed", "sigma": 0.01})),
+            ("conserved_area", "conserved", json!({"method": "projection"})),
+            ("stokes_area", "stokes", json!({"method": "projection"})),
+        ] {
             for threads in [1, 2] {
-                let id = BenchmarkId::new(dynamics, format!("{n}^{dim}/t{threads}"));
+                let id = BenchmarkId::new(name, format!("{n}^{dim}/t{threads}"));
                 let make = || {
                     engine_of(json!({
                         "dim": dim, "n": vec![n; dim], "h": 1.0, "eps": 1.0, "scheme": "sbdf2",
@@ -210,7 +217,7 @@ fn bench_stokes(c: &mut Criterion) {
                         } else {
                             serde_json::Value::Null
                         },
-                        "area": {"method": "fixed", "sigma": 0.01},
+                        "area": area,
                         "initial": {"shape": "harmonic", "radius": radius, "mode": 2,
                                     "amplitude": 0.02}
                     }))
