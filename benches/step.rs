@@ -201,9 +201,21 @@ fn bench_stokes(c: &mut Criterion) {
     let mut group = c.benchmark_group("stokes");
     for (dim, n, radius) in [(3usize, 64usize, 16.0), (2, 512, 128.0)] {
         for (name, dynamics, area) in [
-            ("conserved", "conserved", json!({"method": "fixed", "sigma": 0.01})),
-            ("stokes", "stokes", json!({"method": "fixed", "sigma": 0.01})),
-            ("conserved_area", "conserved", json!({"method": "projection"})),
+            (
+                "conserved",
+                "conserved",
+                json!({"method": "fixed", "sigma": 0.01}),
+            ),
+            (
+                "stokes",
+                "stokes",
+                json!({"method": "fixed", "sigma": 0.01}),
+            ),
+            (
+                "conserved_area",
+                "conserved",
+                json!({"method": "projection"}),
+            ),
             ("stokes_area", "stokes", json!({"method": "projection"})),
         ] {
             for threads in [1, 2] {

@@ -9,9 +9,11 @@
 use super::evaluator::{Evaluator, ExplicitTerm, Metric, State, Symbols};
 use super::pieces::{for_each_piece, reals, reals_mut};
 use super::update::{Update, MAX_LEVELS};
+use crate::engines::numerics::sum_in_fixed_tree;
 use crate::problem::area_difference::{curvature_density, curvature_variation_local};
 use ndarray::Array3;
 use num_complex::Complex64;
+use rayon::prelude::*;
 
 /// The scratch of the term's evaluation: one spectrum, two real fields.
 pub struct CurvatureScratch {
@@ -32,15 +34,20 @@ impl CurvatureScratch {
 /// Calls `f(at, |k|², w)` for every mode of a spectrum of `total` reals, `at` its first real
 /// (one real per mode in a packed spectrum, two otherwise), in order.
 pub fn for_each_mode(sym: &Symbols, total: usize, mut f: impl FnMut(usize, f64, f64)) {
-    let task = sym.task_reals();
-    for t in 0..total.div_ceil(task) {
-        let len = task.min(total - t * task);
-        for_each_piece(sym, t, len, |p, at| {
-            for (l, (k, w)) in p.symbols().enumerate() {
-                f(t * task + at + l * sym.width, k, w);
-            }
-        });
+    for t in 0..total.div_ceil(sym.task_reals()) {
+        for_task_modes(sym, total, t, &mut f);
     }
+}
+
+/// [`for_each_mode`] over the modes of task `t` alone (the reals from t · `task_reals` on).
+fn for_task_modes(sym: &Symbols, total: usize, t: usize, mut f: impl FnMut(usize, f64, f64)) {
+    let task = sym.task_reals();
+    let len = task.min(total - t * task);
+    for_each_piece(sym, t, len, |p, at| {
+        for (l, (k, w)) in p.symbols().enumerate() {
+            f(t * task + at + l * sym.width, k, w);
+        }
+    });
 }
 
 /// The reals of one mode starting at `at`.
@@ -170,6 +177,16 @@ pub struct CoupleSums {
     pub curvature: [f64; 3],
 }
 
+impl CoupleSums {
+    /// The sums of two parts of the spectrum together.
+    fn add(self, o: Self) -> Self {
+        CoupleSums {
+            area: std::array::from_fn(|j| self.area[j] + o.area[j]),
+            curvature: std::array::from_fn(|j| self.curvature[j] + o.curvature[j]),
+        }
+    }
+}
+
 /// The spectra of a step with a second affine term: φ̂, N̂ and m̂ (or the Stokes flow's T̂) of
 /// the current state (level 1) and, with two levels, of the one before.
 pub struct CoupleInputs<'a> {
@@ -197,12 +214,26 @@ fn update_at(u: &Update, inputs: &CoupleInputs, i: usize, k: f64, width: usize) 
     out
 }
 
-/// The [`CoupleSums`] of the update `u` from `inputs`.
+/// The [`CoupleSums`] of the update `u` from `inputs`, task by task in parallel, the tasks'
+/// sums added in a fixed tree (the same bits on any number of threads).
 pub fn couple_sums(sym: &Symbols, u: &Update, inputs: &CoupleInputs, total: usize) -> CoupleSums {
+    let tasks = (0..total.div_ceil(sym.task_reals())).into_par_iter();
+    let partials = tasks.map(|t| couple_sums_of_task(sym, u, inputs, total, t));
+    sum_in_fixed_tree(partials, CoupleSums::default, CoupleSums::add)
+}
+
+/// [`couple_sums`] over the modes of task `t`.
+fn couple_sums_of_task(
+    sym: &Symbols,
+    u: &Update,
+    inputs: &CoupleInputs,
+    total: usize,
+    t: usize,
+) -> CoupleSums {
     let width = sym.width;
     let [h0, _, m0] = inputs.levels[0];
     let mut s = CoupleSums::default();
-    for_each_mode(sym, total, |i, k, w| {
+    for_task_modes(sym, total, t, |i, k, w| {
         let [p, q, r] = update_at(u, inputs, i, k, width);
         let (p, q, r) = (&p[..width], &q[..width], &r[..width]);
         let aw = sym.area_prefactor * k * w;
@@ -219,7 +250,8 @@ pub fn couple_sums(sym: &Symbols, u: &Update, inputs: &CoupleInputs, total: usiz
 }
 
 /// Add λR̂ of `u` to the written φ̂^{n+1} (`hat`) and rewrite the evaluation's inverse inputs
-/// (`copy` = φ̂^{n+1}, `lap` = −|k|²φ̂^{n+1}); returns the new A(φ̂^{n+1}).
+/// (`copy` = φ̂^{n+1}, `lap` = −|k|²φ̂^{n+1}); returns the new A(φ̂^{n+1}). Task by task in
+/// parallel, the tasks' areas added in a fixed tree.
 pub fn add_couple(
     sym: &Symbols,
     u: &Update,
@@ -227,17 +259,26 @@ pub fn add_couple(
     lambda: f64,
     [hat, copy, lap]: [&mut [f64]; 3],
 ) -> f64 {
-    let width = sym.width;
-    let mut area = 0.0;
-    for_each_mode(sym, hat.len(), |i, k, w| {
-        let [_, _, r] = update_at(u, inputs, i, k, width);
-        for c in 0..width {
-            let v = hat[i + c] + lambda * r[c];
-            hat[i + c] = v;
-            copy[i + c] = v;
-            lap[i + c] = -(v * k);
-            area += sym.area_prefactor * k * w * v * v;
-        }
+    let (width, task, total) = (sym.width, sym.task_reals(), hat.len());
+    let chunks = hat
+        .par_chunks_mut(task)
+        .zip(copy.par_chunks_mut(task))
+        .zip(lap.par_chunks_mut(task))
+        .enumerate();
+    let partials = chunks.map(|(t, ((hat, copy), lap))| {
+        let mut area = 0.0;
+        for_task_modes(sym, total, t, |i, k, w| {
+            let [_, _, r] = update_at(u, inputs, i, k, width);
+            let j = i - t * task;
+            for c in 0..width {
+                let v = hat[j + c] + lambda * r[c];
+                hat[j + c] = v;
+                copy[j + c] = v;
+                lap[j + c] = -(v * k);
+                area += sym.area_prefactor * k * w * v * v;
+            }
+        });
+        area
     });
-    area
+    sum_in_fixed_tree(partials, || 0.0, |a, b| a + b)
 }
