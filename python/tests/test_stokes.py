@@ -8,7 +8,7 @@ from conftest import ellipse
 
 
 def stokes(**extra):
-    """The ellipse on the full periodic box (the flow has no mirror planes) in a fluid."""
+    """The ellipse on the full periodic box in a fluid."""
     scene = ellipse(symmetry=[], dynamics="stokes", flow={"viscosity": 1.0, "mobility": 0.01},
                     area={"method": "fixed", "sigma": 0.01}, adaptive=False, dt=0.5)
     scene.update(extra)
@@ -30,7 +30,23 @@ def test_flow_without_stokes_is_refused_naming_the_key():
     assert err.value.field == "flow"
 
 
-def test_stokes_with_mirrors_is_refused_naming_the_key():
+def test_stokes_with_every_axis_mirrored_is_refused_naming_the_key():
     with pytest.raises(vesicle.InvalidInput) as err:
-        vesicle.Scene(stokes(symmetry=["x"]))
+        vesicle.Scene(stokes(symmetry=["x", "y"]))
     assert err.value.field == "symmetry"
+
+
+def test_walls_bound_a_couette_flow():
+    """Between walls across y the imposed shear is plane Couette flow; the vesicle is measured
+    alone (its enclosed area, held exactly, that of the same start on the periodic box), and a
+    wall across the flow is refused naming the key."""
+    sheared = dict(flow={"viscosity": 1.0, "mobility": 0.01, "shear_rate": 1e-3}, max_steps=30)
+    walled = vesicle.Simulation(stokes(walls=["y"], **sheared))
+    periodic = vesicle.Simulation(stokes(**sheared))
+    walled.run()
+    periodic.run()
+    assert walled.record["volume"] == pytest.approx(periodic.record["volume"], rel=1e-10)
+    assert walled.record["max_speed"] > 0.0
+    with pytest.raises(vesicle.InvalidInput) as err:
+        vesicle.Scene(stokes(walls=["x"], **sheared))
+    assert err.value.field == "walls"

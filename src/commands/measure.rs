@@ -97,20 +97,28 @@ pub fn radius_profile(phi: &Array3<f64>, axis: usize, h: f64) -> Vec<f64> {
 /// The error is O(h²) in the curvature of the contour. Cells across the slice's outer edges
 /// are not counted (a shape keeps outside bulk there).
 pub fn inside_area(slice: ArrayView2<f64>, h: f64) -> f64 {
+    cells(slice)
+        .map(|corners| cell_inside_area(&corners))
+        .sum::<f64>()
+        * h
+        * h
+}
+
+/// The cells of a 2D slice (four neighbouring nodes each), as their corners in order around
+/// the cell with φ: (position in the unit cell, φ). Cells across the slice's outer edges are
+/// left out.
+fn cells(slice: ArrayView2<'_, f64>) -> impl Iterator<Item = [([f64; 2], f64); 4]> + '_ {
     let (n0, n1) = slice.dim();
-    let mut area = 0.0;
-    for i in 0..n0.saturating_sub(1) {
-        for j in 0..n1.saturating_sub(1) {
-            let corners = [
+    (0..n0.saturating_sub(1)).flat_map(move |i| {
+        (0..n1.saturating_sub(1)).map(move |j| {
+            [
                 ([0.0, 0.0], slice[[i, j]]),
                 ([1.0, 0.0], slice[[i + 1, j]]),
                 ([1.0, 1.0], slice[[i + 1, j + 1]]),
                 ([0.0, 1.0], slice[[i, j + 1]]),
-            ];
-            area += cell_inside_area(&corners);
-        }
-    }
-    area * h * h
+            ]
+        })
+    })
 }
 
 /// The area (unit cell) of the polygon of a cell's corners with φ > 0 and its edges' zero
@@ -147,16 +155,8 @@ fn cell_inside_area(corners: &[([f64; 2], f64); 4]) -> f64 {
 /// four crossings joins them in order around the cell), summed. Its error is O(h²) in the
 /// contour's curvature; cells across the slice's outer edges are not counted.
 pub fn contour_length(slice: ArrayView2<f64>, h: f64) -> f64 {
-    let (n0, n1) = slice.dim();
-    let mut length = 0.0;
-    for i in 0..n0.saturating_sub(1) {
-        for j in 0..n1.saturating_sub(1) {
-            let corners = [
-                ([0.0, 0.0], slice[[i, j]]),
-                ([1.0, 0.0], slice[[i + 1, j]]),
-                ([1.0, 1.0], slice[[i + 1, j + 1]]),
-                ([0.0, 1.0], slice[[i, j + 1]]),
-            ];
+    let length: f64 = cells(slice)
+        .map(|corners| {
             let mut crossings: Vec<[f64; 2]> = Vec::with_capacity(4);
             for (k, &(p, a)) in corners.iter().enumerate() {
                 let (q, b) = corners[(k + 1) % 4];
@@ -165,12 +165,12 @@ pub fn contour_length(slice: ArrayView2<f64>, h: f64) -> f64 {
                     crossings.push([p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1])]);
                 }
             }
-            length += crossings
+            crossings
                 .chunks_exact(2)
                 .map(|c| (c[0][0] - c[1][0]).hypot(c[0][1] - c[1][1]))
-                .sum::<f64>();
-        }
-    }
+                .sum::<f64>()
+        })
+        .sum();
     length * h
 }
 

@@ -39,7 +39,7 @@
 use super::lbfgs::{flat, Direction};
 use super::RelaxEngine;
 use crate::engines::numerics::nearest_root;
-use crate::engines::spectral::curvature::for_each_mode;
+use crate::engines::spectral::curvature::{at, dot, for_each_mode};
 use crate::engines::spectral::evaluator::{Metric, State, Symbols};
 use crate::engines::spectral::pieces::{reals, reals_mut};
 use crate::engines::spectral::stepper::{COUPLE_ITERATIONS, COUPLE_TOL};
@@ -96,18 +96,6 @@ pub(super) struct CoupleSums {
     pub(super) qm: f64,
     /// Σ a |q_M|².
     pub(super) m2: f64,
-}
-
-/// The reals of one mode starting at `at`.
-#[inline]
-fn at(v: &[f64], at: usize, width: usize) -> &[f64] {
-    &v[at..at + width]
-}
-
-/// Σ over a mode's reals of a·b: Re(a b*).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The [`CoupleSums`] of `state` (its φ̂, ĝ in `nonlinear` and m̂).

@@ -52,13 +52,13 @@ fn for_task_modes(sym: &Symbols, total: usize, t: usize, mut f: impl FnMut(usize
 
 /// The reals of one mode starting at `at`.
 #[inline]
-fn at(v: &[f64], at: usize, width: usize) -> &[f64] {
+pub(crate) fn at(v: &[f64], at: usize, width: usize) -> &[f64] {
     &v[at..at + width]
 }
 
 /// Σ over a mode's reals of a·b: Re(a b*) of modes given as slices.
 #[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 

@@ -517,6 +517,16 @@ mod tests {
     use crate::problem::grid::Grid;
     use crate::problem::model::{SpontaneousCurvature, C0};
 
+    /// The conserved flow's evaluator on `grid` (ε = 1, c0 = 0, one thread).
+    fn plain_evaluator(grid: &Grid) -> Evaluator {
+        let c0 = C0 {
+            shape: SpontaneousCurvature::Zero,
+            ramp_time: None,
+        };
+        let explicit = ExplicitTerm::ConservedRhs;
+        Evaluator::new(grid.clone(), 1.0, c0, Laplacian::Spectral, explicit, 1)
+    }
+
     /// With no membrane (φ ≡ −1: μ = 0, no force) the velocity is the imposed shear alone, at
     /// every point to 1e-14: γ̇y between walls across y, (γ̇/k₀) sin(k₀y) on the periodic box
     /// (y from the box's centre), and u_y = 0.
@@ -525,18 +535,7 @@ mod tests {
         let rate = 0.01;
         for walls in [false, true] {
             let grid = Grid::new(&[12, 16], 0.5, &[false, false]).with_walls(&[false, walls]);
-            let mut ev = Evaluator::new(
-                grid.clone(),
-                1.0,
-                C0 {
-                    shape: SpontaneousCurvature::Zero,
-                    ramp_time: None,
-                },
-                Laplacian::Spectral,
-                ExplicitTerm::ConservedRhs,
-                1,
-            )
-            .with_flow(FlowSpec {
+            let mut ev = plain_evaluator(&grid).with_flow(FlowSpec {
                 viscosity: 1.0,
                 mobility: 0.01,
                 shear_rate: Some(rate),
@@ -595,17 +594,7 @@ mod tests {
                 (2.2 - (0.04 * x * x + 0.03 * y * y + 0.05 * z * z + 0.01 * x * y).sqrt()).tanh()
             });
             let evaluator = |flow: bool| {
-                let ev = Evaluator::new(
-                    grid.clone(),
-                    1.0,
-                    C0 {
-                        shape: SpontaneousCurvature::Zero,
-                        ramp_time: None,
-                    },
-                    Laplacian::Spectral,
-                    ExplicitTerm::ConservedRhs,
-                    1,
-                );
+                let ev = plain_evaluator(&grid);
                 match (flow, fixed) {
                     (false, _) => ev,
                     (true, false) => ev.with_flow(spec),

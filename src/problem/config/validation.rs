@@ -447,29 +447,13 @@ impl Scene {
 
     /// `walls`: known axes, each once, none of them also a mirror axis.
     fn validate_walls(&self) -> Result<()> {
-        let mut seen = Vec::new();
-        for a in &self.walls {
-            let i = axis_index(a, self.dim).ok_or_else(|| {
-                Error::config(
+        axis_list("walls", &self.walls, self.dim)?;
+        if let Symmetry::Axes(axes) = &self.symmetry {
+            if let Some(a) = self.walls.iter().find(|a| axes.contains(a)) {
+                return Err(Error::config(
                     "walls",
-                    format!(
-                        "unknown axis {a:?} for dim {} (use x, y{})",
-                        self.dim,
-                        if self.dim == 3 { ", z" } else { "" }
-                    ),
-                )
-            })?;
-            if seen.contains(&i) {
-                return Err(Error::config("walls", format!("axis {a:?} given twice")));
-            }
-            seen.push(i);
-            if let Symmetry::Axes(axes) = &self.symmetry {
-                if axes.contains(a) {
-                    return Err(Error::config(
-                        "walls",
-                        format!("axis {a:?} has walls and a mirror plane; give one or the other"),
-                    ));
-                }
+                    format!("axis {a:?} has walls and a mirror plane; give one or the other"),
+                ));
             }
         }
         Ok(())
@@ -477,22 +461,7 @@ impl Scene {
 
     fn validate_symmetry(&self) -> Result<()> {
         if let Symmetry::Axes(axes) = &self.symmetry {
-            let mut seen = Vec::new();
-            for a in axes {
-                let i = axis_index(a, self.dim).ok_or_else(|| {
-                    Error::config(
-                        "symmetry",
-                        format!(
-                            "unknown axis {a:?} for dim {} (use x, y{})",
-                            self.dim,
-                            if self.dim == 3 { ", z" } else { "" }
-                        ),
-                    )
-                })?;
-                if seen.contains(&i) {
-                    return Err(Error::config("symmetry", format!("axis {a:?} given twice")));
-                }
-                seen.push(i);
+            for (a, i) in axes.iter().zip(axis_list("symmetry", axes, self.dim)?) {
                 if !self.n[i].is_multiple_of(2) {
                     return Err(Error::config(
                         "symmetry",
@@ -736,4 +705,25 @@ fn validate_shape(s: &Shape, at: &str, dim: usize) -> Result<()> {
             check_center(&f("center"), &s.center, dim)
         }
     }
+}
+
+/// The scene axes named in `names` (field `key`): each known for `dim` and given once.
+fn axis_list(key: &str, names: &[String], dim: usize) -> Result<Vec<usize>> {
+    let mut seen = Vec::new();
+    for a in names {
+        let i = axis_index(a, dim).ok_or_else(|| {
+            Error::config(
+                key,
+                format!(
+                    "unknown axis {a:?} for dim {dim} (use x, y{})",
+                    if dim == 3 { ", z" } else { "" }
+                ),
+            )
+        })?;
+        if seen.contains(&i) {
+            return Err(Error::config(key, format!("axis {a:?} given twice")));
+        }
+        seen.push(i);
+    }
+    Ok(seen)
 }
