@@ -6,7 +6,9 @@
 //! periodic Kolmogorov flow) at one capillary number until it is steady ([`measure`]). Per
 //! reduced area the sizes' departures ψ − ψ_lin(v) from the linear theory cos 2ψ = 2b (taken
 //! at each run's own reduced area, which the phase field measures slightly differently from the
-//! start's) are extrapolated to ε/R0 = 0 by the polynomial through them.
+//! start's) are extrapolated to ε/R0 = 0 by the least-squares line through them (the sizes'
+//! departures differ by less than the runs' last drift, so a polynomial through them would
+//! extrapolate noise).
 //!
 //! Writes `shear.txt`, `cases.csv` (every run), `angles.csv` (per reduced area), the chart
 //! `inclination` (ψ against v with the theory) and `shapes.png` (the finest size's steady shapes).
@@ -14,8 +16,8 @@
 pub mod measure;
 pub mod spec;
 
+use super::fit;
 use super::harness::{Report, Study};
-use super::rates::value_at_zero;
 use super::table::{self, Column, Format, Row};
 use crate::error::Result;
 use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
@@ -99,6 +101,8 @@ pub struct Angle {
     pub inclination: f64,
     /// cos 2ψ/(2b) of that ψ: 1 where the linear theory holds.
     pub cos_ratio: f64,
+    /// cos 2ψ/(2b) at the finest size, its own ψ and v.
+    pub finest_cos_ratio: f64,
     /// Ω/(γ̇/2) at the finest size.
     pub tank_treading: f64,
 }
@@ -141,6 +145,12 @@ impl Row for Angle {
                 "cos 2psi/(2b)",
                 Format::Fixed(3),
                 |r: &Self| r.cos_ratio.into(),
+            ),
+            Column::both(
+                "finest_cos_ratio",
+                "cos 2psi/(2b) finest",
+                Format::Fixed(3),
+                |r: &Self| r.finest_cos_ratio.into(),
             ),
             Column::both(
                 "tank_treading",
@@ -269,16 +279,19 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
     (groups, variations)
 }
 
-/// One reduced area's departures ψ − ψ_lin(v) and their extrapolation to ε/R0 = 0 through the
-/// last three sizes (the finest).
+/// One reduced area's departures ψ − ψ_lin(v) and their extrapolation to ε/R0 = 0 by the
+/// least-squares line in ε/R0 through every size.
 fn extrapolate(group: &[Measured]) -> Angle {
     let finest = group.last().expect("at least two sizes");
     let points: Vec<(f64, f64)> = group
         .iter()
         .map(|m| (1.0 / m.case.r0, m.inclination - m.linear))
         .collect();
-    let extrapolated = value_at_zero(&points[points.len().saturating_sub(3)..]);
+    let (x, y): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
+    let extrapolated = fit::linear(&x, &y).map_or(f64::NAN, |line| line.intercept);
     let inclination = finest.linear + extrapolated;
+    let cos_ratio =
+        |psi: f64| (2.0 * psi.to_radians()).cos() / (2.0 * measure::amplitude(finest.reduced_area));
     Angle {
         start: finest.case.reduced_area,
         reduced_area: finest.reduced_area,
@@ -290,8 +303,8 @@ fn extrapolate(group: &[Measured]) -> Angle {
             .join(" "),
         extrapolated,
         inclination,
-        cos_ratio: (2.0 * inclination.to_radians()).cos()
-            / (2.0 * measure::amplitude(finest.reduced_area)),
+        cos_ratio: cos_ratio(inclination),
+        finest_cos_ratio: cos_ratio(finest.inclination),
         tank_treading: finest.tank_treading,
     }
 }
