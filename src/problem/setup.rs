@@ -182,8 +182,7 @@ fn mirror_axes(scene: &Scene, grid: &Grid, phi: &Array3<f64>, c0: &C0) -> Result
             let sheared = scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some());
             for (s, m) in mirror.iter_mut().enumerate() {
                 let a = internal(s);
-                *m = !walls[s]
-                    && !(sheared && s < 2)
+                *m = !(walls[s] || (sheared && s < 2))
                     && grid.shape[a].is_multiple_of(2)
                     && asymmetry(phi, a) <= SYMMETRY_TOL
                     && c0_asymmetry(c0, a) <= SYMMETRY_TOL;
