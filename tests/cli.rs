@@ -1032,6 +1032,31 @@ fn huge_max_steps_runs_and_a_folder_as_scene_is_exit_2() {
     assert!(stderr(&o).contains("(scene file)"), "{}", stderr(&o));
 }
 
+/// The rates study's `mirror` (the quarter box about x and y) is for the sphere: on the circle
+/// it would mirror both axes of the 2D box, which the Stokes flow refuses, so the study file is
+/// refused with exit 2 naming `circle.mirror`, before anything runs or is written. (A study
+/// file, not a scene: `tests/bad_scenes/` holds scenes for `check` and `run`.)
+#[test]
+fn a_mirrored_circle_in_the_rates_study_is_exit_2() {
+    let tmp = TempDir::new().unwrap();
+    let text = fs::read_to_string(runs_dir().join("studies").join("rates.json")).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["circle"]["mirror"] = Value::Bool(true);
+    let bad = tmp.path().join("rates_mirrored_circle.json");
+    fs::write(&bad, v.to_string()).unwrap();
+    let out = tmp.path().join("o");
+    let o = vesicle([
+        OsStr::new("study"),
+        OsStr::new("rates"),
+        bad.as_os_str(),
+        OsStr::new("--out"),
+        out.as_os_str(),
+    ]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("`circle.mirror`"), "{}", stderr(&o));
+    assert!(!out.exists());
+}
+
 // ---------------------------------------------------------------------------------------------
 // Blow-up
 // ---------------------------------------------------------------------------------------------

@@ -12,6 +12,12 @@
 //!
 //! Each case runs twice, seeded with +a and −a, and the rate is fitted to Q(+a) − Q(−a)
 //! ([`moments`]).
+//!
+//! On a mirror-reduced box (the sphere's quarter box, [`Case::mirror`]) the centroid's
+//! coordinate along each mirrored axis is the mirror plane, 0 (the quarter alone would put it
+//! inside the quarter), and the sum over the computed points is multiplied by
+//! [`Grid::mirror_factor`]: the integrand about a centroid on the mirror planes is even across
+//! them, so Q is the full box's Q, not only proportional to it.
 
 use super::spec::Spec;
 use crate::commands::study::fit;
@@ -62,6 +68,8 @@ pub struct Case {
     pub size: f64,
     /// L/R (closed vesicles) or the box's height over λ (flat).
     pub box_ratio: f64,
+    /// Run on the quarter box mirrored about x and y (the sphere only: `"symmetry": ["x", "y"]`).
+    pub mirror: bool,
 }
 
 /// What one case measured; a row of `cases.csv`.
@@ -168,7 +176,7 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
                        "wavelength": r, "amplitude": sign * spec.amplitude * r}),
         ),
     };
-    let value = json!({
+    let mut value = json!({
         "description": format!("rates study: {} mode {} sigma_bar {} size {}",
             case.kind.name(), case.mode, case.sigma_bar, r),
         "dim": dim, "n": n, "h": h, "eps": 1.0,
@@ -179,6 +187,9 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
         "area": {"method": "fixed", "sigma": sigma},
         "initial": initial,
     });
+    if case.mirror {
+        value["symmetry"] = json!(["x", "y"]);
+    }
     let scene = config::from_value(value)?;
     crate::problem::memory::check(&scene)?;
     Ok(scene)
@@ -258,7 +269,8 @@ fn moments(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<(Series
 }
 
 /// The amplitude moment Q of `case`'s mode in the field `phi` on `grid` (module
-/// documentation). 2D fields run along internal axes 1 (x) and 2 (y).
+/// documentation): the full box's Q also on a mirror-reduced grid. 2D fields run along
+/// internal axes 1 (x) and 2 (y).
 pub fn amplitude(case: &Case, grid: &Grid, phi: &Array3<f64>) -> f64 {
     let c = [grid.coords(0), grid.coords(1), grid.coords(2)];
     let chi = |v: f64| 0.5 * (1.0 + v);
@@ -273,7 +285,15 @@ pub fn amplitude(case: &Case, grid: &Grid, phi: &Array3<f64>) -> f64 {
             first[a] += chi(v) * p[a];
         }
     }
-    let centre = first.map(|f| f / mass);
+    // The centroid lies on every mirror plane (coordinate 0): the computed part alone would
+    // put it inside the reduced box.
+    let centre: [f64; 3] = std::array::from_fn(|a| {
+        if grid.mirrored(a) {
+            0.0
+        } else {
+            first[a] / mass
+        }
+    });
     let mut q = 0.0;
     for (idx, &v) in phi.indexed_iter() {
         let p = at(idx);
@@ -295,5 +315,5 @@ pub fn amplitude(case: &Case, grid: &Grid, phi: &Array3<f64>) -> f64 {
                 Kind::Flat => p[2] * (2.0 * PI * p[1] / case.size).cos(),
             };
     }
-    q
+    q * grid.mirror_factor()
 }

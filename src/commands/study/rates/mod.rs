@@ -42,6 +42,9 @@ impl Row for Measured {
                 r.case.box_ratio.into()
             }),
             Column::csv("points", |r| r.points.iter().product::<usize>().into()),
+            Column::csv("mirrored_axes", |r| {
+                (if r.case.mirror { 2usize } else { 0 }).into()
+            }),
             Column::both("dt", "dt", Format::Sci(2), |r| r.dt.into()),
             Column::both("steps", "steps", Format::Plain, |r| r.steps.into()),
             Column::both("rate", "rate", Format::Sci(4), |r| r.rate.into()),
@@ -188,6 +191,7 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
                                 sigma_bar,
                                 size,
                                 box_ratio: f.box_over_r,
+                                mirror: f.mirror,
                             })
                             .collect(),
                     );
@@ -208,6 +212,7 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
                         sigma_bar,
                         size,
                         box_ratio: f.height,
+                        mirror: false,
                     })
                     .collect(),
             );

@@ -50,6 +50,12 @@ pub struct Family {
     /// L/R, the periodic box's side over the radius.
     #[serde(rename = "box")]
     pub box_over_r: f64,
+    /// Run each case on the quarter box mirrored about x and y (`"symmetry": ["x", "y"]`; the
+    /// quasi-sphere's P_l(cos θ) about z is even in both), z left periodic: a quarter of the
+    /// points, the same rate (the reduced box reproduces the full one to round-off). Sphere
+    /// only: the circle would have both of its axes mirrored, which the Stokes flow refuses.
+    #[serde(default)]
+    pub mirror: bool,
     /// The groups.
     pub groups: Vec<Group>,
 }
@@ -114,6 +120,13 @@ impl Spec {
             if let Some(f) = family {
                 f.validate().map_err(|e| within(key, e))?;
             }
+        }
+        if self.circle.as_ref().is_some_and(|f| f.mirror) {
+            return Err(Error::config(
+                "circle.mirror",
+                "the quarter box is for the sphere only: mirroring both axes of the 2D box \
+                 leaves the Stokes flow no periodic axis, which it refuses",
+            ));
         }
         if let Some(f) = &self.flat {
             if f.wavelengths.is_empty() || f.wavelengths.iter().any(|w| !at_least(*w, 8.0)) {
