@@ -17,6 +17,7 @@
 //!   branch; [`heating`]: budding on heating, the same in the ADE model's Δa0.
 
 pub mod budding;
+pub mod checks;
 pub mod classify;
 pub mod convergence;
 pub mod file;

@@ -254,10 +254,9 @@ impl Flow {
         for c in 0..self.axes.len() {
             let [ub, us] = &mut self.component;
             transform.inverse(&mut self.components[0][c], ub);
+            // At a fixed tension u_σ is never written: it stays the zeros it was made with.
             if parts == 2 {
                 transform.inverse(&mut self.components[1][c], us);
-            } else {
-                us.fill(0.0);
             }
             if let (0, Some(profile)) = (c, &self.shear) {
                 let y = self.axes[1];

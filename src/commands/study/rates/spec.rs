@@ -2,6 +2,7 @@
 //! quasi-circle, the quasi-sphere and the flat membrane, the fluid and the lattice. Strict:
 //! unknown keys are refused, every value checked, errors name the key.
 
+use crate::commands::study::checks::{at_least, h_over_eps, positive, within};
 use crate::error::{Error, Result};
 use serde::Deserialize;
 
@@ -90,9 +91,7 @@ impl Spec {
     /// # Errors
     /// `Error::Config` naming the key.
     pub fn validate(&self) -> Result<()> {
-        if !(self.h_over_eps > 0.0 && self.h_over_eps <= 1.0) {
-            return Err(Error::config("h_over_eps", "need 0 < h/ε ≤ 1"));
-        }
+        h_over_eps(self.h_over_eps)?;
         for (key, v) in [
             ("viscosity", self.viscosity),
             ("mobility", self.mobility),
@@ -100,12 +99,7 @@ impl Spec {
             ("step_per_rate", self.step_per_rate),
             ("e_folds", self.e_folds),
         ] {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(Error::config(
-                    key,
-                    format!("must be finite and > 0, got {v}"),
-                ));
-            }
+            positive(key, v)?;
         }
         if !(self.amplitude > 0.0 && self.amplitude < 0.2) {
             return Err(Error::config(
@@ -186,18 +180,5 @@ impl Group {
             ));
         }
         Ok(())
-    }
-}
-
-/// x ≥ `lo` (false for NaN).
-fn at_least(x: f64, lo: f64) -> bool {
-    x >= lo
-}
-
-/// `e` with its field under `key`.
-fn within(key: &str, e: Error) -> Error {
-    match e {
-        Error::Config { field, reason } => Error::config(format!("{key}.{field}"), reason),
-        other => other,
     }
 }

@@ -2,6 +2,7 @@
 //! capillary number, the channel and the fluid, and single cases that vary one of them. Strict:
 //! unknown keys are refused, every value checked, errors name the key.
 
+use crate::commands::study::checks::{at_least, h_over_eps, positive};
 use crate::error::{Error, Result};
 use serde::Deserialize;
 
@@ -87,9 +88,7 @@ impl Spec {
     /// # Errors
     /// `Error::Config` naming the key.
     pub fn validate(&self) -> Result<()> {
-        if !(self.h_over_eps > 0.0 && self.h_over_eps <= 1.0) {
-            return Err(Error::config("h_over_eps", "need 0 < h/ε ≤ 1"));
-        }
+        h_over_eps(self.h_over_eps)?;
         for (key, v) in [
             ("viscosity", self.viscosity),
             ("mobility", self.mobility),
@@ -135,18 +134,6 @@ impl Spec {
     }
 }
 
-/// A finite value > 0.
-fn positive(key: &str, v: f64) -> Result<()> {
-    if v > 0.0 && v.is_finite() {
-        Ok(())
-    } else {
-        Err(Error::config(
-            key,
-            format!("must be finite and > 0, got {v}"),
-        ))
-    }
-}
-
 /// A reduced area the ellipse start can take and the tank-treading regime holds.
 fn reduced_area(key: &str, v: f64) -> Result<()> {
     if v > 0.3 && v < 1.0 {
@@ -166,9 +153,4 @@ fn channel(key: &str, w: f64) -> Result<()> {
             format!("need W/R0 ≥ 3 (the vesicle clear of the walls), got {w}"),
         ))
     }
-}
-
-/// x ≥ `lo` (false for NaN).
-fn at_least(x: f64, lo: f64) -> bool {
-    x >= lo
 }
