@@ -186,35 +186,26 @@ fn l_pear_two_sphere_limit() {
 /// The prolate at v = 0.789 loses stability to up–down asymmetric deformations where its
 /// up–down test function μ(c̄0) (smallest eigenvalue of the odd block of the constrained
 /// Hessian, `axisym::prolate_updown`) crosses zero. It is stable at c̄0 = 3 (μ > 0) and the zero,
-/// located by regula falsi on [3.5, 3.7], is within 1e-3 of the independent solver's: issue #51
-/// gives its test function as +0.0102 at c̄0 = 3.62 and −0.0009 at 3.64, whose linear zero is
-/// 3.6384 (quoted as 3.64). This program measures μ = +0.0078 at 3.62 and −0.0007 at 3.64 (its
-/// normalisation of μ differs, the zero does not).
+/// located by `prolate_updown_zero` on [3.5, 3.7], is within 1e-3 of the independent solver's:
+/// issue #51 gives its test function as +0.0102 at c̄0 = 3.62 and −0.0009 at 3.64, whose linear
+/// zero is 3.6384 (quoted as 3.64). This program measures μ = +0.0078 at 3.62 and −0.0007 at
+/// 3.64 (its normalisation of μ differs, the zero does not); μ at the zero found is below 1e-6.
 #[test]
 fn prolate_loses_updown_stability_near_3_64() {
     let v = 0.789;
-    let mu = |c0: f64| axisym::prolate_updown(v, &Options::default().with_c0(c0)).unwrap();
+    let opts = Options::default();
+    let mu = |c0: f64| axisym::prolate_updown(v, &opts.with_c0(c0)).unwrap();
     assert!(mu(3.0) > 0.1, "stable at c0 = 3");
-    let (mut lo, mut hi) = (3.5, 3.7);
-    let (mut mlo, mut mhi) = (mu(lo), mu(hi));
-    assert!(mlo > 0.0 && mhi < 0.0, "μ(3.5) = {mlo}, μ(3.7) = {mhi}");
-    let mut root = lo;
-    for _ in 0..6 {
-        root = lo - mlo * (hi - lo) / (mhi - mlo);
-        let m = mu(root);
-        if m.abs() < 1e-7 {
-            break;
-        }
-        if m > 0.0 {
-            (lo, mlo) = (root, m);
-        } else {
-            (hi, mhi) = (root, m);
-        }
-    }
+    let root = axisym::prolate_updown_zero(v, (3.5, 3.7), &opts).expect("a zero in [3.5, 3.7]");
+    assert!(mu(root).abs() < 1e-6, "μ({root}) = {}", mu(root));
     let issue = 3.62 + 0.02 * 0.0102 / (0.0102 + 0.0009);
     assert!(
         (root - issue).abs() < 1e-3,
         "zero of μ at c0 = {root}, independent {issue}"
+    );
+    assert!(
+        axisym::prolate_updown_zero(v, (3.0, 3.5), &opts).is_none(),
+        "no sign change on [3, 3.5]"
     );
 }
 

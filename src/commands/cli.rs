@@ -254,6 +254,14 @@ enum Study {
         after_help = "Example:\n  vesicle study budding runs/studies/budding.json --out out/budding [--quick]"
     )]
     Budding(StudyArgs),
+    /// The budding onset: the c0 R0 where the prolate at v leaves up-down symmetry (a coarse
+    /// path of L-BFGS relaxations, each after a small seeded asymmetry, then bisection), at
+    /// several R0 and seed strengths, extrapolated in eps/R0 beside the sharp prolate's loss of
+    /// up-down stability at the same v.
+    #[command(
+        after_help = "Example:\n  vesicle study onset runs/studies/onset.json --out out/onset [--quick]"
+    )]
+    Onset(StudyArgs),
     /// Budding on heating (ADE): from the axisymmetric ADE prolate at v, Δa0 stepped up and
     /// down with an L-BFGS relaxation at each step (a small up-down asymmetry seeded first), at
     /// one or more R0; w, Δa, neck and skewness against Δa0 beside the sharp ADE prolate and
@@ -478,6 +486,10 @@ fn dispatch(cli: Cli) -> Result<i32, Error> {
         }
         Command::Study(Study::Budding(args)) => {
             args.run(crate::commands::study::budding::Budding::NAME)?;
+            Ok(0)
+        }
+        Command::Study(Study::Onset(args)) => {
+            args.run(crate::commands::study::onset::OnsetStudy::NAME)?;
             Ok(0)
         }
         Command::Study(Study::Heating(args)) => {

@@ -11,6 +11,7 @@ use crate::commands::study::file;
 use crate::commands::study::harness::{self, Report, Study};
 use crate::commands::study::heating::Heating;
 use crate::commands::study::nonaxisymmetric::Nonaxisymmetric;
+use crate::commands::study::onset::OnsetStudy;
 use crate::commands::study::pinning::PinningStudy;
 use crate::commands::study::precision::Precision;
 use crate::commands::study::rates::RatesStudy;
@@ -91,6 +92,7 @@ pub fn run(name: &str, args: &Args) -> Result<Vec<Table>> {
         Stability::NAME => run_file::<Stability>(args),
         Budding::NAME => run_file::<Budding>(args),
         Heating::NAME => run_file::<Heating>(args),
+        OnsetStudy::NAME => run_file::<OnsetStudy>(args),
         PinningStudy::NAME => run_file::<PinningStudy>(args),
         ResolutionStudy::NAME => run_file::<ResolutionStudy>(args),
         AdeStability::NAME => run_file::<AdeStability>(args),
@@ -183,6 +185,7 @@ mod tests {
             "stability",
             "budding",
             "heating",
+            "onset",
             "pinning",
             "resolution",
             "ade",

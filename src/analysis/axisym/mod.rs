@@ -65,7 +65,7 @@ pub use limits::{l_pear_at, l_sto_at, limit_line, Limit, LimitShape};
 pub use model::{ade_c0_eff, ade_da0, Model};
 pub use pear::{
     follow_pear, l_pear, l_pear_radii, neck_limit, pear_at, pear_bifurcation, prolate_updown,
-    symmetric_fold, Bifurcation, NeckLimit, PearBranch, PearEnd, NECK_FIT,
+    prolate_updown_zero, symmetric_fold, Bifurcation, NeckLimit, PearBranch, PearEnd, NECK_FIT,
 };
 
 /// The branches of the diagram: the three of c0 = 0 ([`Branch::ALL`]) and the pear.

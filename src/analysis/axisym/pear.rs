@@ -216,6 +216,43 @@ pub fn prolate_updown(v: f64, opts: &Options) -> Option<f64> {
     odd_stability(&full, &a, s.lambda_v).map(|(mu, _)| mu)
 }
 
+/// Where the prolate at reduced volume `v` loses up–down stability as c̄0 grows: the zero of
+/// its test function μ(c̄0) ([`prolate_updown`]) in the bracket `(lo, hi)`, which must hold
+/// μ(lo) > 0 > μ(hi), by regula falsi with the Illinois halving until |μ| < 1e-8 or the
+/// bracket is below 1e-7 (μ is smooth and nearly linear there: at v = 0.789 the zero 3.6383
+/// is found in 4–6 solves). `None` if the prolate is not found or the bracket holds no sign
+/// change. `opts.c0` is replaced.
+pub fn prolate_updown_zero(v: f64, (lo, hi): (f64, f64), opts: &Options) -> Option<f64> {
+    let mu = |c0: f64| prolate_updown(v, &opts.clone().with_c0(c0));
+    let (mut a, mut b) = (lo, hi);
+    let (mut fa, mut fb) = (mu(a)?, mu(b)?);
+    if !(fa > 0.0 && fb < 0.0) {
+        return None;
+    }
+    let mut side = 0;
+    for _ in 0..60 {
+        let c = (a * fb - b * fa) / (fb - fa);
+        let fc = mu(c)?;
+        if fc.abs() < 1e-8 || (b - a) < 1e-7 {
+            return Some(c);
+        }
+        if fc > 0.0 {
+            (a, fa) = (c, fc);
+            if side == 1 {
+                fb *= 0.5;
+            }
+            side = 1;
+        } else {
+            (b, fb) = (c, fc);
+            if side == -1 {
+                fa *= 0.5;
+            }
+            side = -1;
+        }
+    }
+    Some((a * fb - b * fa) / (fb - fa))
+}
+
 /// The budding limit read off the pear branch as its neck closes ([`neck_limit`]).
 #[derive(Clone, Copy, Debug)]
 pub struct NeckLimit {

@@ -14,7 +14,8 @@
 //! * [`nonaxisymmetric`]: a non-axisymmetric ADE state (triaxial, starfish) against the
 //!   axisymmetric branches at the same (v, α, Δa0), phase field and sharp;
 //! * [`budding`]: quasi-static budding in c̄0 through stationary states beside the sharp pear
-//!   branch; [`heating`]: budding on heating, the same in the ADE model's Δa0.
+//!   branch; [`onset`]: where it starts, bisected and converged in ε/R0 beside the sharp
+//!   instability; [`heating`]: budding on heating, the same in the ADE model's Δa0.
 
 pub mod budding;
 pub mod checks;
@@ -26,6 +27,7 @@ pub mod harness;
 pub mod heating;
 pub mod levels;
 pub mod nonaxisymmetric;
+pub mod onset;
 pub mod pinning;
 pub mod precision;
 pub mod rates;

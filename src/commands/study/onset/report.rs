@@ -1,0 +1,360 @@
+//! The onset study's report: the printed tables, `onset_steps.csv`, `onset.csv`, the
+//! extrapolation of the shift in ε/R0, and the charts `onset_skewness` and `onset_eps`.
+//!
+//! **Extrapolation in the seed.** The prolate loses up–down stability subcritically: below the
+//! instability c* an unstable pear of amplitude ∝ √(c* − c̄0) separates it from the budded
+//! state, and a seed of strength δ carries the state across from c* − gδ² on. So at each R0 with
+//! two or more seeds the onset is fitted as onset(δ) = o0 − gδ² by least squares in δ², and o0
+//! is the onset of a vanishing seed: the loss of stability itself ([`SeedLimit`]).
+//!
+//! **Extrapolation in ε/R0.** The shift from the sharp instability, s = onset − c̄0*(v), is a
+//! phase-field error; for each seed, and for o0, it is fitted as s = s0 + b ε/R0 by least
+//! squares over every R0, and through the two finest R0 alone. s0 is the extrapolated shift;
+//! the two fits' difference shows how far the data are from the linear law.
+
+use super::{Onset, Spec, Step};
+use crate::commands::study::fit;
+use crate::commands::study::harness::Report;
+use crate::commands::study::table::{self, Column, Format};
+use crate::error::Result;
+use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
+use std::fmt::Write as _;
+
+impl table::Row for Step {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("r0", "R0/eps", Format::Plain, |r| r.r0.into()),
+            Column::both("seed", "seed", Format::Plain, |r| r.seed.into()),
+            Column::both("stage", "stage", Format::Plain, |r| r.stage.into()),
+            Column::both("c0", "c0R0", Format::Fixed(4), |r| r.c0.into()),
+            Column::both("iterations", "iters", Format::Plain, |r| {
+                r.iterations.into()
+            }),
+            Column::both("stopped", "stopped", Format::Plain, |r| {
+                r.stopped.as_str().into()
+            }),
+            Column::both("residual", "residual", Format::Sci(1), |r| {
+                r.residual.into()
+            }),
+            Column::both("e", "e", Format::Fixed(4), |r| r.e.into()),
+            Column::both("v", "v", Format::Fixed(4), |r| r.v.into()),
+            Column::both("skewness", "skew", Format::Fixed(4), |r| r.skewness.into()),
+            Column::both("neck", "neck/eps", Format::Fixed(2), |r| r.neck.into()),
+            Column::both("pieces", "pieces", Format::Plain, |r| r.pieces.into()),
+            Column::both("state", "state", Format::Plain, |r| r.state.as_str().into()),
+            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| {
+                r.wall_seconds.into()
+            })
+            .unit("s"),
+        ]
+    }
+}
+
+impl table::Row for Onset {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("r0", "R0/eps", Format::Plain, |r| r.r0.into()),
+            Column::both("seed", "seed", Format::Plain, |r| r.seed.into()),
+            Column::both("below", "symmetric at", Format::Fixed(4), |r| {
+                r.below.into()
+            }),
+            Column::both("above", "asymmetric at", Format::Fixed(4), |r: &Self| {
+                r.above.into()
+            })
+            .or("none"),
+            Column::both("onset", "onset", Format::Fixed(4), |r| r.onset.into()),
+            Column::both("v", "v", Format::Fixed(4), |r| r.v.into()),
+            Column::both("sharp", "sharp", Format::Fixed(4), |r| r.sharp.into()),
+            Column::both("shift", "shift", Format::Fixed(4), |r| r.shift.into()),
+            Column::both("relaxations", "relax", Format::Plain, |r| {
+                r.relaxations.into()
+            }),
+            Column::both("wall_seconds", "wall", Format::Fixed(0), |r: &Self| {
+                r.wall_seconds.into()
+            })
+            .unit("s"),
+        ]
+    }
+}
+
+/// The onset of one R0 extrapolated to a vanishing seed (see the module docs); a row of
+/// `onset_limit.csv`.
+#[derive(Clone, Copy, Debug)]
+pub struct SeedLimit {
+    /// R0/ε.
+    pub r0: f64,
+    /// Seeds fitted.
+    pub seeds: usize,
+    /// o0: the onset as δ → 0.
+    pub onset: f64,
+    /// g of onset(δ) = o0 − gδ².
+    pub g: f64,
+    /// The sharp instability at this R0's v (the mean over its runs).
+    pub sharp: f64,
+    /// o0 − sharp.
+    pub shift: f64,
+}
+
+impl table::Row for SeedLimit {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("r0", "R0/eps", Format::Plain, |r| r.r0.into()),
+            Column::both("seeds", "seeds", Format::Plain, |r| r.seeds.into()),
+            Column::both("onset", "onset (seed -> 0)", Format::Fixed(4), |r| {
+                r.onset.into()
+            }),
+            Column::both("g", "g", Format::Fixed(1), |r| r.g.into()),
+            Column::both("sharp", "sharp", Format::Fixed(4), |r| r.sharp.into()),
+            Column::both("shift", "shift", Format::Fixed(4), |r| r.shift.into()),
+        ]
+    }
+}
+
+/// The onset of each R0 of `spec` with two or more seeds bracketed, extrapolated to δ → 0.
+pub fn seed_limits(spec: &Spec, onsets: &[Onset]) -> Vec<SeedLimit> {
+    spec.r0
+        .iter()
+        .filter_map(|&r0| {
+            let mine: Vec<&Onset> = onsets
+                .iter()
+                .filter(|o| o.r0 == r0 && o.onset.is_finite())
+                .collect();
+            let d2: Vec<f64> = mine.iter().map(|o| o.seed * o.seed).collect();
+            let y: Vec<f64> = mine.iter().map(|o| o.onset).collect();
+            let line = fit::linear(&d2, &y)?;
+            let sharp = mine.iter().map(|o| o.sharp).sum::<f64>() / mine.len() as f64;
+            Some(SeedLimit {
+                r0,
+                seeds: line.n,
+                onset: line.intercept,
+                g: -line.slope,
+                sharp,
+                shift: line.intercept - sharp,
+            })
+        })
+        .collect()
+}
+
+/// The intercepts at ε/R0 = 0 of the lines s = s0 + b ε/R0 through `(r0, s)`: over every
+/// point, and through the two of largest R0 (the points in increasing R0; NaN with fewer than
+/// two).
+fn intercepts(points: &[(f64, f64)]) -> (f64, f64) {
+    let (x, s): (Vec<f64>, Vec<f64>) = points
+        .iter()
+        .filter(|p| p.1.is_finite())
+        .map(|&(r0, s)| (1.0 / r0, s))
+        .unzip();
+    let intercept = |x: &[f64], s: &[f64]| fit::linear(x, s).map_or(f64::NAN, |l| l.intercept);
+    let k = x.len().saturating_sub(2);
+    (intercept(&x, &s), intercept(&x[k..], &s[k..]))
+}
+
+/// The extrapolation of one seed's shifts in ε/R0.
+#[derive(Clone, Copy, Debug)]
+pub struct Extrapolation {
+    /// The seed strength.
+    pub seed: f64,
+    /// s0 of the least-squares line over every R0 (NaN with fewer than two).
+    pub all: f64,
+    /// s0 of the line through the two finest R0 (NaN with fewer than two).
+    pub finest: f64,
+}
+
+/// The extrapolated shift of each seed of `spec` from `onsets` (see the module docs).
+pub fn extrapolate(spec: &Spec, onsets: &[Onset]) -> Vec<Extrapolation> {
+    spec.seeds
+        .iter()
+        .map(|&seed| {
+            let points: Vec<(f64, f64)> = onsets
+                .iter()
+                .filter(|o| o.seed == seed)
+                .map(|o| (o.r0, o.shift))
+                .collect();
+            let (all, finest) = intercepts(&points);
+            Extrapolation { seed, all, finest }
+        })
+        .collect()
+}
+
+/// The report of the relaxations `steps` and the `onsets` of `spec`.
+///
+/// # Errors
+/// `Error::Config` if a CSV row cannot be written (a bug).
+pub fn report(spec: &Spec, steps: &[Step], onsets: &[Onset]) -> Result<Report> {
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "budding onset: the prolate at v = {} (sharp start at c0 R0 = {}), c0 R0 stepped up \
+         until it leaves up-down symmetry, then the bracket bisected {} times; L-BFGS through \
+         stationary states",
+        spec.v, spec.c0[0], spec.bisections
+    );
+    text.push_str(&table::text(steps));
+    let unconverged = steps.iter().filter(|s| s.stopped != "stationary").count();
+    if unconverged > 0 {
+        let _ = writeln!(
+            text,
+            "warning: {unconverged} relaxations stopped before stop_residual: their state is \
+             not a stationary one"
+        );
+    }
+    text.push('\n');
+    text.push_str(&table::text(onsets));
+    let _ = writeln!(
+        text,
+        "sharp: the zero in c0 R0 of the axisymmetric prolate's up-down test function at the \
+         phase field's phi = 0 v (last symmetric state); shift = onset - sharp"
+    );
+    for e in extrapolate(spec, onsets) {
+        let _ = writeln!(
+            text,
+            "seed {}: shift extrapolated to eps/R0 -> 0 (linear in eps/R0): {:+.4} over every \
+             R0, {:+.4} through the two finest",
+            e.seed, e.all, e.finest
+        );
+    }
+    let limits = seed_limits(spec, onsets);
+    if !limits.is_empty() {
+        let _ = writeln!(
+            text,
+            "\nthe onset of a vanishing seed at each R0, onset(seed) = o0 - g seed^2 by least \
+             squares (the subcritical barrier: a seed crosses it from sharp - g seed^2 on)"
+        );
+        text.push_str(&table::text(&limits));
+        let points: Vec<(f64, f64)> = limits.iter().map(|l| (l.r0, l.shift)).collect();
+        let (all, finest) = intercepts(&points);
+        let _ = writeln!(
+            text,
+            "seed -> 0: shift extrapolated to eps/R0 -> 0 (linear in eps/R0): {all:+.4} over \
+             every R0, {finest:+.4} through the two finest"
+        );
+    }
+    let mut report = Report {
+        text,
+        ..Report::default()
+    };
+    report.table("onset_steps.csv", steps)?;
+    report.table("onset.csv", onsets)?;
+    if !limits.is_empty() {
+        report.table("onset_limit.csv", &limits)?;
+    }
+    report.chart("onset_skewness", skewness_chart(spec, steps));
+    report.chart("onset_eps", onset_chart(spec, onsets, &limits));
+    Ok(report)
+}
+
+/// |skewness| against c̄0 for every run (R0 by colour, seed by marker), sorted in c̄0, with
+/// the symmetric threshold.
+fn skewness_chart(spec: &Spec, steps: &[Step]) -> Figure {
+    let mut fig = Figure::new(
+        "Budding onset: up-down asymmetry of the relaxed states",
+        Axis::linear("c0 R0"),
+        Axis::log("|skewness| of the volume along z"),
+    );
+    fig.legend = Corner::UpperLeft;
+    let shapes = [
+        Shape::Circle,
+        Shape::Square,
+        Shape::Triangle,
+        Shape::Diamond,
+    ];
+    for (i, &r0) in spec.r0.iter().enumerate() {
+        for (j, &seed) in spec.seeds.iter().enumerate() {
+            let mut pts: Vec<(f64, f64)> = steps
+                .iter()
+                .filter(|s| s.r0 == r0 && s.seed == seed && s.skewness != 0.0)
+                .map(|s| (s.c0, s.skewness.abs()))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            fig.push(Series::new(
+                format!("R0 = {r0} eps, seed {seed}"),
+                pts,
+                colour(i),
+                Mark::LinePoints(shapes[j % shapes.len()]),
+            ));
+        }
+    }
+    let (lo, hi) = (spec.c0[0], spec.c0[spec.c0.len() - 1]);
+    fig.push(Series::new(
+        "symmetric below",
+        vec![
+            (lo, super::budding::SYMMETRIC_SKEWNESS),
+            (hi, super::budding::SYMMETRIC_SKEWNESS),
+        ],
+        colour(7),
+        Mark::Dashed,
+    ));
+    fig
+}
+
+/// The onset against ε/R0 for each seed and for a vanishing seed (`limits`), the sharp
+/// instability at each run's v, and each series' least-squares line over every R0 (dashed, to
+/// ε/R0 = 0).
+fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
+    let mut fig = Figure::new(
+        "Budding onset against eps/R0 beside the sharp instability",
+        Axis::linear("eps / R0"),
+        Axis::linear("c0 R0"),
+    );
+    fig.legend = Corner::LowerLeft;
+    let shapes = [
+        Shape::Circle,
+        Shape::Square,
+        Shape::Triangle,
+        Shape::Diamond,
+    ];
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = spec
+        .seeds
+        .iter()
+        .map(|&seed| {
+            let pts = onsets
+                .iter()
+                .filter(|o| o.seed == seed && o.onset.is_finite())
+                .map(|o| (1.0 / o.r0, o.onset))
+                .collect();
+            (format!("phase field, seed {seed}"), pts)
+        })
+        .collect();
+    if !limits.is_empty() {
+        let pts = limits.iter().map(|l| (1.0 / l.r0, l.onset)).collect();
+        series.push(("phase field, seed -> 0".to_string(), pts));
+    }
+    for (j, (name, pts)) in series.into_iter().enumerate() {
+        let (x, y): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
+        fig.push(Series::new(
+            name,
+            pts,
+            colour(j),
+            Mark::Points(shapes[j % shapes.len()]),
+        ));
+        if let Some(line) = fit::linear(&x, &y) {
+            let top = x.iter().copied().fold(0.0, f64::max);
+            fig.push(
+                Series::new(
+                    "",
+                    vec![
+                        (0.0, line.intercept),
+                        (top, line.intercept + line.slope * top),
+                    ],
+                    colour(j),
+                    Mark::Dashed,
+                )
+                .unlisted(),
+            );
+        }
+    }
+    let mut sharp: Vec<(f64, f64)> = onsets
+        .iter()
+        .filter(|o| o.sharp.is_finite())
+        .map(|o| (1.0 / o.r0, o.sharp))
+        .collect();
+    sharp.sort_by(|a, b| a.0.total_cmp(&b.0));
+    sharp.dedup_by(|a, b| a.0 == b.0);
+    fig.push(Series::new(
+        "sharp instability at the run's v",
+        sharp,
+        colour(3),
+        Mark::Points(Shape::Cross),
+    ));
+    fig
+}

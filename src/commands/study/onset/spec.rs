@@ -1,0 +1,184 @@
+//! The onset study's file: its keys ([`Spec`]), their checks, and the scene of one R0 with the
+//! box sized to the start prolate and the budded pear (the heating study's
+//! [`box_size`](super::super::heating::spec::box_size)).
+
+use super::super::budding::{within, MAX_EPS_C0};
+use super::super::heating::spec::box_size;
+use crate::error::{Error, Result};
+use crate::problem::config::{self, Scene};
+use serde::Deserialize;
+use serde_json::{json, Value};
+
+/// Keys of the scene that the study sets itself.
+const STUDY_KEYS: [&str; 6] = ["initial", "n", "c0", "dynamics", "symmetry", "volume"];
+
+/// Most bisections of an onset bracket the file may ask for (2⁻¹² of a coarse step is far
+/// below what the stop residual resolves).
+pub const MAX_BISECTIONS: usize = 12;
+
+/// The study file's keys.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Spec {
+    /// `"onset"`.
+    pub study: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// The lattice spacing, width and relaxation: a scene object (`dim` 3, `h`, `eps`, `dt`,
+    /// `stop_residual`, `max_steps`, `prepare_steps`, …) without `initial`, `n`, `c0`,
+    /// `dynamics`, `symmetry` and `volume`, which the study sets.
+    pub scene: Value,
+    /// Reduced volume of the start prolate (the sharp one, at `c0[0]`), in (0, 1).
+    pub v: f64,
+    /// The R0/ε of the runs, increasing.
+    pub r0: Vec<f64>,
+    /// The seed strengths δ, each a run of its own at every R0, in (0, 0.1].
+    pub seeds: Vec<f64>,
+    /// The coarse path in c̄0 = c0 R0, increasing: stepped up until the first state that is
+    /// not up–down symmetric.
+    pub c0: Vec<f64>,
+    /// Bisections of the bracket (last symmetric c̄0, first asymmetric c̄0), each from the last
+    /// symmetric state.
+    pub bisections: usize,
+}
+
+/// Refuse a bad study file, naming the key.
+///
+/// # Errors
+/// `Error::Config` naming the key.
+pub fn check(spec: &Spec) -> Result<()> {
+    if !(spec.v > 0.0 && spec.v < 1.0) {
+        return Err(Error::config(
+            "v",
+            format!("must lie in (0, 1), got {}", spec.v),
+        ));
+    }
+    if spec.r0.is_empty() || spec.r0.iter().any(|r| !(r.is_finite() && *r > 0.0)) {
+        return Err(Error::config("r0", "needs one or more R0/eps, each > 0"));
+    }
+    if spec.r0.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(Error::config("r0", "must increase"));
+    }
+    if spec.seeds.is_empty() || spec.seeds.iter().any(|s| !(*s > 0.0 && *s <= 0.1)) {
+        return Err(Error::config(
+            "seeds",
+            "needs one or more seed strengths, each in (0, 0.1]",
+        ));
+    }
+    if spec.c0.len() < 2 || spec.c0.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(Error::config(
+            "c0",
+            "needs two or more values of c0 R0, increasing",
+        ));
+    }
+    let smallest = spec.r0[0];
+    if let Some(c) = spec
+        .c0
+        .iter()
+        .find(|c| !c.is_finite() || c.abs() / smallest > MAX_EPS_C0 + 1e-12)
+    {
+        return Err(Error::config(
+            "c0",
+            format!(
+                "c0 R0 = {c} at R0 = {smallest} eps is eps|c0| = {:.3}, above {MAX_EPS_C0}: the \
+                 preferred bud radius 2/c0 would come within ten interface widths",
+                c.abs() / smallest
+            ),
+        ));
+    }
+    if spec.bisections > MAX_BISECTIONS {
+        return Err(Error::config(
+            "bisections",
+            format!("at most {MAX_BISECTIONS}, got {}", spec.bisections),
+        ));
+    }
+    Ok(())
+}
+
+/// The scene of one R0: the file's `scene` with L-BFGS, mirror planes x and y (a pear breaks
+/// the up–down mirror), the box of [`box_size`] for the contour `(r, z)` (R0 = 1) and a
+/// placeholder initial shape, a sphere of radius R0/2 that fits every such box (the start
+/// field, checked on its own, replaces it).
+///
+/// # Errors
+/// `Error::Config` naming `scene.<key>` for a key the study sets or an invalid scene.
+pub fn base_scene(spec: &Spec, r0: f64, r: &[f64], z: &[f64]) -> Result<Scene> {
+    let Value::Object(obj) = &spec.scene else {
+        return Err(Error::config("scene", "must be a scene object"));
+    };
+    if let Some(k) = STUDY_KEYS.iter().find(|k| obj.contains_key(**k)) {
+        return Err(Error::config(
+            format!("scene.{k}"),
+            "is set by the study (initial: the axisymmetric prolate at v and c0[0]; n: sized \
+             to R0; c0: the path; dynamics: relaxational; symmetry: x and y); remove it",
+        ));
+    }
+    let num = |k: &str| obj.get(k).and_then(Value::as_f64).unwrap_or(1.0);
+    let (h, eps) = (num("h"), num("eps"));
+    let mut value = spec.scene.clone();
+    value["n"] = json!(box_size(r, z, r0, h, eps));
+    value["initial"] = json!({"shape": "sphere", "radius": 0.5 * r0 * eps});
+    value["dynamics"] = json!("relaxational");
+    value["symmetry"] = json!(["x", "y"]);
+    let scene = config::load_value(value, &[], None).map_err(within("scene"))?;
+    if scene.dim != 3 {
+        return Err(Error::config("scene.dim", "the onset study is 3D"));
+    }
+    if scene.stop_residual.is_none() {
+        return Err(Error::config(
+            "scene.stop_residual",
+            "each relaxation needs stop_residual (a state is classified only once stationary)",
+        ));
+    }
+    Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(edit: impl FnOnce(&mut Value)) -> std::result::Result<Spec, String> {
+        let mut v = json!({
+            "study": "onset",
+            "scene": {"dim": 3, "h": 1.0, "dt": 0.01, "stop_residual": 1e-6, "max_steps": 100},
+            "v": 0.8, "r0": [10.0, 14.0], "seeds": [0.02, 0.05], "c0": [1.0, 1.5],
+            "bisections": 2
+        });
+        edit(&mut v);
+        let spec: Spec = serde_json::from_value(v).map_err(|e| e.to_string())?;
+        check(&spec).map_err(|e| e.to_string())?;
+        let (r, z) = ([0.0, 0.6, 0.0], [-1.3, 0.0, 1.3]);
+        base_scene(&spec, spec.r0[0], &r, &z).map_err(|e| e.to_string())?;
+        Ok(spec)
+    }
+
+    fn refused(edit: impl FnOnce(&mut Value)) -> String {
+        spec(edit).expect_err("should be refused")
+    }
+
+    /// The file's refusals name the key: v outside (0, 1), R0 not increasing, a seed of 0 (no
+    /// asymmetry: the symmetric state would never be left) or above 0.1, a path that does not
+    /// increase, ε|c0| above 0.2 at the smallest R0 (c0 R0 = 2.5 at 10ε), too many bisections,
+    /// a scene key the study sets, and a scene without a stop residual.
+    #[test]
+    fn bad_files_are_refused_naming_the_key() {
+        assert!(spec(|_| {}).is_ok());
+        assert!(refused(|v| v["v"] = json!(1.0)).contains("`v`"));
+        assert!(refused(|v| v["r0"] = json!([14.0, 10.0])).contains("`r0`"));
+        assert!(refused(|v| v["seeds"] = json!([0.0])).contains("`seeds`"));
+        assert!(refused(|v| v["seeds"] = json!([0.2])).contains("`seeds`"));
+        assert!(refused(|v| v["c0"] = json!([1.5, 1.0])).contains("`c0`"));
+        let high = refused(|v| v["c0"] = json!([1.0, 2.5]));
+        assert!(high.contains("`c0`") && high.contains("0.250"), "{high}");
+        assert!(refused(|v| v["bisections"] = json!(13)).contains("`bisections`"));
+        assert!(refused(|v| v["scene"]["n"] = json!([8, 8, 8])).contains("`scene.n`"));
+        let no_stop = refused(|v| {
+            v["scene"]
+                .as_object_mut()
+                .expect("an object")
+                .remove("stop_residual");
+        });
+        assert!(no_stop.contains("`scene.stop_residual`"), "{no_stop}");
+    }
+}
