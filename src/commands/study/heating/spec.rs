@@ -130,42 +130,59 @@ pub fn box_size(r: &[f64], z: &[f64], r0: f64, h: f64, eps: f64) -> [usize; 3] {
     [across, across, side((0.5 * (hi - lo)).max(MIN_HALF.1))]
 }
 
-/// The scene of one R0: the file's `scene` with L-BFGS, mirror planes x and y, the box of
-/// [`box_size`] and a placeholder initial shape (the start field replaces it).
+/// The scene of one R0: the file's `scene` through [`sized_scene`], with a stop.
 ///
 /// # Errors
 /// `Error::Config` naming `scene.<key>` for a key the study sets or an invalid scene.
 pub(super) fn base_scene(spec: &Spec, r0: f64, r: &[f64], z: &[f64]) -> Result<Scene> {
-    let Value::Object(obj) = &spec.scene else {
-        return Err(Error::config("scene", "must be a scene object"));
-    };
-    if let Some(k) = STUDY_KEYS.iter().find(|k| obj.contains_key(**k)) {
-        return Err(Error::config(
-            format!("scene.{k}"),
-            "is set by the study (initial: the axisymmetric ADE prolate at v and da0[0]; n: \
-             sized to R0; c0: 0; ade: alpha and the path; dynamics: relaxational; symmetry: x \
-             and y); remove it",
-        ));
-    }
-    let num = |k: &str| obj.get(k).and_then(Value::as_f64).unwrap_or(1.0);
-    let (h, eps) = (num("h"), num("eps"));
-    let mut value = spec.scene.clone();
-    value["n"] = json!(box_size(r, z, r0, h, eps));
-    value["initial"] = json!({
-        "shape": "spheroid", "reduced_volume": spec.v, "kind": "prolate", "axis": "z",
-        "r0": r0 * eps
-    });
-    value["dynamics"] = json!("relaxational");
-    value["symmetry"] = json!(["x", "y"]);
-    let scene = config::load_value(value, &[], None).map_err(within("scene"))?;
-    if scene.dim != 3 {
-        return Err(Error::config("scene.dim", "the heating study is 3D"));
-    }
+    let set_by = "initial: the axisymmetric ADE prolate at v and da0[0]; n: sized to R0; c0: 0; \
+                  ade: alpha and the path; dynamics: relaxational; symmetry: x and y";
+    let scene = sized_scene(&spec.scene, &STUDY_KEYS, set_by, r0, (r, z))?;
     if scene.stop_residual.is_none() && scene.max_steps.is_none() {
         return Err(Error::config(
             "scene.stop_residual",
             "each relaxation needs a stop: stop_residual (and max_steps as a cap)",
         ));
+    }
+    Ok(scene)
+}
+
+/// The 3D scene of one R0 of a continuation along the prolate's axis (the heating and onset
+/// studies): the study file's `scene`, which must not hold any of `keys` (`set_by` says what
+/// the study sets them to), with L-BFGS, mirror planes x and y (a pear breaks the up–down
+/// mirror), the box of [`box_size`] for the contour `(r, z)` (R0 = 1) at R0 = `r0` ε, and a
+/// placeholder initial shape, a sphere of radius R0/2 that fits every such box (the start
+/// field, checked on its own, replaces it).
+///
+/// # Errors
+/// `Error::Config` naming `scene.<key>` for a key the study sets, a 2D scene or an invalid
+/// scene.
+pub fn sized_scene(
+    scene: &Value,
+    keys: &[&str],
+    set_by: &str,
+    r0: f64,
+    (r, z): (&[f64], &[f64]),
+) -> Result<Scene> {
+    let Value::Object(obj) = scene else {
+        return Err(Error::config("scene", "must be a scene object"));
+    };
+    if let Some(k) = keys.iter().find(|k| obj.contains_key(**k)) {
+        return Err(Error::config(
+            format!("scene.{k}"),
+            format!("is set by the study ({set_by}); remove it"),
+        ));
+    }
+    let num = |k: &str| obj.get(k).and_then(Value::as_f64).unwrap_or(1.0);
+    let (h, eps) = (num("h"), num("eps"));
+    let mut value = scene.clone();
+    value["n"] = json!(box_size(r, z, r0, h, eps));
+    value["initial"] = json!({"shape": "sphere", "radius": 0.5 * r0 * eps});
+    value["dynamics"] = json!("relaxational");
+    value["symmetry"] = json!(["x", "y"]);
+    let scene = config::load_value(value, &[], None).map_err(within("scene"))?;
+    if scene.dim != 3 {
+        return Err(Error::config("scene.dim", "the study is 3D"));
     }
     Ok(scene)
 }

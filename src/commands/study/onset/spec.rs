@@ -1,13 +1,12 @@
 //! The onset study's file: its keys ([`Spec`]), their checks, and the scene of one R0 with the
-//! box sized to the start prolate and the budded pear (the heating study's
-//! [`box_size`](super::super::heating::spec::box_size)).
+//! box sized to the start prolate and the budded pear (the heating study's [`sized_scene`]).
 
-use super::super::budding::{within, MAX_EPS_C0};
-use super::super::heating::spec::box_size;
+use super::super::budding::MAX_EPS_C0;
+use super::super::heating::spec::sized_scene;
 use crate::error::{Error, Result};
-use crate::problem::config::{self, Scene};
+use crate::problem::config::Scene;
 use serde::Deserialize;
-use serde_json::{json, Value};
+use serde_json::Value;
 
 /// Keys of the scene that the study sets itself.
 const STUDY_KEYS: [&str; 6] = ["initial", "n", "c0", "dynamics", "symmetry", "volume"];
@@ -96,35 +95,16 @@ pub fn check(spec: &Spec) -> Result<()> {
     Ok(())
 }
 
-/// The scene of one R0: the file's `scene` with L-BFGS, mirror planes x and y (a pear breaks
-/// the up–down mirror), the box of [`box_size`] for the contour `(r, z)` (R0 = 1) and a
-/// placeholder initial shape, a sphere of radius R0/2 that fits every such box (the start
-/// field, checked on its own, replaces it).
+/// The scene of one R0: the file's `scene` through the heating study's
+/// [`sized_scene`], with a stop residual.
 ///
 /// # Errors
-/// `Error::Config` naming `scene.<key>` for a key the study sets or an invalid scene.
+/// `Error::Config` naming `scene.<key>` for a key the study sets, a scene without
+/// `stop_residual` or an invalid scene.
 pub fn base_scene(spec: &Spec, r0: f64, r: &[f64], z: &[f64]) -> Result<Scene> {
-    let Value::Object(obj) = &spec.scene else {
-        return Err(Error::config("scene", "must be a scene object"));
-    };
-    if let Some(k) = STUDY_KEYS.iter().find(|k| obj.contains_key(**k)) {
-        return Err(Error::config(
-            format!("scene.{k}"),
-            "is set by the study (initial: the axisymmetric prolate at v and c0[0]; n: sized \
-             to R0; c0: the path; dynamics: relaxational; symmetry: x and y); remove it",
-        ));
-    }
-    let num = |k: &str| obj.get(k).and_then(Value::as_f64).unwrap_or(1.0);
-    let (h, eps) = (num("h"), num("eps"));
-    let mut value = spec.scene.clone();
-    value["n"] = json!(box_size(r, z, r0, h, eps));
-    value["initial"] = json!({"shape": "sphere", "radius": 0.5 * r0 * eps});
-    value["dynamics"] = json!("relaxational");
-    value["symmetry"] = json!(["x", "y"]);
-    let scene = config::load_value(value, &[], None).map_err(within("scene"))?;
-    if scene.dim != 3 {
-        return Err(Error::config("scene.dim", "the onset study is 3D"));
-    }
+    let set_by = "initial: the axisymmetric prolate at v and c0[0]; n: sized to R0; c0: the \
+                  path; dynamics: relaxational; symmetry: x and y";
+    let scene = sized_scene(&spec.scene, &STUDY_KEYS, set_by, r0, (r, z))?;
     if scene.stop_residual.is_none() {
         return Err(Error::config(
             "scene.stop_residual",
@@ -137,6 +117,7 @@ pub fn base_scene(spec: &Spec, r0: f64, r: &[f64], z: &[f64]) -> Result<Scene> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
 
     fn spec(edit: impl FnOnce(&mut Value)) -> std::result::Result<Spec, String> {
         let mut v = json!({
