@@ -23,7 +23,8 @@
 #   resolution       study resolution (error against wall time)         ~6 min (342 s, loaded)
 #   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
-#   budding          study budding budding.json (41 relaxations)                  505 s, measured
+#   budding          study budding budding.json (41 relaxations, h = 2ε/3)       BUDDING_S
+#   onset            study onset onset.json + onset_seeds.json (R0 20-40ε)     ONSET_S
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     44 s, measured
@@ -47,7 +48,7 @@ cd "$(dirname "$0")/.."
 VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
-ALL=(convergence stability stability_ade pinning resolution precision pear3d budding heating axisym_c0 axisym_bc
+ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating axisym_c0 axisym_bc
      axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade budding3d deflation3d
      dumbbell3d pearling3d triaxial3d starfish3d)
 
@@ -113,6 +114,13 @@ group_pear3d() {
 group_budding() {
     study budding budding.json
     for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
+}
+group_onset() {
+    study onset onset.json
+    same_names "$out" onset
+    out=$WORK/onset_seeds
+    study onset onset_seeds.json
+    same_names "$out" onset_seeds
 }
 group_heating() {
     study heating heating.json
@@ -205,6 +213,9 @@ FIGURES=(
     axisym_ade_phase.png=axisym_ade/phase.png
     budding_neck_r0.png=budding/budding_neck_r0.png
     budding_skewness.png=budding/budding_skewness.png
+    onset_eps.png=onset/onset_eps.png
+    onset_skewness.png=onset/onset_skewness.png
+    onset_seeds_skewness.png=onset_seeds/onset_skewness.png
     heating_neck.png=heating/heating_neck.png
     heating_w.png=heating/heating_w.png
     heating_w_error.png=heating/heating_w_error.png
