@@ -1,16 +1,22 @@
 //! The onset study's report: the printed tables, `onset_steps.csv`, `onset.csv`, the
 //! extrapolation of the shift in ε/R0, and the charts `onset_skewness` and `onset_eps`.
 //!
-//! **Extrapolation in the seed.** The prolate loses up–down stability subcritically: below the
-//! instability c* an unstable pear of amplitude ∝ √(c* − c̄0) separates it from the budded
-//! state, and a seed of strength δ carries the state across from c* − gδ² on. So at each R0 with
-//! two or more seeds the onset is fitted as onset(δ) = o0 − gδ² by least squares in δ², and o0
-//! is the onset of a vanishing seed: the loss of stability itself ([`SeedLimit`]).
+//! **The shift.** The onset is compared with the sharp instability c̄0*(v) at the run's own
+//! φ = 0 reduced volume v, as the shift s = onset − c̄0*(v): v is not the same in every run (the
+//! area held is the seeded start's, so a stronger seed holds a little more area and a lower v,
+//! 0.794 at δ = 0.005 and 0.772 at δ = 0.03 for R0 = 20ε), and c̄0* moves by about 19 per unit of
+//! v there, so the onset alone would mix the seed's push with the change of v.
 //!
-//! **Extrapolation in ε/R0.** The shift from the sharp instability, s = onset − c̄0*(v), is a
-//! phase-field error; for each seed, and for o0, it is fitted as s = s0 + b ε/R0 by least
-//! squares over every R0, and through the two finest R0 alone. s0 is the extrapolated shift;
-//! the two fits' difference shows how far the data are from the linear law.
+//! **Extrapolation in the seed.** The prolate loses up–down stability subcritically: below the
+//! instability an unstable pear of amplitude ∝ √(c̄0* − c̄0) separates it from the budded
+//! state, and a seed of strength δ can carry the state across from c̄0* − gδ² on. So at each R0
+//! with two or more seeds the shift is fitted as s(δ) = s0 − gδ² by least squares in δ², and s0
+//! is the shift of a vanishing seed: the phase field's loss of stability itself ([`SeedLimit`]).
+//!
+//! **Extrapolation in ε/R0.** The shift is a phase-field error; for each seed, and for s0, it is
+//! fitted as s = s_∞ + b ε/R0 by least squares over every R0, and through the two finest R0
+//! alone. s_∞ is the extrapolated shift; the two fits' difference shows how far the data are
+//! from the linear law.
 
 use super::{Onset, Spec, Step};
 use crate::commands::study::fit;
@@ -77,7 +83,7 @@ impl table::Row for Onset {
     }
 }
 
-/// The onset of one R0 extrapolated to a vanishing seed (see the module docs); a row of
+/// The shift of one R0 extrapolated to a vanishing seed (see the module docs); a row of
 /// `onset_limit.csv`.
 #[derive(Clone, Copy, Debug)]
 pub struct SeedLimit {
@@ -85,14 +91,12 @@ pub struct SeedLimit {
     pub r0: f64,
     /// Seeds fitted.
     pub seeds: usize,
-    /// o0: the onset as δ → 0.
-    pub onset: f64,
-    /// g of onset(δ) = o0 − gδ².
-    pub g: f64,
-    /// The sharp instability at this R0's v (the mean over its runs).
-    pub sharp: f64,
-    /// o0 − sharp.
+    /// s0: the shift onset − sharp as δ → 0.
     pub shift: f64,
+    /// g of s(δ) = s0 − gδ².
+    pub g: f64,
+    /// The largest distance of a seed's shift from the fit.
+    pub misfit: f64,
 }
 
 impl table::Row for SeedLimit {
@@ -100,36 +104,37 @@ impl table::Row for SeedLimit {
         vec![
             Column::both("r0", "R0/eps", Format::Plain, |r| r.r0.into()),
             Column::both("seeds", "seeds", Format::Plain, |r| r.seeds.into()),
-            Column::both("onset", "onset (seed -> 0)", Format::Fixed(4), |r| {
-                r.onset.into()
+            Column::both("shift", "shift (seed -> 0)", Format::Fixed(4), |r| {
+                r.shift.into()
             }),
             Column::both("g", "g", Format::Fixed(1), |r| r.g.into()),
-            Column::both("sharp", "sharp", Format::Fixed(4), |r| r.sharp.into()),
-            Column::both("shift", "shift", Format::Fixed(4), |r| r.shift.into()),
+            Column::both("misfit", "misfit", Format::Fixed(4), |r| r.misfit.into()),
         ]
     }
 }
 
-/// The onset of each R0 of `spec` with two or more seeds bracketed, extrapolated to δ → 0.
+/// The shift of each R0 of `spec` with two or more seeds bracketed, extrapolated to δ → 0.
 pub fn seed_limits(spec: &Spec, onsets: &[Onset]) -> Vec<SeedLimit> {
     spec.r0
         .iter()
         .filter_map(|&r0| {
-            let mine: Vec<&Onset> = onsets
+            let (d2, y): (Vec<f64>, Vec<f64>) = onsets
                 .iter()
-                .filter(|o| o.r0 == r0 && o.onset.is_finite())
-                .collect();
-            let d2: Vec<f64> = mine.iter().map(|o| o.seed * o.seed).collect();
-            let y: Vec<f64> = mine.iter().map(|o| o.onset).collect();
+                .filter(|o| o.r0 == r0 && o.shift.is_finite())
+                .map(|o| (o.seed * o.seed, o.shift))
+                .unzip();
             let line = fit::linear(&d2, &y)?;
-            let sharp = mine.iter().map(|o| o.sharp).sum::<f64>() / mine.len() as f64;
+            let misfit = d2
+                .iter()
+                .zip(&y)
+                .map(|(x, y)| (y - line.intercept - line.slope * x).abs())
+                .fold(0.0, f64::max);
             Some(SeedLimit {
                 r0,
                 seeds: line.n,
-                onset: line.intercept,
+                shift: line.intercept,
                 g: -line.slope,
-                sharp,
-                shift: line.intercept - sharp,
+                misfit,
             })
         })
         .collect()
@@ -217,8 +222,9 @@ pub fn report(spec: &Spec, steps: &[Step], onsets: &[Onset]) -> Result<Report> {
     if !limits.is_empty() {
         let _ = writeln!(
             text,
-            "\nthe onset of a vanishing seed at each R0, onset(seed) = o0 - g seed^2 by least \
-             squares (the subcritical barrier: a seed crosses it from sharp - g seed^2 on)"
+            "\nthe shift of a vanishing seed at each R0, shift(seed) = s0 - g seed^2 by least \
+             squares (a seed can push the state over the subcritical barrier before the \
+             prolate loses stability)"
         );
         text.push_str(&table::text(&limits));
         let points: Vec<(f64, f64)> = limits.iter().map(|l| (l.r0, l.shift)).collect();
@@ -287,14 +293,14 @@ fn skewness_chart(spec: &Spec, steps: &[Step]) -> Figure {
     fig
 }
 
-/// The onset against ε/R0 for each seed and for a vanishing seed (`limits`), the sharp
-/// instability at each run's v, and each series' least-squares line over every R0 (dashed, to
-/// ε/R0 = 0).
+/// The shift onset − sharp against ε/R0 for each seed and for a vanishing seed (`limits`),
+/// each series with its least-squares line over every R0 (dashed, to ε/R0 = 0), and the sharp
+/// value 0.
 fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
     let mut fig = Figure::new(
-        "Budding onset against eps/R0 beside the sharp instability",
+        "Budding onset: shift from the sharp instability against eps/R0",
         Axis::linear("eps / R0"),
-        Axis::linear("c0 R0"),
+        Axis::linear("onset - sharp instability at the run's v (c0 R0)"),
     );
     fig.legend = Corner::LowerLeft;
     let shapes = [
@@ -309,16 +315,17 @@ fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
         .map(|&seed| {
             let pts = onsets
                 .iter()
-                .filter(|o| o.seed == seed && o.onset.is_finite())
-                .map(|o| (1.0 / o.r0, o.onset))
+                .filter(|o| o.seed == seed && o.shift.is_finite())
+                .map(|o| (1.0 / o.r0, o.shift))
                 .collect();
             (format!("phase field, seed {seed}"), pts)
         })
         .collect();
     if !limits.is_empty() {
-        let pts = limits.iter().map(|l| (1.0 / l.r0, l.onset)).collect();
+        let pts = limits.iter().map(|l| (1.0 / l.r0, l.shift)).collect();
         series.push(("phase field, seed -> 0".to_string(), pts));
     }
+    let top = onsets.iter().map(|o| 1.0 / o.r0).fold(0.0, f64::max);
     for (j, (name, pts)) in series.into_iter().enumerate() {
         let (x, y): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
         fig.push(Series::new(
@@ -328,7 +335,6 @@ fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
             Mark::Points(shapes[j % shapes.len()]),
         ));
         if let Some(line) = fit::linear(&x, &y) {
-            let top = x.iter().copied().fold(0.0, f64::max);
             fig.push(
                 Series::new(
                     "",
@@ -343,18 +349,11 @@ fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
             );
         }
     }
-    let mut sharp: Vec<(f64, f64)> = onsets
-        .iter()
-        .filter(|o| o.sharp.is_finite())
-        .map(|o| (1.0 / o.r0, o.sharp))
-        .collect();
-    sharp.sort_by(|a, b| a.0.total_cmp(&b.0));
-    sharp.dedup_by(|a, b| a.0 == b.0);
     fig.push(Series::new(
-        "sharp instability at the run's v",
-        sharp,
-        colour(3),
-        Mark::Points(Shape::Cross),
+        "sharp instability",
+        vec![(0.0, 0.0), (top, 0.0)],
+        colour(7),
+        Mark::Line,
     ));
     fig
 }

@@ -39,16 +39,17 @@ fn the_shift_extrapolates_linearly_in_eps_over_r0() {
     assert!((e[1].all - e[1].finest).abs() > 0.05);
 }
 
-/// Onsets that follow onset(δ) = o0 − gδ² (o0 = 3.7, g = 400: 3.69, 3.66, 3.54 at δ = 0.005,
-/// 0.01, 0.02) give o0 and g back to round-off, and the shift from the mean sharp value.
+/// Shifts that follow s(δ) = s0 − gδ² (s0 = 0.1, g = 400: 0.09, 0.06, −0.06 at δ = 0.005,
+/// 0.01, 0.02) give s0 and g back to round-off, with no misfit; moving one seed's shift by 0.01
+/// shows as a misfit of that order.
 #[test]
-fn the_onset_of_a_vanishing_seed_is_the_intercept_in_seed_squared() {
+fn the_shift_of_a_vanishing_seed_is_the_intercept_in_seed_squared() {
     let spec: Spec = serde_json::from_value(serde_json::json!({
         "study": "onset", "scene": {}, "v": 0.8, "r0": [20.0],
         "seeds": [0.005, 0.01, 0.02], "c0": [3.0, 3.5], "bisections": 3
     }))
     .expect("a spec");
-    let onsets: Vec<Onset> = spec
+    let mut onsets: Vec<Onset> = spec
         .seeds
         .iter()
         .map(|&d| onset(20.0, d, 0.1 - 400.0 * d * d))
@@ -57,7 +58,14 @@ fn the_onset_of_a_vanishing_seed_is_the_intercept_in_seed_squared() {
     assert_eq!(limits.len(), 1);
     let l = limits[0];
     assert_eq!(l.seeds, 3);
-    assert!((l.onset - 3.7).abs() < 1e-12, "{}", l.onset);
+    assert!((l.shift - 0.1).abs() < 1e-12, "{}", l.shift);
     assert!((l.g - 400.0).abs() < 1e-9, "{}", l.g);
-    assert!((l.shift - 0.1).abs() < 1e-12);
+    assert!(l.misfit < 1e-12);
+    onsets[1].shift += 0.01;
+    let moved = super::report::seed_limits(&spec, &onsets)[0];
+    assert!(
+        moved.misfit > 0.003 && moved.misfit < 0.01,
+        "{}",
+        moved.misfit
+    );
 }
