@@ -62,10 +62,10 @@ use crate::problem::config::FlowSpec;
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::TENSION_FACTOR;
 use bytemuck::Pod;
-use ndarray::{Array3, Axis, Zip};
+use ndarray::{Array3, ArrayViewMut3, Axis, Slice, Zip};
 use num_complex::Complex64;
 use rayon::prelude::*;
-use std::ops::{Add, Div, Mul, Neg, Sub};
+use std::ops::{Add, Div, Mul, Neg, Range, Sub};
 
 /// What one evaluation's flow measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -267,12 +267,18 @@ impl Flow {
         }
         for (c, &a) in self.axes.iter().enumerate() {
             let (kappa, odd) = (&self.kappa[a], self.odd[c]);
-            // iκ_aX, or on a mirror axis the sine coefficient −q_jX stored twisted.
+            // The distance between neighbours along axis a among the modes.
+            let stride: usize = modes[a + 1..].iter().product();
+            // iκ_aX, or on a mirror axis the sine coefficient −q_jX stored twisted: at index j
+            // the mode l = n − j (1 ≤ j < n), j·stride before it.
             modes_mut(&mut self.spectrum, modes, sym, |i, idx, _, out: &mut T| {
+                let j = idx[a];
                 *out = match odd {
-                    None => hat[i].derivative(kappa[idx[a]]),
-                    Some(n) => twisted(idx, a, n)
-                        .map_or_else(T::default, |l| -hat[flat_of(l, modes)] * kappa[l[a]]),
+                    None => hat[i].derivative(kappa[j]),
+                    Some(n) if (1..n).contains(&j) => {
+                        -hat[i - j * stride + (n - j) * stride] * kappa[n - j]
+                    }
+                    Some(_) => T::default(),
                 };
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
@@ -285,9 +291,13 @@ impl Flow {
             }
         }
         for part in 0..parts {
+            self.turn::<T>(part, T::picture);
             self.project::<T>(sym, part);
         }
         let dissipation = self.dissipation::<T>(sym, sigma);
+        for part in 0..parts {
+            self.turn::<T>(part, T::stored);
+        }
         for c in 0..self.axes.len() {
             let [ub, us] = &mut self.component;
             transform.inverse(&mut self.components[0][c], ub);
@@ -369,81 +379,105 @@ impl Flow {
         out
     }
 
+    /// Every odd component's spectrum of `part` (0: σ = 0, 1: per unit σ) between its twisted
+    /// storage and the logical order, in place: the index j ↔ n − j along its axis (n points)
+    /// for 1 ≤ j < n, the map its own inverse; j = 0 holds the top sine mode in both, and a
+    /// packed row's padding stays. Each value is mapped by `map` (into the picture of
+    /// [`Coefficient`], or back), so that [`Flow::project`] and [`Flow::dissipation`] read every
+    /// component at the mode they compute, with no index map.
+    fn turn<T: Coefficient>(&mut self, part: usize, map: fn(T) -> T) {
+        let modes = self.modes;
+        for (c, &a) in self.axes.iter().enumerate() {
+            let Some(n) = self.odd[c] else { continue };
+            let values = coefficients_mut::<T>(&mut self.components[part][c]);
+            let mut view = ArrayViewMut3::from_shape(modes, values).expect("the modes' shape");
+            // The pairs (j, n − j), j = 1..=half, swapped and mapped; j = 0 and the j = n/2 of
+            // an even n (its own partner) mapped in place.
+            let half = (n - 1) / 2;
+            let (low, high) = view.view_mut().split_at(Axis(a), n - half);
+            let (mut own, low) = low.split_at(Axis(a), 1);
+            let mut low = low.slice_axis_move(Axis(a), Slice::from(0..half));
+            let mut high = high.slice_axis_move(Axis(a), Slice::from(0..half));
+            high.invert_axis(Axis(a));
+            Zip::from(&mut low)
+                .and(&mut high)
+                .par_for_each(|x, y| (*x, *y) = (map(*y), map(*x)));
+            own.map_inplace(|v| *v = map(*v));
+            if n % 2 == 0 {
+                view.index_axis_mut(Axis(a), n / 2)
+                    .map_inplace(|v| *v = map(*v));
+            }
+        }
+    }
+
     /// The Oseen projection in place on the force's spectra of `part` (0: σ = 0, 1: per unit
-    /// σ), in the picture of [`Coefficient`]: s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²)
-    /// (0 at k = 0), now û_a. On complex spectra an odd component's coefficient S enters as
-    /// −iS, so it becomes (S − iκ_a s)/(η|k|²); on a packed spectrum every component is odd
-    /// and the sine coefficients S_a project as they stand: (S_a − κ_a s)/(η|k|²) with
-    /// s = κ·S/|κ|².
+    /// σ), in logical order and in the picture of [`Coefficient`] ([`Flow::turn`]):
+    /// s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a. On complex
+    /// spectra an odd component's coefficient S enters as −iS; on a packed spectrum every
+    /// component is odd and the sine coefficients S_a project as they stand:
+    /// (S_a − κ_a s)/(η|k|²) with s = κ·S/|κ|². An odd component's top sine mode sits where
+    /// j_a = 0: κ_a = 0 there, so it is not projected, and (π/h)² is added to its |k|².
     fn project<T: Coefficient>(&mut self, sym: &Symbols, part: usize) {
-        let (axes, kappa, odd, modes) = (&self.axes, &self.kappa, &self.odd, self.modes);
+        let (axes, kappa, modes) = (&self.axes, &self.kappa, self.modes);
         let components = slices::<T>(&self.components[part]);
         modes_mut(&mut self.spectrum, modes, sym, |i, idx, _, out: &mut T| {
             let mut dot = T::default();
             let mut norm = 0.0;
             for (c, &a) in axes.iter().enumerate() {
                 let k = kappa[a][idx[a]];
-                dot = dot + in_picture(components[c], i, idx, (a, odd[c]), modes) * k;
+                dot = dot + components[c][i] * k;
                 norm += k * k;
             }
             *out = if norm > 0.0 { dot / norm } else { T::default() };
         });
-        let (eta, top_k2) = (self.viscosity, self.top_k2);
+        let eta = self.viscosity;
         for (c, &a) in self.axes.iter().enumerate() {
-            let (kappa, s, odd) = (
+            let (kappa, s, top_k2) = (
                 &self.kappa[a],
                 coefficients::<T>(&self.spectrum),
-                self.odd[c],
+                self.top_k2_of(c),
             );
             modes_mut(
                 &mut self.components[part][c],
                 modes,
                 sym,
                 |i, idx, (k2, _), u: &mut T| {
-                    *u = match odd {
-                        None if k2 > 0.0 => (*u - s[i] * kappa[idx[a]]) / (eta * k2),
-                        None => T::default(),
-                        // The top sine mode (κ_a = 0, no other component there).
-                        Some(_) if idx[a] == 0 => *u / (eta * (k2 + top_k2)),
-                        Some(n) => twisted(idx, a, n).map_or_else(T::default, |l| {
-                            let (k2, _) = mode_symbols(sym, l);
-                            let s = s[flat_of(l, modes)] * kappa[l[a]];
-                            (*u - s.stored()) / (eta * k2)
-                        }),
+                    let k2 = if idx[a] == 0 { k2 + top_k2 } else { k2 };
+                    *u = if k2 > 0.0 {
+                        (*u - s[i] * kappa[idx[a]]) / (eta * k2)
+                    } else {
+                        T::default()
                     };
                 },
             );
         }
     }
 
-    /// η Σ_k w |k|² |û_b + σû_σ|² over the components: the power the fluid dissipates at σ
-    /// (û_b alone at a fixed tension).
+    /// (π/h)² for an odd component `c` (its top sine mode's share of |k|² where j_a = 0 in
+    /// logical order), else 0.
+    fn top_k2_of(&self, c: usize) -> f64 {
+        if self.odd[c].is_some() {
+            self.top_k2
+        } else {
+            0.0
+        }
+    }
+
+    /// η Σ_k w |k|² |û_b + σû_σ|² over the components, in logical order ([`Flow::turn`]): the
+    /// power the fluid dissipates at σ (û_b alone at a fixed tension).
     fn dissipation<T: Coefficient>(&self, sym: &Symbols, sigma: f64) -> f64 {
         let [base, per_sigma] = &self.components;
         let (base, per_sigma, modes) = (slices::<T>(base), slices::<T>(per_sigma), self.modes);
+        let tops: Vec<f64> = (0..self.axes.len()).map(|c| self.top_k2_of(c)).collect();
         let len = modes.iter().product::<usize>();
         let partials = (0..len.div_ceil(PAR_CHUNK)).into_par_iter().map(|t| {
-            (t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len))
-                .map(|i| {
-                    let idx = index_of(i, modes);
+            indexed(t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len), modes)
+                .map(|(i, idx)| {
                     let (k2, w) = mode_symbols(sym, idx);
                     let u = self.axes.iter().enumerate().map(|(c, &a)| {
-                        let at = (a, self.odd[c]);
-                        let per = |v: &[T], i: usize| v.get(i).copied().unwrap_or_default();
-                        let b = in_picture(base[c], i, idx, at, modes);
-                        let s = if per_sigma[c].is_empty() {
-                            T::default()
-                        } else {
-                            in_picture(per_sigma[c], i, idx, at, modes)
-                        };
-                        // The top sine mode, stored where this mode's j_a = 0.
-                        let top = if at.1.is_some() && idx[a] == 0 {
-                            let u = base[c][i] + per(per_sigma[c], i) * sigma;
-                            (k2 + self.top_k2) * u.norm_sqr()
-                        } else {
-                            0.0
-                        };
-                        k2 * (b + s * sigma).norm_sqr() + top
+                        let k2 = if idx[a] == 0 { k2 + tops[c] } else { k2 };
+                        let s = per_sigma[c].get(i).copied().unwrap_or_default();
+                        k2 * (base[c][i] + s * sigma).norm_sqr()
                     });
                     w * u.sum::<f64>()
                 })
@@ -541,55 +575,39 @@ fn modes_mut<T: Coefficient>(
         .par_chunks_mut(PAR_CHUNK)
         .enumerate()
         .for_each(|(t, chunk)| {
-            for (l, out) in chunk.iter_mut().enumerate() {
-                let i = t * PAR_CHUNK + l;
-                let idx = index_of(i, modes);
+            let first = t * PAR_CHUNK;
+            for ((i, idx), out) in indexed(first..first + chunk.len(), modes).zip(chunk) {
                 f(i, idx, mode_symbols(sym, idx), out);
             }
         });
+}
+
+/// The flat positions `range` among modes of index shape `modes`, each with its index
+/// (j0, j1, j2): [`index_of`] of the first, the others counted on along the last axis (no
+/// division a mode).
+#[inline]
+fn indexed(range: Range<usize>, modes: [usize; 3]) -> impl Iterator<Item = (usize, [usize; 3])> {
+    let [_, s1, s2] = modes;
+    let mut idx = index_of(range.start, modes);
+    range.map(move |i| {
+        let at = idx;
+        idx[2] += 1;
+        if idx[2] == s2 {
+            idx[2] = 0;
+            idx[1] += 1;
+            if idx[1] == s1 {
+                idx[1] = 0;
+                idx[0] += 1;
+            }
+        }
+        (i, at)
+    })
 }
 
 /// The index (j0, j1, j2) of the flat position `i` among modes of index shape `modes`.
 #[inline]
 fn index_of(i: usize, [_, s1, s2]: [usize; 3]) -> [usize; 3] {
     [i / (s1 * s2), (i / s2) % s1, i % s2]
-}
-
-/// The flat position of index `idx` among modes of index shape `modes`.
-#[inline]
-fn flat_of([j0, j1, j2]: [usize; 3], [_, s1, s2]: [usize; 3]) -> usize {
-    (j0 * s1 + j1) * s2 + j2
-}
-
-/// The partner of index `idx` under the twist of an odd component on mirror axis `a` of `n`
-/// points (j ↔ n − j; `None` for j = 0, which holds no sine mode, and for a packed row's
-/// padding j = n). The map is its own inverse: it takes a logical mode to its storage and a
-/// storage index to its mode.
-#[inline]
-fn twisted(mut idx: [usize; 3], a: usize, n: usize) -> Option<[usize; 3]> {
-    (1..n).contains(&idx[a]).then(|| {
-        idx[a] = n - idx[a];
-        idx
-    })
-}
-
-/// Component `values`' coefficient at the logical mode `i` (index `idx`) in the picture of
-/// [`Coefficient`]: the stored value on a periodic axis, the picture of the twisted storage's
-/// S on mirror axis `a` of `n` points (`odd = Some(n)`; 0 at j = 0).
-#[inline]
-fn in_picture<T: Coefficient>(
-    values: &[T],
-    i: usize,
-    idx: [usize; 3],
-    (a, odd): (usize, Option<usize>),
-    modes: [usize; 3],
-) -> T {
-    match odd {
-        None => values[i],
-        Some(n) => {
-            twisted(idx, a, n).map_or_else(T::default, |l| values[flat_of(l, modes)].picture())
-        }
-    }
 }
 
 /// |k|² and the Parseval weight w of the mode at `idx`.
