@@ -196,7 +196,9 @@ fn bench_relaxation(c: &mut Criterion) {
 /// transforms of the flow at a fixed tension, 5d + 4 with the area held) beside the conserved
 /// step, SBDF2 on the same full periodic boxes (a quasi-sphere on 64³, a quasi-circle on 512²),
 /// 1 and 2 threads: at fixed tension (`conserved`, `stokes`) and with the area held by the
-/// projection (`conserved_area`, `stokes_area`).
+/// projection (`conserved_area`, `stokes_area`); the two with the area held also on the
+/// mirror-reduced boxes (`…/half`: mirrored about x; `…/quarter`: x and y; `…/eighth`: x, y
+/// and z, 3D), for the cost per point against the full box.
 fn bench_stokes(c: &mut Criterion) {
     let mut group = c.benchmark_group("stokes");
     for (dim, n, radius) in [(3usize, 64usize, 16.0), (2, 512, 128.0)] {
@@ -218,23 +220,37 @@ fn bench_stokes(c: &mut Criterion) {
             ),
             ("stokes_area", "stokes", json!({"method": "projection"})),
         ] {
-            for threads in [1, 2] {
-                let id = BenchmarkId::new(name, format!("{n}^{dim}/t{threads}"));
-                let make = || {
-                    engine_of(json!({
-                        "dim": dim, "n": vec![n; dim], "h": 1.0, "eps": 1.0, "scheme": "sbdf2",
-                        "dt": 1.0, "max_steps": 1, "threads": threads, "dynamics": dynamics,
-                        "flow": if dynamics == "stokes" {
-                            json!({"viscosity": 1.0, "mobility": 0.01})
-                        } else {
-                            serde_json::Value::Null
-                        },
-                        "area": area,
-                        "initial": {"shape": "harmonic", "radius": radius, "mode": 2,
-                                    "amplitude": 0.02}
-                    }))
-                };
-                time_steps(&mut group, id, threads, make, 1.0);
+            let reduced: &[(&str, &[&str])] = match (area["method"] == "projection", dim) {
+                (false, _) => &[],
+                (true, 2) => &[("half", &["x"]), ("quarter", &["x", "y"])],
+                (true, _) => &[
+                    ("half", &["x"]),
+                    ("quarter", &["x", "y"]),
+                    ("eighth", &["x", "y", "z"]),
+                ],
+            };
+            let boxes = std::iter::once((name.to_string(), &[][..]))
+                .chain(reduced.iter().map(|&(b, m)| (format!("{name}/{b}"), m)));
+            for (label, mirror) in boxes {
+                for threads in [1, 2] {
+                    let id = BenchmarkId::new(&label, format!("{n}^{dim}/t{threads}"));
+                    let make = || {
+                        engine_of(json!({
+                            "dim": dim, "n": vec![n; dim], "h": 1.0, "eps": 1.0,
+                            "scheme": "sbdf2", "dt": 1.0, "max_steps": 1, "threads": threads,
+                            "dynamics": dynamics, "symmetry": mirror,
+                            "flow": if dynamics == "stokes" {
+                                json!({"viscosity": 1.0, "mobility": 0.01})
+                            } else {
+                                serde_json::Value::Null
+                            },
+                            "area": area,
+                            "initial": {"shape": "harmonic", "radius": radius, "mode": 2,
+                                        "amplitude": 0.02}
+                        }))
+                    };
+                    time_steps(&mut group, id, threads, make, 1.0);
+                }
             }
         }
     }

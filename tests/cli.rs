@@ -1032,9 +1032,9 @@ fn huge_max_steps_runs_and_a_folder_as_scene_is_exit_2() {
     assert!(stderr(&o).contains("(scene file)"), "{}", stderr(&o));
 }
 
-/// The rates study's `mirror` (the quarter box about x and y) is for the sphere: on the circle
-/// it would mirror both axes of the 2D box, which the Stokes flow refuses, so the study file is
-/// refused with exit 2 naming `circle.mirror`, before anything runs or is written. (A study
+/// The rates study's `mirror` (the quarter box about x and y) holds only the circle's even
+/// modes (cos nθ is odd about x = 0 for odd n): the study file's circle groups hold n = 3, so it
+/// is refused with exit 2 naming `circle.mirror`, before anything runs or is written. (A study
 /// file, not a scene: `tests/bad_scenes/` holds scenes for `check` and `run`.)
 #[test]
 fn a_mirrored_circle_in_the_rates_study_is_exit_2() {

@@ -39,6 +39,15 @@
 //! free-slip for the disturbance flow (u normal = 0, ∂u_tangential/∂n = 0), and a mirror plane
 //! through the vesicle keeps the flow's symmetry.
 //!
+//! **Every axis mirrored or walled** (the 2D quarter box, the 3D eighth box): the spectrum is
+//! real and packed ([`Transform::packed`]), and the flow computes a real a mode
+//! (`Coefficient` `f64`), over the modes' indices [n0, n1, 2⌈n2/2⌉] (a packed row's reals,
+//! the padding of an odd row a mode of κ = 0, |k|² = 0, w = 0 that stays 0). Every velocity
+//! component is odd along its own axis and even along the others, so all of them are sine
+//! coefficients S_a, stored twisted as above; their periodic picture −iS_a has the factor −i in
+//! common, which the linear projection carries through: s = κ·S/|κ|², û_a = (S_a −
+//! κ_a s)/(η|k|²), on reals, with no complex arithmetic (and the top sine mode as above).
+//!
 //! At a fixed tension σ_f (area method `fixed`) nothing is split: μ = μ_b + σ_fμ_σ drives one
 //! flow, its whole advection goes into the explicit term and no T̂ is kept
 //! ([`Flow::at_fixed_tension`]).
@@ -52,9 +61,11 @@ use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::problem::config::FlowSpec;
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::TENSION_FACTOR;
-use ndarray::{Array3, Axis, Zip};
+use bytemuck::Pod;
+use ndarray::{Array3, ArrayViewMut3, Axis, Slice, Zip};
 use num_complex::Complex64;
 use rayon::prelude::*;
+use std::ops::{Add, Div, Mul, Neg, Range, Sub};
 
 /// What one evaluation's flow measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -75,12 +86,16 @@ pub struct Flow {
     /// Per component: the length of its axis when that axis is a mirror or wall axis (the
     /// component is odd there and kept twisted, see the module documentation), else `None`.
     odd: Vec<Option<usize>>,
-    /// κ per axis, over the spectral indices (periodic Nyquist 0).
+    /// κ per axis, over the modes' indices (periodic Nyquist 0; a packed row's padding 0).
     kappa: [Vec<f64>; 3],
     /// |k|² of a mirror axis's top sine mode, (π/h)².
     top_k2: f64,
-    /// The spectral shape.
-    shape: [usize; 3],
+    /// Whether the spectra are packed (every axis a mirror or wall axis): a real a mode,
+    /// computed as [`Coefficient`] `f64`, else a complex value a mode.
+    packed: bool,
+    /// The shape of the modes' indices: the spectral shape, or of a packed spectrum
+    /// [n0, n1, 2⌈n2/2⌉] (its reals, an odd row padded by one).
+    modes: [usize; 3],
     /// μ̂, then iκ_aφ̂, then κ·f̂/|κ|², then FT[u·∇φ].
     spectrum: Array3<Complex64>,
     /// f̂_a, then û_a, of the flow at σ = 0 and of the flow per unit σ.
@@ -101,22 +116,19 @@ pub struct Flow {
 
 impl Flow {
     /// The flow `spec` on `grid`, transformed by `transform`.
-    ///
-    /// # Panics
-    /// If every axis longer than 1 is a mirror or wall axis (a packed spectrum; refused when the
-    /// scene is validated).
     pub fn new(spec: FlowSpec, transform: &Transform, grid: &Grid) -> Self {
-        assert!(
-            !transform.packed() && transform.index_shape() == transform.spectral_shape(),
-            "the flow needs one periodic axis"
-        );
         let h = grid.h;
         let real = transform.shape();
         let shape = transform.spectral_shape();
+        let packed = transform.packed();
+        let mut modes = shape;
+        if packed {
+            modes[2] = 2 * shape[2];
+        }
         let ks = transform.wavenumbers(h);
         let periodic = |a: usize| grid.kinds[a] == AxisKind::Periodic;
         let kappa = std::array::from_fn(|a| {
-            ks[a]
+            let mut kappa: Vec<f64> = ks[a]
                 .iter()
                 .enumerate()
                 .map(|(j, &k)| {
@@ -127,7 +139,9 @@ impl Flow {
                         k
                     }
                 })
-                .collect()
+                .collect();
+            kappa.resize(modes[a], 0.0);
+            kappa
         });
         let axes: Vec<usize> = (0..3).filter(|&a| real[a] > 1).collect();
         let odd = axes
@@ -153,7 +167,8 @@ impl Flow {
             odd,
             kappa,
             top_k2: (std::f64::consts::PI / h).powi(2),
-            shape,
+            packed,
+            modes,
             spectrum: Array3::zeros(shape),
             components: [0, 1].map(|_| axes.iter().map(|_| Array3::zeros(shape)).collect()),
             gradient: axes.iter().map(|_| zeros()).collect(),
@@ -190,8 +205,24 @@ impl Flow {
     /// and η∫|∇u|² of u = u_b + σu_σ at `sigma`. `sym` gives |k|² and the Parseval weights,
     /// `eps` the interface width. At a fixed tension σ_f the flow is that of μ_b + σ_fμ_σ, all
     /// of its advection goes into `nonlinear`, `tension` is not touched, and `sigma` is not
-    /// read.
+    /// read. A packed spectrum is computed a real a mode (`Coefficient`).
     pub fn advect(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        tension: (f64, f64),
+        hat: &Array3<Complex64>,
+        out: [&mut Array3<Complex64>; 2],
+    ) -> FlowStats {
+        if self.packed {
+            self.advect_as::<f64>(transform, sym, tension, hat, out)
+        } else {
+            self.advect_as::<Complex64>(transform, sym, tension, hat, out)
+        }
+    }
+
+    /// [`Flow::advect`] with the modes' coefficients of type `T`.
+    fn advect_as<T: Coefficient>(
         &mut self,
         transform: &mut Transform,
         sym: &Symbols,
@@ -208,35 +239,47 @@ impl Flow {
         };
         // μ̂_b = −N̂/|k|² + 2ε⁴|k|⁴φ̂ (k ≠ 0; a constant in μ exerts a gradient, which the
         // projection removes; plus σ_f c_σ|k|²φ̂ at a fixed tension), and μ̂_σ = c_σ|k|²φ̂.
-        let (hat, nonlinear_in) = (flat(hat), flat(nonlinear));
-        modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
-            *out = if k > 0.0 {
-                -nonlinear_in[i] / k + hat[i] * (e4x2 * k * k + fixed * c_sigma * k)
-            } else {
-                Complex64::default()
-            };
-            0.0
-        });
+        let (hat, nonlinear_in) = (coefficients::<T>(hat), coefficients::<T>(nonlinear));
+        let modes = self.modes;
+        modes_mut(
+            &mut self.spectrum,
+            modes,
+            sym,
+            |i, _, (k, _), out: &mut T| {
+                *out = if k > 0.0 {
+                    -nonlinear_in[i] / k + hat[i] * (e4x2 * k * k + fixed * c_sigma * k)
+                } else {
+                    T::default()
+                };
+            },
+        );
         transform.inverse(&mut self.spectrum, &mut self.mu[0]);
         if parts == 2 {
-            modes_mut(&mut self.spectrum, self.shape, sym, |i, _, (k, _), out| {
-                *out = hat[i] * (c_sigma * k);
-                0.0
-            });
+            modes_mut(
+                &mut self.spectrum,
+                modes,
+                sym,
+                |i, _, (k, _), out: &mut T| {
+                    *out = hat[i] * (c_sigma * k);
+                },
+            );
             transform.inverse(&mut self.spectrum, &mut self.mu[1]);
         }
-        let shape = self.shape;
         for (c, &a) in self.axes.iter().enumerate() {
             let (kappa, odd) = (&self.kappa[a], self.odd[c]);
-            // iκ_aX, or on a mirror axis the sine coefficient −q_jX stored twisted.
-            modes_mut(&mut self.spectrum, shape, sym, |i, idx, _, out| {
+            // The distance between neighbours along axis a among the modes.
+            let stride: usize = modes[a + 1..].iter().product();
+            // iκ_aX, or on a mirror axis the sine coefficient −q_jX stored twisted: at index j
+            // the mode l = n − j (1 ≤ j < n), j·stride before it.
+            modes_mut(&mut self.spectrum, modes, sym, |i, idx, _, out: &mut T| {
+                let j = idx[a];
                 *out = match odd {
-                    None => hat[i] * Complex64::new(0.0, kappa[idx[a]]),
-                    Some(n) => twisted(idx, a, n).map_or_else(Complex64::default, |l| {
-                        -hat[flat_of(l, shape)] * kappa[l[a]]
-                    }),
+                    None => hat[i].derivative(kappa[j]),
+                    Some(n) if (1..n).contains(&j) => {
+                        -hat[i - j * stride + (n - j) * stride] * kappa[n - j]
+                    }
+                    Some(_) => T::default(),
                 };
-                0.0
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
             for part in 0..parts {
@@ -248,9 +291,13 @@ impl Flow {
             }
         }
         for part in 0..parts {
-            self.project(sym, part);
+            self.turn::<T>(part, T::picture);
+            self.project::<T>(sym, part);
         }
-        let dissipation = self.dissipation(sym, sigma);
+        let dissipation = self.dissipation::<T>(sym, sigma);
+        for part in 0..parts {
+            self.turn::<T>(part, T::stored);
+        }
         for c in 0..self.axes.len() {
             let [ub, us] = &mut self.component;
             transform.inverse(&mut self.components[0][c], ub);
@@ -283,7 +330,7 @@ impl Flow {
         }
         let max_speed_sq = self.speed_sq.par_iter().copied().reduce(|| 0.0, f64::max);
         transform.forward(&mut self.mu[0], &mut self.spectrum);
-        self.spectrum[[0, 0, 0]] = Complex64::default();
+        coefficients_mut::<T>(&mut self.spectrum)[0] = T::default();
         let mobility = self.mobility;
         Zip::from(&mut *nonlinear)
             .and(&self.spectrum)
@@ -291,7 +338,7 @@ impl Flow {
         transform.hermitian_symmetrize(nonlinear);
         if parts == 2 {
             transform.forward(&mut self.mu[1], tension);
-            tension[[0, 0, 0]] = Complex64::default();
+            coefficients_mut::<T>(tension)[0] = T::default();
             transform.hermitian_symmetrize(tension);
         }
         FlowStats {
@@ -332,159 +379,235 @@ impl Flow {
         out
     }
 
+    /// Every odd component's spectrum of `part` (0: σ = 0, 1: per unit σ) between its twisted
+    /// storage and the logical order, in place: the index j ↔ n − j along its axis (n points)
+    /// for 1 ≤ j < n, the map its own inverse; j = 0 holds the top sine mode in both, and a
+    /// packed row's padding stays. Each value is mapped by `map` (into the picture of
+    /// [`Coefficient`], or back), so that [`Flow::project`] and [`Flow::dissipation`] read every
+    /// component at the mode they compute, with no index map.
+    fn turn<T: Coefficient>(&mut self, part: usize, map: fn(T) -> T) {
+        let modes = self.modes;
+        for (c, &a) in self.axes.iter().enumerate() {
+            let Some(n) = self.odd[c] else { continue };
+            let values = coefficients_mut::<T>(&mut self.components[part][c]);
+            let mut view = ArrayViewMut3::from_shape(modes, values).expect("the modes' shape");
+            // The pairs (j, n − j), j = 1..=half, swapped and mapped; j = 0 and the j = n/2 of
+            // an even n (its own partner) mapped in place.
+            let half = (n - 1) / 2;
+            let (low, high) = view.view_mut().split_at(Axis(a), n - half);
+            let (mut own, low) = low.split_at(Axis(a), 1);
+            let mut low = low.slice_axis_move(Axis(a), Slice::from(0..half));
+            let mut high = high.slice_axis_move(Axis(a), Slice::from(0..half));
+            high.invert_axis(Axis(a));
+            Zip::from(&mut low)
+                .and(&mut high)
+                .par_for_each(|x, y| (*x, *y) = (map(*y), map(*x)));
+            own.map_inplace(|v| *v = map(*v));
+            if n % 2 == 0 {
+                view.index_axis_mut(Axis(a), n / 2)
+                    .map_inplace(|v| *v = map(*v));
+            }
+        }
+    }
+
     /// The Oseen projection in place on the force's spectra of `part` (0: σ = 0, 1: per unit
-    /// σ): s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a; an odd
-    /// component's coefficient S enters as −iS, so it becomes (S − iκ_a s)/(η|k|²).
-    fn project(&mut self, sym: &Symbols, part: usize) {
-        let (axes, kappa, odd, shape) = (&self.axes, &self.kappa, &self.odd, self.shape);
-        let components = slices(&self.components[part]);
-        modes_mut(&mut self.spectrum, shape, sym, |i, idx, _, out| {
-            let mut dot = Complex64::default();
+    /// σ), in logical order and in the picture of [`Coefficient`] ([`Flow::turn`]):
+    /// s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a. On complex
+    /// spectra an odd component's coefficient S enters as −iS; on a packed spectrum every
+    /// component is odd and the sine coefficients S_a project as they stand:
+    /// (S_a − κ_a s)/(η|k|²) with s = κ·S/|κ|². An odd component's top sine mode sits where
+    /// j_a = 0: κ_a = 0 there, so it is not projected, and (π/h)² is added to its |k|².
+    fn project<T: Coefficient>(&mut self, sym: &Symbols, part: usize) {
+        let (axes, kappa, modes) = (&self.axes, &self.kappa, self.modes);
+        let components = slices::<T>(&self.components[part]);
+        modes_mut(&mut self.spectrum, modes, sym, |i, idx, _, out: &mut T| {
+            let mut dot = T::default();
             let mut norm = 0.0;
             for (c, &a) in axes.iter().enumerate() {
                 let k = kappa[a][idx[a]];
-                dot += periodic_picture(components[c], i, idx, (a, odd[c]), shape) * k;
+                dot = dot + components[c][i] * k;
                 norm += k * k;
             }
-            *out = if norm > 0.0 {
-                dot / norm
-            } else {
-                Complex64::default()
-            };
-            0.0
+            *out = if norm > 0.0 { dot / norm } else { T::default() };
         });
-        let (eta, top_k2) = (self.viscosity, self.top_k2);
+        let eta = self.viscosity;
         for (c, &a) in self.axes.iter().enumerate() {
-            let (kappa, s, odd) = (&self.kappa[a], flat(&self.spectrum), self.odd[c]);
+            let (kappa, s, top_k2) = (
+                &self.kappa[a],
+                coefficients::<T>(&self.spectrum),
+                self.top_k2_of(c),
+            );
             modes_mut(
                 &mut self.components[part][c],
-                shape,
+                modes,
                 sym,
-                |i, idx, (k2, _), u| {
-                    *u = match odd {
-                        None if k2 > 0.0 => (*u - s[i] * kappa[idx[a]]) / (eta * k2),
-                        None => Complex64::default(),
-                        // The top sine mode (κ_a = 0, no other component there).
-                        Some(_) if idx[a] == 0 => *u / (eta * (k2 + top_k2)),
-                        Some(n) => twisted(idx, a, n).map_or_else(Complex64::default, |l| {
-                            let (k2, _) = mode_symbols(sym, l);
-                            let s = s[flat_of(l, shape)] * kappa[l[a]];
-                            (*u - Complex64::new(-s.im, s.re)) / (eta * k2)
-                        }),
+                |i, idx, (k2, _), u: &mut T| {
+                    let k2 = if idx[a] == 0 { k2 + top_k2 } else { k2 };
+                    *u = if k2 > 0.0 {
+                        (*u - s[i] * kappa[idx[a]]) / (eta * k2)
+                    } else {
+                        T::default()
                     };
-                    0.0
                 },
             );
         }
     }
 
-    /// η Σ_k w |k|² |û_b + σû_σ|² over the components: the power the fluid dissipates at σ
-    /// (û_b alone at a fixed tension).
-    fn dissipation(&self, sym: &Symbols, sigma: f64) -> f64 {
+    /// (π/h)² for an odd component `c` (its top sine mode's share of |k|² where j_a = 0 in
+    /// logical order), else 0.
+    fn top_k2_of(&self, c: usize) -> f64 {
+        if self.odd[c].is_some() {
+            self.top_k2
+        } else {
+            0.0
+        }
+    }
+
+    /// η Σ_k w |k|² |û_b + σû_σ|² over the components, in logical order ([`Flow::turn`]): the
+    /// power the fluid dissipates at σ (û_b alone at a fixed tension).
+    fn dissipation<T: Coefficient>(&self, sym: &Symbols, sigma: f64) -> f64 {
         let [base, per_sigma] = &self.components;
-        let (base, per_sigma, shape) = (slices(base), slices(per_sigma), self.shape);
-        let partials = (0..self.spectrum.len().div_ceil(PAR_CHUNK))
-            .into_par_iter()
-            .map(|t| {
-                let modes = t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(self.spectrum.len());
-                modes
-                    .map(|i| {
-                        let idx = index_of(i, shape);
-                        let (k2, w) = mode_symbols(sym, idx);
-                        let u = self.axes.iter().enumerate().map(|(c, &a)| {
-                            let at = (a, self.odd[c]);
-                            let per =
-                                |v: &[Complex64], i: usize| v.get(i).copied().unwrap_or_default();
-                            let b = periodic_picture(base[c], i, idx, at, shape);
-                            let s = if per_sigma[c].is_empty() {
-                                Complex64::default()
-                            } else {
-                                periodic_picture(per_sigma[c], i, idx, at, shape)
-                            };
-                            // The top sine mode, stored where this mode's j_a = 0.
-                            let top = if at.1.is_some() && idx[a] == 0 {
-                                let u = base[c][i] + per(per_sigma[c], i) * sigma;
-                                (k2 + self.top_k2) * u.norm_sqr()
-                            } else {
-                                0.0
-                            };
-                            k2 * (b + s * sigma).norm_sqr() + top
-                        });
-                        w * u.sum::<f64>()
-                    })
-                    .sum::<f64>()
-            });
+        let (base, per_sigma, modes) = (slices::<T>(base), slices::<T>(per_sigma), self.modes);
+        let tops: Vec<f64> = (0..self.axes.len()).map(|c| self.top_k2_of(c)).collect();
+        let len = modes.iter().product::<usize>();
+        let partials = (0..len.div_ceil(PAR_CHUNK)).into_par_iter().map(|t| {
+            indexed(t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len), modes)
+                .map(|(i, idx)| {
+                    let (k2, w) = mode_symbols(sym, idx);
+                    let u = self.axes.iter().enumerate().map(|(c, &a)| {
+                        let k2 = if idx[a] == 0 { k2 + tops[c] } else { k2 };
+                        let s = per_sigma[c].get(i).copied().unwrap_or_default();
+                        k2 * (base[c][i] + s * sigma).norm_sqr()
+                    });
+                    w * u.sum::<f64>()
+                })
+                .sum::<f64>()
+        });
         self.viscosity * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
     }
 }
 
-/// Call `f(i, [j0, j1, j2], (|k|², w), &mut out)` on every mode `i` of `spectrum` (of spectral
-/// shape `shape`) in parallel chunks, and return the sum of what it returns, added in a fixed
-/// tree (the same bits on any number of threads).
-fn modes_mut(
+/// A coefficient of the flow's spectra: a complex value, or in a packed spectrum (every axis a
+/// mirror or wall axis) one real. The projection reads each component in a *picture* in which
+/// it is the plain Oseen projection (I − κ̂κ̂)/(η|k|²) of the components' coefficients at one
+/// mode: on complex spectra the periodic picture (an odd component's stored sine coefficient S
+/// as −iS, a periodic one's as stored); on a packed spectrum every component is odd, and the
+/// picture is the sine coefficients themselves — the periodic picture times i, a factor common
+/// to every component, which the linear projection carries through — so no complex arithmetic
+/// is done.
+trait Coefficient:
+    Pod
+    + Default
+    + Send
+    + Sync
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Neg<Output = Self>
+    + Mul<f64, Output = Self>
+    + Div<f64, Output = Self>
+{
+    /// An odd component's stored sine coefficient S in the picture: −iS, or S.
+    fn picture(self) -> Self;
+    /// The stored coefficient of an odd component whose picture is `self` (the inverse of
+    /// [`Coefficient::picture`]): i·self, or self.
+    fn stored(self) -> Self;
+    /// iκX: the coefficient of ∂_a of the cosine coefficient X on a periodic axis a (wavenumber
+    /// κ).
+    fn derivative(self, kappa: f64) -> Self;
+    /// |X|².
+    fn norm_sqr(self) -> f64;
+}
+
+impl Coefficient for Complex64 {
+    #[inline]
+    fn picture(self) -> Self {
+        Complex64::new(self.im, -self.re)
+    }
+
+    #[inline]
+    fn stored(self) -> Self {
+        Complex64::new(-self.im, self.re)
+    }
+
+    #[inline]
+    fn derivative(self, kappa: f64) -> Self {
+        self * Complex64::new(0.0, kappa)
+    }
+
+    #[inline]
+    fn norm_sqr(self) -> f64 {
+        Complex64::norm_sqr(&self)
+    }
+}
+
+impl Coefficient for f64 {
+    #[inline]
+    fn picture(self) -> Self {
+        self
+    }
+
+    #[inline]
+    fn stored(self) -> Self {
+        self
+    }
+
+    /// # Panics
+    /// Always: a packed spectrum has no periodic axis (its components are all odd).
+    fn derivative(self, _: f64) -> Self {
+        unreachable!("a packed spectrum has no periodic axis")
+    }
+
+    #[inline]
+    fn norm_sqr(self) -> f64 {
+        self * self
+    }
+}
+
+/// Call `f(i, [j0, j1, j2], (|k|², w), &mut out)` on every mode `i` of `spectrum` (its modes'
+/// indices of shape `modes`, [`Coefficient`] `T` each) in parallel chunks.
+fn modes_mut<T: Coefficient>(
     spectrum: &mut Array3<Complex64>,
-    shape: [usize; 3],
+    modes: [usize; 3],
     sym: &Symbols,
-    f: impl Fn(usize, [usize; 3], (f64, f64), &mut Complex64) -> f64 + Sync,
-) -> f64 {
-    let partials = spectrum
-        .as_slice_mut()
-        .expect("standard layout")
+    f: impl Fn(usize, [usize; 3], (f64, f64), &mut T) + Sync,
+) {
+    coefficients_mut::<T>(spectrum)
         .par_chunks_mut(PAR_CHUNK)
         .enumerate()
-        .map(|(t, chunk)| {
-            let mut sum = 0.0;
-            for (l, out) in chunk.iter_mut().enumerate() {
-                let i = t * PAR_CHUNK + l;
-                let idx = index_of(i, shape);
-                sum += f(i, idx, mode_symbols(sym, idx), out);
+        .for_each(|(t, chunk)| {
+            let first = t * PAR_CHUNK;
+            for ((i, idx), out) in indexed(first..first + chunk.len(), modes).zip(chunk) {
+                f(i, idx, mode_symbols(sym, idx), out);
             }
-            sum
         });
-    sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
 }
 
-/// The index (j0, j1, j2) of the flat spectral position `i` in a spectrum of shape `shape`.
+/// The flat positions `range` among modes of index shape `modes`, each with its index
+/// (j0, j1, j2): [`index_of`] of the first, the others counted on along the last axis (no
+/// division a mode).
 #[inline]
-fn index_of(i: usize, [_, s1, s2]: [usize; 3]) -> [usize; 3] {
-    [i / (s1 * s2), (i / s2) % s1, i % s2]
-}
-
-/// The flat position of index `idx` in a spectrum of shape `shape`.
-#[inline]
-fn flat_of([j0, j1, j2]: [usize; 3], [_, s1, s2]: [usize; 3]) -> usize {
-    (j0 * s1 + j1) * s2 + j2
-}
-
-/// The partner of index `idx` under the twist of an odd component on mirror axis `a` of `n`
-/// points (j ↔ n − j; `None` for j = 0, which holds no sine mode). The map is its own
-/// inverse: it takes a logical mode to its storage and a storage index to its mode.
-#[inline]
-fn twisted(mut idx: [usize; 3], a: usize, n: usize) -> Option<[usize; 3]> {
-    (idx[a] > 0).then(|| {
-        idx[a] = n - idx[a];
-        idx
+fn indexed(range: Range<usize>, modes: [usize; 3]) -> impl Iterator<Item = (usize, [usize; 3])> {
+    let [_, s1, s2] = modes;
+    let mut idx = index_of(range.start, modes);
+    range.map(move |i| {
+        let at = idx;
+        idx[2] += 1;
+        if idx[2] == s2 {
+            idx[2] = 0;
+            idx[1] += 1;
+            if idx[1] == s1 {
+                idx[1] = 0;
+                idx[0] += 1;
+            }
+        }
+        (i, at)
     })
 }
 
-/// Component `values`' coefficient at the logical mode `i` (index `idx`) in the periodic
-/// picture: the stored value on a periodic axis, −iS from the twisted storage on mirror axis
-/// `a` of `n` points (`odd = Some(n)`; 0 at j = 0).
+/// The index (j0, j1, j2) of the flat position `i` among modes of index shape `modes`.
 #[inline]
-fn periodic_picture(
-    values: &[Complex64],
-    i: usize,
-    idx: [usize; 3],
-    (a, odd): (usize, Option<usize>),
-    shape: [usize; 3],
-) -> Complex64 {
-    match odd {
-        None => values[i],
-        Some(n) => twisted(idx, a, n).map_or_else(Complex64::default, |l| {
-            let v = values[flat_of(l, shape)];
-            Complex64::new(v.im, -v.re)
-        }),
-    }
+fn index_of(i: usize, [_, s1, s2]: [usize; 3]) -> [usize; 3] {
+    [i / (s1 * s2), (i / s2) % s1, i % s2]
 }
 
 /// |k|² and the Parseval weight w of the mode at `idx`.
@@ -496,16 +619,23 @@ fn mode_symbols(sym: &Symbols, [i0, i1, i2]: [usize; 3]) -> (f64, f64) {
     )
 }
 
-/// A spectrum's coefficients in flat order.
+/// A spectrum's coefficients in flat order, as [`Coefficient`] `T` (a packed spectrum's
+/// reals as `f64`).
 #[inline]
-fn flat(a: &Array3<Complex64>) -> &[Complex64] {
-    a.as_slice().expect("standard layout")
+fn coefficients<T: Coefficient>(a: &Array3<Complex64>) -> &[T] {
+    bytemuck::cast_slice(a.as_slice().expect("standard layout"))
+}
+
+/// [`coefficients`], writable.
+#[inline]
+fn coefficients_mut<T: Coefficient>(a: &mut Array3<Complex64>) -> &mut [T] {
+    bytemuck::cast_slice_mut(a.as_slice_mut().expect("standard layout"))
 }
 
 /// The coefficients of each velocity component's spectrum (up to three; the missing ones
 /// empty), taken once per pass instead of once per mode.
-fn slices(components: &[Array3<Complex64>]) -> [&[Complex64]; 3] {
-    std::array::from_fn(|c| components.get(c).map_or(&[][..], flat))
+fn slices<T: Coefficient>(components: &[Array3<Complex64>]) -> [&[T]; 3] {
+    std::array::from_fn(|c| components.get(c).map_or(&[][..], coefficients))
 }
 
 #[cfg(test)]
@@ -561,7 +691,8 @@ mod tests {
 
     /// The semi-discrete energy law term by term (module documentation), on 2D and 3D fields
     /// with odd and even lengths, periodic, mirrored (a velocity component twisted, with its top
-    /// sine mode) and walled, at σ = 0.3: with FT[u·∇φ] = M N̂_conserved − N̂_flow +
+    /// sine mode), walled, and with every axis mirrored or walled (the quarter and eighth boxes'
+    /// packed spectra, computed a real a mode, with an odd row's padding), at σ = 0.3: with FT[u·∇φ] = M N̂_conserved − N̂_flow +
     /// σT̂ (the same state evaluated without and with the flow; N̂_flow holds the advection at
     /// σ = 0, T̂ the advection per unit σ) and μ̂ = −N̂_conserved/|k|² +
     /// 2ε⁴|k|⁴φ̂ + c_σσ|k|²φ̂, Σ_x μ u·∇φ = Σ_k w Re(μ̂ FT[u·∇φ]*) equals the reported
@@ -579,12 +710,16 @@ mod tests {
                 shear_rate: None,
             },
         );
-        let boxes: [(&[usize], &[bool], &[bool]); 5] = [
+        let boxes: [(&[usize], &[bool], &[bool]); 9] = [
             (&[24, 19], &[false, false], &[false, false]),
             (&[12, 11, 10], &[false; 3], &[false; 3]),
             (&[24, 20], &[false, true], &[false, false]),
             (&[12, 11, 10], &[false; 3], &[true, false, false]),
             (&[12, 10, 10], &[false, true, false], &[false, false, true]),
+            (&[24, 20], &[true, true], &[false, false]),
+            (&[24, 22], &[true, false], &[false, true]),
+            (&[12, 10, 14], &[true; 3], &[false; 3]),
+            (&[12, 9, 10], &[true, false, true], &[false, true, false]),
         ];
         for ((n, mirror, walls), fixed) in boxes.into_iter().flat_map(|b| [(b, false), (b, true)]) {
             let grid = Grid::new(n, 0.8, mirror).with_walls(walls);
@@ -603,20 +738,28 @@ mod tests {
             let plain = evaluator(false).state_at(&phi, 0.0, sigma).expect("finite");
             let mut ev = evaluator(true);
             let flowing = ev.state_at(&phi, 0.0, sigma).expect("finite");
-            let sym = &ev.symbols;
-            let shape = ev.transform.spectral_shape();
+            let (sym, t) = (&ev.symbols, &ev.transform);
             let (e4x2, tension) = (2.0, TENSION_FACTOR * sigma);
             let mut power = 0.0;
             assert_eq!(flowing.curvature_hat.is_empty(), fixed);
-            let per_sigma = |i: usize| flowing.curvature_hat.as_slice().and_then(|t| t.get(i));
-            for (i, ((&n, &nf), &h)) in plain
-                .nonlinear
+            assert_eq!(t.packed(), mirror.iter().zip(walls).all(|(m, w)| m | w));
+            // Every spectrum in the index layout (a packed one's reals as complex values).
+            let index = |s: &Array3<Complex64>| t.unpacked(s.view());
+            let per_sigma = (!fixed).then(|| index(&flowing.curvature_hat));
+            let per_sigma = |i: usize| per_sigma.as_ref().map(|t| t.as_slice().unwrap()[i]);
+            let (n_plain, n_flow, hat) = (
+                index(&plain.nonlinear),
+                index(&flowing.nonlinear),
+                index(&plain.hat),
+            );
+            let shape = t.index_shape();
+            for (i, ((&n, &nf), &h)) in n_plain
                 .iter()
-                .zip(flowing.nonlinear.iter())
-                .zip(plain.hat.iter())
+                .zip(n_flow.iter())
+                .zip(hat.iter())
                 .enumerate()
             {
-                let t = per_sigma(i).copied().unwrap_or_default();
+                let t = per_sigma(i).unwrap_or_default();
                 let (k, w) = mode_symbols(sym, index_of(i, shape));
                 let advection = n * spec.mobility - nf + t * sigma;
                 if k == 0.0 {

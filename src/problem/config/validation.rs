@@ -241,9 +241,10 @@ impl Scene {
         }
     }
 
-    /// `dynamics: "stokes"` needs `flow` with η > 0 and M > 0, the spectral CPU engine on the
-    /// periodic box with its spectral Laplacian, and no area-difference term; `flow` belongs to
-    /// it alone.
+    /// `dynamics: "stokes"` needs `flow` with η > 0 and M > 0, the spectral CPU engine with its
+    /// spectral Laplacian (on any box: periodic, mirrored or walled axes in any mix), and no
+    /// area-difference term; an imposed shear along x, varying along y, takes neither an x nor
+    /// a y mirror plane nor walls across x. `flow` belongs to it alone.
     fn validate_flow(&self) -> Result<()> {
         let Some(flow) = self.flow else {
             if self.dynamics == Dynamics::Stokes {
@@ -293,12 +294,6 @@ impl Scene {
                 "walls",
                 "the imposed shear flows along x: walls across x would stop it; put the walls \
                  across y",
-            ));
-        }
-        if (0..self.dim).all(|a| self.mirrored_or_walled(a)) {
-            return Err(Error::config(
-                "symmetry",
-                "stokes dynamics needs one periodic axis (every axis is mirrored or walled)",
             ));
         }
         if self.ade.is_some() || self.bilayer_couple.is_some() {
@@ -434,15 +429,6 @@ impl Scene {
             }
             C0Field::File(_) => Ok(()),
         }
-    }
-
-    /// Whether scene axis `a` is a declared mirror axis or bounded by walls.
-    fn mirrored_or_walled(&self, a: usize) -> bool {
-        let mirrored = match &self.symmetry {
-            Symmetry::Axes(axes) => axes.iter().any(|n| axis_index(n, self.dim) == Some(a)),
-            Symmetry::Auto(_) => false,
-        };
-        mirrored || self.wall_flags()[a]
     }
 
     /// `walls`: known axes, each once, none of them also a mirror axis.

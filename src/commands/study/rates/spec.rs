@@ -51,10 +51,11 @@ pub struct Family {
     /// L/R, the periodic box's side over the radius.
     #[serde(rename = "box")]
     pub box_over_r: f64,
-    /// Run each case on the quarter box mirrored about x and y (`"symmetry": ["x", "y"]`; the
-    /// quasi-sphere's P_l(cos θ) about z is even in both), z left periodic: a quarter of the
-    /// points, the same rate (the reduced box reproduces the full one to round-off). Sphere
-    /// only: the circle would have both of its axes mirrored, which the Stokes flow refuses.
+    /// Run each case on the box mirrored about x and y (`"symmetry": ["x", "y"]`): the sphere's
+    /// quarter box (the quasi-sphere's P_l(cos θ) about z is even in both, z left periodic) or
+    /// the circle's quarter box (cos nθ is even about both axes for even n only, so a mirrored
+    /// circle takes even modes), a quarter of the points, the same rate (the reduced box
+    /// reproduces the full one to round-off).
     #[serde(default)]
     pub mirror: bool,
     /// The groups.
@@ -115,11 +116,19 @@ impl Spec {
                 f.validate().map_err(|e| within(key, e))?;
             }
         }
-        if self.circle.as_ref().is_some_and(|f| f.mirror) {
+        let mirrored_circle = self.circle.as_ref().filter(|f| f.mirror);
+        if let Some(n) = mirrored_circle.and_then(|f| {
+            f.groups
+                .iter()
+                .flat_map(|g| &g.modes)
+                .find(|&&n| n % 2 == 1)
+        }) {
             return Err(Error::config(
                 "circle.mirror",
-                "the quarter box is for the sphere only: mirroring both axes of the 2D box \
-                 leaves the Stokes flow no periodic axis, which it refuses",
+                format!(
+                    "the circle's quarter box holds even modes only: cos {n}θ is odd about \
+                     x = 0; run odd modes on the full box"
+                ),
             ));
         }
         if let Some(f) = &self.flat {
