@@ -23,7 +23,7 @@
 #   resolution       study resolution (error against wall time)         ~6 min (342 s, loaded)
 #   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
-#   budding          study budding budding.json (41 relaxations, h = 2ε/3)       BUDDING_S
+#   budding          study budding budding.json (41 relaxations, h = 2ε/3)   ~32 min (8.5 min CPU), measured
 #   onset            study onset onset.json + onset_seeds.json (R0 20-40ε)     ONSET_S
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
