@@ -34,6 +34,7 @@
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
 #   diagram_c0_fine  diagram diagram_c0_fine.json, 165 cases      ~17-35 min (cases: 1 968 s)
 #   diagram_ade      diagram diagram_ade.json, 60 cases (h = ε/2, R0 24-40ε)     13.5 min (cases: 1 594 s), measured
+#   diagram_bc       diagram diagram_bc.json, 36 cases (h = ε/2, R0 24-40ε)  36.6 min at load 7-8 (cases: 4 032 s), measured
 #   budding3d        run budding3d.json (200 000 steps), measure, render    ~14 min (820 s recorded)
 #   deflation3d      run deflation3d.json (215 000 steps), measure, render     280 s, measured
 #   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
@@ -49,7 +50,7 @@ VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
 ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating axisym_c0 axisym_bc
-     axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade budding3d deflation3d
+     axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade diagram_bc budding3d deflation3d
      dumbbell3d pearling3d triaxial3d starfish3d)
 
 # Run the program, echoing the command.
@@ -153,6 +154,7 @@ group_diagram_fine() { diagram diagram_fine; }
 group_diagram_c0() { diagram diagram_c0; }
 group_diagram_c0_fine() { diagram diagram_c0_fine; }
 group_diagram_ade() { diagram diagram_ade; }
+group_diagram_bc() { diagram diagram_bc; }
 group_budding3d() {
     scene budding3d
     vesicle measure "$out" --force
@@ -245,6 +247,7 @@ FIGURES=(
     resolution.png=resolution/resolution.png
     diagram_ade_phase.png=diagram_ade/phase.png
     diagram_ade_errors.png=diagram_ade/errors.png
+    diagram_bc_errors.png=diagram_bc/errors.png
     budding3d_010000.png=scenes/budding3d_010000.png
     budding3d_110000.png=scenes/budding3d_110000.png
     budding3d_200000.png=scenes/budding3d_200000.png

@@ -25,7 +25,9 @@ pub fn cubic_at(pts: &[(f64, f64)], x: f64) -> f64 {
 /// sign changes of `cubic_at(a) − cubic_at(b)` at the points of both curves, each refined by
 /// bisection to round-off. The range searched is the one both curves cover, widened at each
 /// end by half the spacing of the nearer end points of the curve that ends there (a crossing
-/// just beyond the last point of one curve is found from its end cubic).
+/// just beyond the last point of one curve is found from its end cubic). Curves whose widened
+/// ranges do not overlap (one ends before the other starts) have no crossing: the roots of
+/// the two end cubics extrapolated across the gap would be no point of either curve.
 pub fn crossings(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<f64> {
     if a.len() < 2 || b.len() < 2 {
         return Vec::new();
@@ -39,6 +41,9 @@ pub fn crossings(a: &[(f64, f64)], b: &[(f64, f64)]) -> Vec<f64> {
     let hi = end(a)
         .min(end(b))
         .min(a[a.len() - 1].0.max(b[b.len() - 1].0));
+    if lo >= hi {
+        return Vec::new();
+    }
     let mut xs: Vec<f64> = a
         .iter()
         .chain(b)
@@ -143,6 +148,20 @@ fn spread(ys: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two lines that would cross at x = 4 if extrapolated, one given on [0, 3] and the other
+    /// on [5, 8]: no crossing (before the guard, the search ran from the later start down to
+    /// the earlier end and returned 4).
+    #[test]
+    fn curves_that_do_not_overlap_do_not_cross() {
+        let a: Vec<(f64, f64)> = (0..4).map(|i| (i as f64, 1.0 + 0.3 * i as f64)).collect();
+        let b: Vec<(f64, f64)> = (5..9).map(|i| (i as f64, 3.0 - 0.2 * i as f64)).collect();
+        assert_eq!(crossings(&a, &b), Vec::<f64>::new());
+        // Overlapping on [2, 3], lines that meet at 2.5 cross there.
+        let b: Vec<(f64, f64)> = (2..9).map(|i| (i as f64, 2.25 - 0.2 * i as f64)).collect();
+        let x = crossings(&a, &b);
+        assert!(x.len() == 1 && (x[0] - 2.5).abs() < 1e-9, "{x:?}");
+    }
 
     #[test]
     fn cubic_interpolation_is_exact_for_cubics() {

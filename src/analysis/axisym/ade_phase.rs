@@ -32,14 +32,16 @@ pub fn v_slice(v: f64, window: (f64, f64), opts: &Options) -> VSlice {
 /// A change of the lowest-energy branch between two grid values of `x` (`Δa` or `Δa0`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Change {
-    /// Where: the crossing of the two energies, or the midpoint of the grid interval when they
-    /// do not cross there (a branch ends).
+    /// Where: the crossing of the two energies (inside the stretch both branches cover), or
+    /// the midpoint of the grid interval when they do not cross there (a branch ends or
+    /// begins in it, or none exists between the two grid values).
     pub x: f64,
     /// Lowest below `x`.
     pub below: Branch,
     /// Lowest above `x`.
     pub above: Branch,
-    /// Whether `x` is an energy crossing (else a grid midpoint).
+    /// Whether `x` is an energy crossing, a transition (else a grid midpoint where a branch
+    /// ends: no transition).
     pub crossing: bool,
 }
 
@@ -81,30 +83,39 @@ fn monotone_pieces(path: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
         .collect()
 }
 
-/// The lowest branch along `xs` over the branches' pieces `(branch, piece)`.
+/// The lowest branch along `xs` over the branches' pieces `(branch, piece)`, and where it
+/// changes between two grid values from one branch to another: an energy crossing when a
+/// piece of the one and a piece of the other cross inside the interval and inside the stretch
+/// both pieces cover (no extrapolation past a piece's end; any pieces of the two branches, as
+/// a path that turns back briefly splits into pieces of which the lowest at the grid values
+/// need not be the ones that cross), else the interval's midpoint marked as no crossing.
 fn lowest(pieces: &[(Branch, Vec<(f64, f64)>)], xs: &[f64]) -> Lowest {
-    let covering = |x: f64| {
-        pieces
-            .iter()
-            .filter(move |(_, p)| x >= p[0].0 && x <= p[p.len() - 1].0)
-            .map(move |(b, p)| (*b, cubic_at(p, x), p))
-    };
+    let covers = |p: &[(f64, f64)], x: f64| x >= p[0].0 && x <= p[p.len() - 1].0;
     let mut out = Lowest::default();
-    let mut best_pieces = Vec::new();
     for &x in xs {
-        if let Some((b, y, p)) = covering(x).min_by(|a, b| a.1.total_cmp(&b.1)) {
+        let lowest = pieces
+            .iter()
+            .filter(|(_, p)| covers(p, x))
+            .map(|(b, p)| (*b, cubic_at(p, x)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((b, y)) = lowest {
             out.points.push((x, b, y));
-            best_pieces.push(p);
         }
     }
+    let of = |branch: Branch| pieces.iter().filter(move |(b, _)| *b == branch);
     for i in 1..out.points.len() {
         let ((x0, b0, _), (x1, b1, _)) = (out.points[i - 1], out.points[i]);
         if b0 == b1 {
             continue;
         }
         let mid = 0.5 * (x0 + x1);
-        let cross = crossings(best_pieces[i - 1], best_pieces[i])
-            .into_iter()
+        let cross = of(b0)
+            .flat_map(|(_, p0)| of(b1).map(move |(_, p1)| (p0, p1)))
+            .flat_map(|(p0, p1)| {
+                crossings(p0, p1)
+                    .into_iter()
+                    .filter(move |x| covers(p0, *x) && covers(p1, *x))
+            })
             .filter(|x| *x >= x0 - 1e-9 && *x <= x1 + 1e-9)
             .min_by(|a, b| (a - mid).abs().total_cmp(&(b - mid).abs()));
         out.changes.push(Change {
@@ -161,4 +172,64 @@ pub fn ade_lowest(slice: &VSlice, alpha: f64, da0s: &[f64]) -> Lowest {
         }
     }
     lowest(&pieces, da0s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The oblate's piece ends at Δa = 3 and the prolate's starts at 5, their end cubics
+    /// extrapolated meeting at 4 (the shape of the BC gap at v = 0.76 the earlier code reported
+    /// as an "energies cross" change at Δa = 1.146): the change of the lowest branch is a
+    /// branch ending, not a crossing. Where the pieces overlap and cross inside the grid
+    /// interval, the change is the crossing.
+    #[test]
+    fn a_branch_ending_is_no_crossing() {
+        let line = |lo: usize, hi: usize, a: f64, b: f64| -> Vec<(f64, f64)> {
+            (lo..=hi).map(|i| (i as f64, a + b * i as f64)).collect()
+        };
+        let xs: Vec<f64> = (0..=8).map(f64::from).collect();
+        let gap = lowest(
+            &[
+                (Branch::Oblate, line(0, 3, 1.0, 0.3)),
+                (Branch::Prolate, line(5, 8, 3.0, -0.2)),
+            ],
+            &xs,
+        );
+        assert_eq!(gap.points.len(), 8, "nothing at Δa = 4");
+        let [c] = gap.changes.as_slice() else {
+            panic!("{:?}", gap.changes)
+        };
+        assert!(!c.crossing && (c.x - 4.0).abs() < 1e-12, "{c:?}");
+        assert_eq!((c.below, c.above), (Branch::Oblate, Branch::Prolate));
+
+        let cross = lowest(
+            &[
+                (Branch::Oblate, line(0, 6, 1.0, 0.3)),
+                (Branch::Prolate, line(2, 8, 3.0, -0.2)),
+            ],
+            &xs,
+        );
+        let [c] = cross.changes.as_slice() else {
+            panic!("{:?}", cross.changes)
+        };
+        assert!(c.crossing && (c.x - 4.0).abs() < 1e-9, "{c:?}");
+
+        // The prolate's path turns back briefly between 4 and 5, so it is two pieces: the one
+        // lowest at x = 5 starts past the crossing at 3.5, which the other covers (the shape of
+        // the ADE pear at v = 0.86). Only the lowest pieces at 3 and 5 give no crossing.
+        let grid = [0.0, 1.0, 2.0, 3.0, 5.0, 6.0, 7.0, 8.0];
+        let split = lowest(
+            &[
+                (Branch::Oblate, line(0, 6, 1.0, 0.3)),
+                (Branch::Prolate, line(1, 4, 2.75, -0.2)),
+                (Branch::Prolate, line(5, 8, 2.75, -0.2)),
+            ],
+            &grid,
+        );
+        let [c] = split.changes.as_slice() else {
+            panic!("{:?}", split.changes)
+        };
+        assert!(c.crossing && (c.x - 3.5).abs() < 1e-9, "{c:?}");
+    }
 }

@@ -191,22 +191,27 @@ fn write_lowest(path: &Path, slices: &[VSlice], lows: &[Lowest], which: Which) -
     f.flush().map_err(&err)
 }
 
-/// `summary.csv`: per `v`, `v,event,x,detail`: the changes of the lowest branch, the pear
-/// bifurcation, the limit shapes at this `v`.
+/// `summary.csv`: per `v`, `v,event,x,detail`: the changes of the lowest branch (`lowest branch
+/// changes` where the energies cross, the transitions; `branch ends` where the lowest changes
+/// only because a branch ends or begins inside a grid interval), the pear bifurcation, the
+/// limit shapes at this `v`.
 fn write_summary(path: &Path, slices: &[VSlice], lows: &[Lowest], which: Which) -> Result<()> {
     let mut f = create_file(path)?;
     let err = io_err(path);
     writeln!(f, "v,event,{},detail", which.x_name()).map_err(&err)?;
     for (s, l) in slices.iter().zip(lows) {
         for c in &l.changes {
-            let how = if c.crossing {
-                "energies cross"
+            let (event, how) = if c.crossing {
+                ("lowest branch changes", "energies cross")
             } else {
-                "grid midpoint: a branch ends"
+                (
+                    "branch ends",
+                    "grid midpoint: no energy crossing, a branch ends or begins",
+                )
             };
             writeln!(
                 f,
-                "{:.6},lowest branch changes,{:.6},{} below / {} above ({how})",
+                "{:.6},{event},{:.6},{} below / {} above ({how})",
                 s.v,
                 c.x,
                 c.below.name(),
@@ -391,7 +396,11 @@ fn print_slice(s: &VSlice, l: &Lowest, which: Which) {
             c.above.name(),
             which.x_name(),
             c.x,
-            if c.crossing { "" } else { " (grid midpoint)" }
+            if c.crossing {
+                ""
+            } else {
+                " (grid midpoint: a branch ends, no crossing)"
+            }
         );
     }
     if let Some(b) = pear_bifurcation_x(s, which) {

@@ -61,9 +61,15 @@ pub fn run(args: &AxisymArgs, list: &[f64], vs: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// `c0` as it appears in file names (`-0.5` → `m0.50`, `1` → `1.00`).
+/// `c0` as it appears in file names (`-0.5` → `m0.50`, `1` → `1.00`, `1.035` → `1.035`): two
+/// decimals, or as many as the value needs beyond them (so that 1.03 and 1.035 differ).
 pub fn c0_tag(c0: f64) -> String {
-    let t = format!("{:.2}", c0.abs());
+    let two = format!("{:.2}", c0.abs());
+    let t = if (two.parse::<f64>().unwrap_or(f64::NAN) - c0.abs()).abs() < 1e-12 {
+        two
+    } else {
+        format!("{}", c0.abs())
+    };
     if c0 < 0.0 {
         format!("m{t}")
     } else {
@@ -367,5 +373,21 @@ fn print_slice(s: &Slice) {
     match axisym::l_pear(s.c0) {
         Some(v) => println!("  L_pear (two-sphere limit, 1/R1 + 1/R2 = c0) at v = {v:.5}"),
         None => println!("  no L_pear (c0 < 2√2)"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::c0_tag;
+
+    /// Two decimals where they suffice (the committed folder names), more where the value has
+    /// them: 1.03 and 1.035 (two slices of one bilayer-couple diagram) get different folders.
+    #[test]
+    fn tags_keep_the_digits_that_tell_values_apart() {
+        assert_eq!(c0_tag(-0.5), "m0.50");
+        assert_eq!(c0_tag(1.0), "1.00");
+        assert_eq!(c0_tag(1.03), "1.03");
+        assert_eq!(c0_tag(1.035), "1.035");
+        assert_eq!(c0_tag(-1.125), "m1.125");
     }
 }

@@ -165,22 +165,6 @@ pub fn scene_json(spec: &DiagramSpec, case: &Case, n: [usize; 3]) -> serde_json:
         let (key, value) = couple.scene_entry();
         scene[key] = value;
     }
-    if let Some(Couple::Bc { .. }) = case.couple {
-        // The bilayer couple is held by the conserved flow's step only.
-        scene["dynamics"] = json!("conserved");
-        scene["scheme"] = json!("sbdf2");
-        scene["adaptive"] = json!({"dt_max": 50.0});
-        scene["description"] = json!(format!(
-            "diagram case {}: {} branch at v = {}, {}, R0 = {} eps, relaxed by the conserved flow \
-             (SBDF2, adaptive) to residual {:e}",
-            case.index,
-            case.branch.name(),
-            case.v,
-            case.slice().describe(),
-            case.r0,
-            spec.stop_residual
-        ));
-    }
     scene
 }
 

@@ -22,19 +22,25 @@ pub struct DiagramSpec {
     /// Reduced spontaneous curvatures c̄0 = c0 R0 (default `[0]`, the c0 = 0 diagram).
     #[serde(default = "zero_c0")]
     pub c0: Vec<f64>,
-    /// Reduced volumes per branch, at every c̄0 that `branches_by_c0` does not list.
+    /// Reduced volumes per branch, at every slice that `branches_by_c0` or `branches_by_da`
+    /// does not list.
     #[serde(default)]
     pub branches: Branches,
     /// Reduced volumes per branch at one c̄0 (the key, as a number: `"-0.5"`), replacing
     /// `branches` there.
     #[serde(default)]
     pub branches_by_c0: BTreeMap<String, Branches>,
+    /// Reduced volumes per branch at one slice of an ADE or bilayer-couple diagram (the key, as
+    /// a number: its Δa0 or Δa), replacing `branches` there (a bilayer couple's prolate and
+    /// oblate exist at different Δa).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub branches_by_da: BTreeMap<String, Branches>,
     /// Area-difference elasticity: the diagram's slices are the preferred Δa0 at one α (and
     /// the single c̄0 of `c0`); each case's scene holds `"ade"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ade: Option<AdeSlices>,
-    /// The bilayer couple: the slices are the Δa held (the single c̄0 of `c0`); each case runs
-    /// the spectral conserved flow (SBDF2, adaptive), which holds Δa (L-BFGS does not).
+    /// The bilayer couple: the slices are the Δa held (the single c̄0 of `c0`); each case's
+    /// scene holds `"bilayer_couple"`, which L-BFGS holds as its second constraint.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bilayer_couple: Option<BcSlices>,
     /// R0/ε of each resolution (ε = 1); at least two for the extrapolation in ε/R0.
@@ -300,15 +306,24 @@ impl DiagramSpec {
     pub fn validate(&self) -> Result<()> {
         self.validate_c0()?;
         self.validate_ade()?;
-        for c0 in &self.c0 {
-            let (key, branches) = self.branches_at(*c0);
+        self.validate_by_da()?;
+        for slice in self.slices() {
+            let (key, branches) = self.branches_at(slice);
             let Some(branches) = branches else {
+                let by = if slice.couple.is_some() {
+                    "branches_by_da"
+                } else {
+                    "branches_by_c0"
+                };
                 return Err(Error::config(
                     "branches",
-                    format!("list the branches of c0 = {c0} (here or in branches_by_c0)"),
+                    format!(
+                        "list the branches of {} (here or in {by})",
+                        slice.describe()
+                    ),
                 ));
             };
-            validate_branches(&key, branches, *c0)?;
+            validate_branches(&key, branches, slice.c0)?;
         }
         if self.r0.len() < 2 {
             return Err(Error::config(
@@ -473,14 +488,50 @@ impl DiagramSpec {
         Ok(())
     }
 
-    /// The branches at `c0` and the key they come from (`branches_by_c0.<c0>` or `branches`).
-    pub fn branches_at(&self, c0: f64) -> (String, Option<&Branches>) {
-        match self
-            .branches_by_c0
+    /// `branches_by_da`: only with `ade` or `bilayer_couple`, each key a number among the
+    /// slice values (Δa0 or Δa).
+    fn validate_by_da(&self) -> Result<()> {
+        let values: Vec<f64> = match (&self.ade, &self.bilayer_couple) {
+            (Some(a), _) => a.da0.clone(),
+            (None, Some(b)) => b.da.clone(),
+            (None, None) => Vec::new(),
+        };
+        for key in self.branches_by_da.keys() {
+            let at = format!("branches_by_da.{key}");
+            if values.is_empty() {
+                return Err(Error::config(
+                    at,
+                    "branches_by_da needs ade or bilayer_couple (its keys are their values)",
+                ));
+            }
+            let Ok(x) = key.parse::<f64>() else {
+                return Err(Error::config(
+                    at,
+                    "the key must be a number (a value of ade.da0 or bilayer_couple.da)",
+                ));
+            };
+            if !values.contains(&x) {
+                return Err(Error::config(
+                    at,
+                    format!("{x} is not a slice value (ade.da0 or bilayer_couple.da)"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The branches of the slice `at` and the key they come from: `branches_by_da.<Δa>` (an
+    /// ADE or bilayer-couple slice), `branches_by_c0.<c0>` (a c̄0 slice) or `branches`.
+    pub fn branches_at(&self, at: SliceAt) -> (String, Option<&Branches>) {
+        let (name, map, value) = match at.couple {
+            Some(_) => ("branches_by_da", &self.branches_by_da, at.value()),
+            None => ("branches_by_c0", &self.branches_by_c0, at.c0),
+        };
+        match map
             .iter()
-            .find(|(k, _)| k.parse::<f64>().ok() == Some(c0))
+            .find(|(k, _)| k.parse::<f64>().ok() == Some(value))
         {
-            Some((k, b)) => (format!("branches_by_c0.{k}"), Some(b)),
+            Some((k, b)) => (format!("{name}.{k}"), Some(b)),
             None => (
                 "branches".to_string(),
                 (!self.branches.is_empty()).then_some(&self.branches),
@@ -491,7 +542,11 @@ impl DiagramSpec {
     /// The key that lists `case`'s branch at its c̄0 (`branches.prolate`,
     /// `branches_by_c0.-1.oblate`).
     pub fn key_of(&self, case: &Case) -> String {
-        format!("{}.{}", self.branches_at(case.c0).0, case.branch.name())
+        format!(
+            "{}.{}",
+            self.branches_at(case.slice()).0,
+            case.branch.name()
+        )
     }
 
     /// Every case, numbered: the slices (c̄0, or Δa0) in increasing order, in each the branches in diagram order
@@ -501,8 +556,9 @@ impl DiagramSpec {
         let mut r0 = self.r0.clone();
         r0.sort_by(f64::total_cmp);
         let mut out = Vec::new();
-        for SliceAt { c0, couple } in self.slices() {
-            let Some(branches) = self.branches_at(c0).1 else {
+        for slice in self.slices() {
+            let SliceAt { c0, couple } = slice;
+            let Some(branches) = self.branches_at(slice).1 else {
                 continue;
             };
             for branch in Branch::ALL {

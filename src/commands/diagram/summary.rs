@@ -299,12 +299,13 @@ fn phase_chart(slices: &[Slice]) -> Figure {
     fig
 }
 
-/// The first column of the merged CSV files: `c0`, or `da0` for an ADE diagram.
+/// The first column of the merged CSV files: `c0`, `da0` for an ADE diagram, `da` for a
+/// bilayer-couple one.
 fn column(slices: &[Slice]) -> &'static str {
-    if slices.first().is_some_and(|s| s.at.couple.is_some()) {
-        "da0"
-    } else {
-        "c0"
+    match slices.first().and_then(|s| s.at.couple) {
+        Some(Couple::Ade { .. }) => "da0",
+        Some(Couple::Bc { .. }) => "da",
+        None => "c0",
     }
 }
 

@@ -115,6 +115,7 @@ impl Relaxation {
             c0: vec![0.0],
             branches: Default::default(),
             branches_by_c0: Default::default(),
+            branches_by_da: Default::default(),
             ade: None,
             bilayer_couple: None,
             r0: vec![],
