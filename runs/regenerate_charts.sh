@@ -24,7 +24,7 @@
 #   precision        study precision (transient) + study stationary (Pareto)     104 s, measured
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations, h = 2ε/3)   ~32 min (8.5 min CPU), measured
-#   onset            study onset onset.json + onset_seeds.json (R0 20-40ε)     ONSET_S
+#   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     44 s, measured
