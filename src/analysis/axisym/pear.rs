@@ -223,7 +223,7 @@ pub fn prolate_updown(v: f64, opts: &Options) -> Option<f64> {
 /// is found in 4–6 solves). `None` if the prolate is not found or the bracket holds no sign
 /// change. `opts.c0` is replaced.
 pub fn prolate_updown_zero(v: f64, (lo, hi): (f64, f64), opts: &Options) -> Option<f64> {
-    let mu = |c0: f64| prolate_updown(v, &opts.clone().with_c0(c0));
+    let mu = |c0: f64| prolate_updown(v, &opts.with_c0(c0));
     let (mut a, mut b) = (lo, hi);
     let (mut fa, mut fb) = (mu(a)?, mu(b)?);
     if !(fa > 0.0 && fb < 0.0) {
