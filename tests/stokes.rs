@@ -287,15 +287,7 @@ fn a_quasi_circle_relaxes_at_the_sharp_rate() {
 /// the quarter alone, or a moment without the factor 4, would not give the same Q.
 #[test]
 fn the_quarter_box_measures_the_full_boxs_rate() {
-    let spec: Spec = serde_json::from_value(json!({
-        "study": "rates", "h_over_eps": 0.5, "viscosity": 1.0, "mobility": 0.01,
-        "amplitude": 0.02, "dt_max": 3.0, "step_per_rate": 0.02, "e_folds": 0.5,
-        "prepare_steps": 20,
-        "sphere": {"box": 4, "mirror": true,
-                   "groups": [{"modes": [2], "sigma_bar": [0], "r0": [8, 10]}]}
-    }))
-    .expect("spec");
-    spec.validate().expect("valid");
+    let spec = mirrored_mode_two_spec("sphere");
     let case = mode_two(Kind::Sphere);
     let (full, quarter) = same_rate_on_both_boxes(&spec, &case);
     assert!(full.ratio > 0.7 && full.ratio < 0.8, "ratio {}", full.ratio);
@@ -320,16 +312,23 @@ fn the_quarter_box_measures_the_full_boxs_rate() {
 /// alone, or without the factor 4, would not decay as the full box's does).
 #[test]
 fn the_circles_quarter_box_measures_the_full_boxs_rate() {
+    let spec = mirrored_mode_two_spec("circle");
+    same_rate_on_both_boxes(&spec, mode_two(Kind::Circle));
+}
+
+/// A rates study file of the `shape` ("sphere" or "circle") on its mirrored box, mode 2 at
+/// σ̄ = 0, R = 8ε and 10ε on a box of 4R, h = ε/2, validated.
+fn mirrored_mode_two_spec(shape: &str) -> Spec {
     let spec: Spec = serde_json::from_value(json!({
         "study": "rates", "h_over_eps": 0.5, "viscosity": 1.0, "mobility": 0.01,
         "amplitude": 0.02, "dt_max": 3.0, "step_per_rate": 0.02, "e_folds": 0.5,
         "prepare_steps": 20,
-        "circle": {"box": 4, "mirror": true,
-                   "groups": [{"modes": [2], "sigma_bar": [0], "r0": [8, 10]}]}
+        shape: {"box": 4, "mirror": true,
+                "groups": [{"modes": [2], "sigma_bar": [0], "r0": [8, 10]}]}
     }))
     .expect("spec");
     spec.validate().expect("valid");
-    same_rate_on_both_boxes(&spec, mode_two(Kind::Circle));
+    spec
 }
 
 /// The rates study's case of `kind` at mode 2, σ̄ = 0, R = 8ε on a box of 4R, as a function of

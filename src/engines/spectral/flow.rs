@@ -468,14 +468,17 @@ impl Flow {
     fn dissipation<T: Coefficient>(&self, sym: &Symbols, sigma: f64) -> f64 {
         let [base, per_sigma] = &self.components;
         let (base, per_sigma, modes) = (slices::<T>(base), slices::<T>(per_sigma), self.modes);
-        let tops: Vec<f64> = (0..self.axes.len()).map(|c| self.top_k2_of(c)).collect();
         let len = modes.iter().product::<usize>();
         let partials = (0..len.div_ceil(PAR_CHUNK)).into_par_iter().map(|t| {
             indexed(t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len), modes)
                 .map(|(i, idx)| {
                     let (k2, w) = mode_symbols(sym, idx);
                     let u = self.axes.iter().enumerate().map(|(c, &a)| {
-                        let k2 = if idx[a] == 0 { k2 + tops[c] } else { k2 };
+                        let k2 = if idx[a] == 0 {
+                            k2 + self.top_k2_of(c)
+                        } else {
+                            k2
+                        };
                         let s = per_sigma[c].get(i).copied().unwrap_or_default();
                         k2 * (base[c][i] + s * sigma).norm_sqr()
                     });

@@ -32,13 +32,14 @@ pub mod seed;
 use super::harness::{Report, Study};
 use crate::analysis::axisym::{self, Branch, Options};
 use crate::commands::measure::{self, ShapeMeasure};
+use crate::driver::record::Record;
 use crate::driver::simulation::{Simulation, StopRules};
 use crate::error::{Error, Result};
 use crate::problem::config::{self, C0Spec, Scene};
 use crate::problem::grid::Grid;
 use crate::problem::model::C0;
 use crate::problem::revolution::Meridian;
-use crate::problem::setup::{self, FACE_PHI_MAX};
+use crate::problem::setup::{self, Problem, FACE_PHI_MAX};
 use crate::problem::shapes::{self, Prepared, Revolution, AXISYM_SPACING};
 use ndarray::Array3;
 use reference::Reading;
@@ -158,32 +159,22 @@ impl Study for Budding {
         check_fits(&start)?;
         problem.phi = problem.grid.restrict(&start);
         let mut rows = Vec::new();
-        let mut area_target = None;
-        for (i, &c0) in spec.c0.iter().enumerate() {
+        let mut area = None;
+        for &c0 in &spec.c0 {
             let began = Instant::now();
             let mut scene = base.clone();
             let c = c0 / (spec.r0 * base.eps);
             scene.c0 = C0Spec::Uniform(c);
-            scene.area.target = area_target;
-            if i > 0 {
-                scene.prepare_steps = 0;
-            }
-            let full = problem.grid.unfold(&problem.phi).into_owned();
-            problem.phi =
-                problem
-                    .grid
-                    .restrict(&seed::seeded(&full, base.h, spec.r0 * base.eps, spec.seed));
-            problem.c0 = C0::new(&scene.c0, &problem.grid, base.eps)?;
-            let (mut sim, a0) = Simulation::of_scene(&scene, &problem)?;
-            area_target = Some(a0);
-            let stopped = sim.run(&StopRules::of(&scene), &mut [])?;
-            let last = sim.record();
-            problem.phi = sim.engine().phi().clone();
-            let full = problem.grid.unfold(&problem.phi);
-            let m = measure::measure_field(&full, 2, base.h, last.step, last.t);
-            let mut row = row_of(c0, c, &m, base.eps);
+            let step = relax_seeded(
+                &mut problem,
+                scene,
+                (spec.r0 * base.eps, spec.seed),
+                &mut area,
+            )?;
+            let last = &step.record;
+            let mut row = row_of(c0, c, &step.measure, base.eps);
             row.iterations = last.step;
-            row.stopped = stopped.as_str().to_string();
+            row.stopped = step.stopped.to_string();
             row.residual = last.residual;
             row.e = last.reduced_energy;
             row.wall_seconds = began.elapsed().as_secs_f64();
@@ -299,6 +290,57 @@ fn base_scene(spec: &Spec) -> Result<Scene> {
         ));
     }
     Ok(scene)
+}
+
+/// One relaxed state of a continuation through stationary states ([`relax_seeded`]).
+pub struct Relaxed {
+    /// How the relaxation ended (`stationary` when `stop_residual` was met).
+    pub stopped: &'static str,
+    /// The last record (iterations, residual, energies, the ADE columns).
+    pub record: Record,
+    /// The state on the full box (unfolded).
+    pub full: Array3<f64>,
+    /// Its shape measured ([`measure::measure_field`] along z).
+    pub measure: ShapeMeasure,
+}
+
+/// One step of the budding, heating and onset continuations: the state of `problem` seeded with
+/// the up–down stretch of strength `seed` at radius `r0` (length units, [`seed::seeded`]), its
+/// c0 set from `scene`, then relaxed under `scene` to its stop rules, with the area held at
+/// `area`. The first step (`area` `None`) runs the scene's `prepare_steps` and sets `area` to
+/// its A0; later steps prepare nothing. The relaxed state is left in `problem.phi`.
+///
+/// # Errors
+/// `Error::Config` for a c0 that does not fit the grid; `Error::Blowup` if the relaxation
+/// diverges.
+pub fn relax_seeded(
+    problem: &mut Problem,
+    mut scene: Scene,
+    (r0, seed): (f64, f64),
+    area: &mut Option<f64>,
+) -> Result<Relaxed> {
+    scene.area.target = *area;
+    if area.is_some() {
+        scene.prepare_steps = 0;
+    }
+    let full = problem.grid.unfold(&problem.phi).into_owned();
+    problem.phi = problem
+        .grid
+        .restrict(&seed::seeded(&full, scene.h, r0, seed));
+    problem.c0 = C0::new(&scene.c0, &problem.grid, scene.eps)?;
+    let (mut sim, a0) = Simulation::of_scene(&scene, problem)?;
+    *area = Some(a0);
+    let stopped = sim.run(&StopRules::of(&scene), &mut [])?;
+    let record = sim.record();
+    problem.phi = sim.engine().phi().clone();
+    let full = problem.grid.unfold(&problem.phi).into_owned();
+    let measure = measure::measure_field(&full, 2, scene.h, record.step, record.t);
+    Ok(Relaxed {
+        stopped: stopped.as_str(),
+        record,
+        full,
+        measure,
+    })
 }
 
 /// φ = tanh(d/(√2 ε)) of the surface of revolution about z through the contour `(r, z)` (R0 = 1)

@@ -35,11 +35,10 @@ pub mod reference;
 pub mod report;
 pub mod spec;
 
-use super::budding::{self, check_fits, revolved, seed, within};
+use super::budding::{self, check_fits, relax_seeded, revolved, within};
 use super::harness::{Report, Study};
 use crate::analysis::axisym::{ade_solution, Branch, Options};
-use crate::commands::measure::{self, ShapeMeasure};
-use crate::driver::simulation::{Simulation, StopRules};
+use crate::commands::measure::ShapeMeasure;
 use crate::error::{Error, Result};
 use crate::output::shade::{Bounds, View};
 use crate::output::RgbImage;
@@ -202,7 +201,7 @@ fn continuation(
     problem.phi = problem.grid.restrict(&start);
     let mut rows = Vec::new();
     let mut images = Vec::new();
-    let mut area_target = None;
+    let mut area = None;
     for (index, &da0) in spec.da0.iter().enumerate() {
         let began = Instant::now();
         let mut scene = base.clone();
@@ -211,27 +210,14 @@ fn continuation(
             da0,
             multiplier: None,
         });
-        scene.area.target = area_target;
-        if index > 0 {
-            scene.prepare_steps = 0;
-        }
-        let full = problem.grid.unfold(&problem.phi).into_owned();
-        problem.phi = problem
-            .grid
-            .restrict(&seed::seeded(&full, base.h, r0 * base.eps, spec.seed));
-        let (mut sim, a0) = Simulation::of_scene(&scene, &problem)?;
-        area_target = Some(a0);
-        let stopped = sim.run(&StopRules::of(&scene), &mut [])?;
-        let rec = sim.record();
-        problem.phi = sim.engine().phi().clone();
-        let full = problem.grid.unfold(&problem.phi);
-        let m = measure::measure_field(&full, 2, base.h, rec.step, rec.t);
+        let step = relax_seeded(&mut problem, scene, (r0 * base.eps, spec.seed), &mut area)?;
+        let (rec, m, full) = (&step.record, &step.measure, &step.full);
         let couple = rec.couple.ok_or_else(|| {
             Error::config("scene", "the relaxation reported no ADE columns (a bug)")
         })?;
-        let mut row = row_of(r0, index, da0, &m, base.eps);
+        let mut row = row_of(r0, index, da0, m, base.eps);
         row.iterations = rec.step;
-        row.stopped = stopped.as_str().to_string();
+        row.stopped = step.stopped.to_string();
         row.residual = rec.residual;
         row.w = couple.w;
         row.e = couple.bending_energy;
@@ -239,7 +225,7 @@ fn continuation(
         row.c0_eff = couple.c0_eff;
         row.eps_c0_eff = couple.c0_eff / r0;
         if render.iter().any(|x| (x - da0).abs() < 1e-9) {
-            images.push(picture(&full, base, &row)?);
+            images.push(picture(full, base, &row)?);
         }
         row.wall_seconds = began.elapsed().as_secs_f64();
         eprintln!(

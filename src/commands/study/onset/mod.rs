@@ -32,15 +32,12 @@
 pub mod report;
 pub mod spec;
 
-use super::budding::{self, check_fits, revolved, seed, within};
+use super::budding::{self, check_fits, relax_seeded, revolved, within};
 use super::harness::{Report, Study};
 use crate::analysis::axisym::{self, Branch, Options};
-use crate::commands::measure;
-use crate::driver::simulation::{Simulation, StopRules};
 use crate::error::{Error, Result};
 use crate::problem::config::{C0Spec, Scene};
 use crate::problem::grid::Grid;
-use crate::problem::model::C0;
 use crate::problem::setup::{self, Problem};
 use ndarray::Array3;
 use rayon::prelude::*;
@@ -214,8 +211,8 @@ impl Run<'_> {
         let mut area = None;
         let mut symmetric: Option<(f64, Array3<f64>, f64)> = None;
         let mut above = f64::NAN;
-        for (i, &c0) in spec.c0.iter().enumerate() {
-            let step = self.relax(&mut problem, c0, "path", i == 0, &mut area)?;
+        for &c0 in &spec.c0 {
+            let step = self.relax(&mut problem, c0, "path", &mut area)?;
             let keep = step.symmetric();
             if keep {
                 symmetric = Some((c0, problem.phi.clone(), step.v));
@@ -241,7 +238,7 @@ impl Run<'_> {
                 // Rounded to 1e-9 so that the printed and written midpoints read as decimals.
                 let mid = (0.5 * (below + above) * 1e9).round() / 1e9;
                 problem.phi.assign(&phi_below);
-                let step = self.relax(&mut problem, mid, "bisection", false, &mut area)?;
+                let step = self.relax(&mut problem, mid, "bisection", &mut area)?;
                 if step.symmetric() {
                     (below, v_below) = (mid, step.v);
                     phi_below = problem.phi.clone();
@@ -266,51 +263,36 @@ impl Run<'_> {
         Ok((steps, onset))
     }
 
-    /// Seed the state of `problem`, set c̄0 = `c0` and relax it by L-BFGS (the first
-    /// relaxation of a run with the scene's `prepare_steps`, and fixes the area target `area`);
-    /// the state is left in `problem.phi`.
+    /// Seed the state of `problem`, set c̄0 = `c0` and relax it by L-BFGS
+    /// ([`budding::relax_seeded`]: the first relaxation of a run prepares the field and fixes
+    /// the area target `area`); the state is left in `problem.phi`.
     fn relax(
         &self,
         problem: &mut Problem,
         c0: f64,
         stage: &'static str,
-        first: bool,
         area: &mut Option<f64>,
     ) -> Result<Step> {
         let began = Instant::now();
-        let (h, eps) = (self.base.h, self.base.eps);
+        let eps = self.base.eps;
         let mut scene = self.base.clone();
         scene.c0 = C0Spec::Uniform(c0 / (self.r0 * eps));
-        scene.area.target = *area;
-        if !first {
-            scene.prepare_steps = 0;
-        }
-        let full = problem.grid.unfold(&problem.phi).into_owned();
-        problem.phi = problem
-            .grid
-            .restrict(&seed::seeded(&full, h, self.r0 * eps, self.seed));
-        problem.c0 = C0::new(&scene.c0, &problem.grid, eps)?;
-        let (mut sim, a0) = Simulation::of_scene(&scene, problem)?;
-        *area = Some(a0);
-        let stopped = sim.run(&StopRules::of(&scene), &mut [])?;
-        let rec = sim.record();
-        problem.phi = sim.engine().phi().clone();
-        let full = problem.grid.unfold(&problem.phi);
-        let m = measure::measure_field(&full, 2, h, rec.step, rec.t);
+        let relaxed = relax_seeded(problem, scene, (self.r0 * eps, self.seed), area)?;
+        let (rec, m) = (&relaxed.record, &relaxed.measure);
         let step = Step {
             r0: self.r0,
             seed: self.seed,
             stage,
             c0,
             iterations: rec.step,
-            stopped: stopped.as_str().to_string(),
+            stopped: relaxed.stopped.to_string(),
             residual: rec.residual,
             e: rec.reduced_energy,
             v: m.surface.reduced_volume,
             skewness: m.skewness,
             neck: m.neck.map_or(f64::NAN, |(r, _)| r / eps),
             pieces: m.pieces,
-            state: budding::state(&m).to_string(),
+            state: budding::state(m).to_string(),
             wall_seconds: began.elapsed().as_secs_f64(),
         };
         eprintln!(
