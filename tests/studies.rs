@@ -123,9 +123,14 @@ fn header(path: &Path) -> String {
 /// Run `vesicle study KIND runs/studies/KIND.json --quick` into a temporary folder (which must
 /// have no `snapshots/`: a study writes none).
 fn quick_study(kind: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
+    quick_study_of(kind, kind)
+}
+
+/// [`quick_study`] of the file `runs/studies/{stem}.json`.
+fn quick_study_of(kind: &str, stem: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
     let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join(kind);
-    let file = format!("runs/studies/{kind}.json");
+    let out = tmp.path().join(stem);
+    let file = format!("runs/studies/{stem}.json");
     let o = vesicle(&[
         "study",
         kind,
@@ -497,6 +502,60 @@ fn onset_quick_study_brackets_the_onset() {
     assert!((num("sharp") - 3.56).abs() < 0.02, "sharp {}", num("sharp"));
     assert!(num("shift") < 0.0, "shift {}", num("shift"));
     charts_exist(&out, &["onset_skewness", "onset_eps"]);
+}
+
+/// `study onset` with `"method": "hessian"`, quick: the symmetric prolate at v = 0.8, R0 = 20ε,
+/// h = ε, c̄0 = 2, 2.5, 3 and one regula falsi step. The lowest up–down odd eigenvalue of the
+/// symmetric state must fall along the path and change sign inside it (measured 1.7e-5, 5.2e-6,
+/// −8.0e-6: the coarse lattice's early loss of stability, about 1 below the sharp 3.76); the
+/// refined state must lie inside the bracket, every eigenvalue meet its residual tolerance
+/// (1e-9) and the onset be the linear root of the final bracket.
+#[test]
+fn onset_hessian_quick_study_finds_the_eigenvalue_zero() {
+    let (_tmp, out, stdout) = quick_study_of("onset", "onset_hessian");
+    assert!(stdout.contains("budding onset without a seed"));
+    let table = |name: &str| {
+        let path = out.join(name);
+        let head = header(&path);
+        let names: Vec<String> = head.split(',').map(str::to_string).collect();
+        (names, csv_fields(&path))
+    };
+    let (names, rows) = table("onset_eigen.csv");
+    let num = |i: usize, name: &str| -> f64 {
+        rows[i][names.iter().position(|c| c == name).unwrap()]
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(rows.len(), 4, "three path states and one refinement");
+    let lambda: Vec<f64> = (0..4).map(|i| num(i, "eigenvalue")).collect();
+    assert!(
+        lambda[0] > lambda[1] && lambda[1] > 0.0 && lambda[2] < 0.0,
+        "{lambda:?}"
+    );
+    for i in 0..4 {
+        assert!(num(i, "eigen_residual") <= 1e-9, "row {i}");
+        assert!(num(i, "residual") <= 1e-6, "row {i}");
+    }
+    let refined = num(3, "c0");
+    assert!(refined > 2.5 && refined < 3.0, "{refined}");
+    let (names, onsets) = table("onset.csv");
+    let at = |name: &str| -> f64 {
+        onsets[0][names.iter().position(|c| c == name).unwrap()]
+            .parse()
+            .unwrap()
+    };
+    let (lo, hi) = if lambda[3] < 0.0 { (1, 3) } else { (3, 2) };
+    assert_eq!((at("below"), at("above")), (num(lo, "c0"), num(hi, "c0")));
+    let root =
+        num(lo, "c0") + lambda[lo] / (lambda[lo] - lambda[hi]) * (num(hi, "c0") - num(lo, "c0"));
+    assert!(
+        (at("onset") - root).abs() < 1e-12,
+        "{} against {root}",
+        at("onset")
+    );
+    assert!((at("sharp") - 3.76).abs() < 0.02, "sharp {}", at("sharp"));
+    assert!(at("shift") < -0.5, "shift {}", at("shift"));
+    charts_exist(&out, &["onset_eigenvalue", "onset_eps"]);
 }
 
 /// `study pinning --quick`: the prolate (v0 0.75) at R0 = 10 … 10.75ε and a half-cell shift, at

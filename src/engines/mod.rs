@@ -17,6 +17,7 @@ pub mod gpu;
 pub mod numerics;
 pub mod relax;
 pub mod spectral;
+pub mod stability;
 pub mod stencil;
 
 use crate::problem::area_difference::AreaDifference;

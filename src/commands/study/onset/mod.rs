@@ -29,6 +29,7 @@
 //! `onset.txt`, and the charts `onset_skewness` (|skewness| against c̄0, every run) and
 //! `onset_eps` (the onset against ε/R0 beside the sharp instability).
 
+pub mod hessian;
 pub mod report;
 pub mod spec;
 
@@ -39,10 +40,12 @@ use crate::error::{Error, Result};
 use crate::problem::config::{C0Spec, Scene};
 use crate::problem::grid::Grid;
 use crate::problem::setup::{self, Problem};
+use hessian::EigenRun;
+pub use hessian::Sample;
 use ndarray::Array3;
 use rayon::prelude::*;
-pub use spec::Spec;
 use spec::{base_scene, check};
+pub use spec::{Method, Spec};
 use std::path::Path;
 use std::time::Instant;
 
@@ -113,8 +116,10 @@ pub struct Onset {
 
 /// What the study returns.
 pub struct Output {
-    /// Every relaxation, run by run, in the order computed.
+    /// Every relaxation, run by run, in the order computed (`seeded`).
     pub steps: Vec<Step>,
+    /// Every symmetric state and its eigenvalue, run by run (`hessian`).
+    pub samples: Vec<Sample>,
     /// One onset per R0 and seed.
     pub onsets: Vec<Onset>,
 }
@@ -133,7 +138,31 @@ impl Study for OnsetStudy {
         let start = axisym::solve(Branch::Prolate, spec.v, &opts)
             .map_err(|e| Error::config("v", format!("the start prolate: {e}")))?;
         let mut steps = Vec::new();
+        let mut samples = Vec::new();
         let mut onsets = Vec::new();
+        if spec.method == Method::Hessian {
+            for &r0 in &spec.r0 {
+                let scene = base_scene(spec, r0, &start.r, &start.z)?;
+                let run = EigenRun { base: &scene, r0 };
+                let (path, onset) = run.onset(spec, (&start.r, &start.z))?;
+                eprintln!(
+                    "R0 = {r0} eps: lowest odd eigenvalue crosses 0 at c0 R0 = {:.4} (sharp {:.4} \
+                     at v = {:.4}; {} states, {:.0} s)",
+                    onset.onset, onset.sharp, onset.v, onset.relaxations, onset.wall_seconds
+                );
+                samples.extend(path);
+                onsets.push(onset);
+            }
+            let report = report::eigen_report(spec, &samples, &onsets)?;
+            return Ok((
+                Output {
+                    steps,
+                    samples,
+                    onsets,
+                },
+                report,
+            ));
+        }
         for &r0 in &spec.r0 {
             let scene = base_scene(spec, r0, &start.r, &start.z)?;
             for &delta in &spec.seeds {
@@ -160,7 +189,14 @@ impl Study for OnsetStudy {
             o.shift = o.onset - o.sharp;
         });
         let report = report::report(spec, &steps, &onsets)?;
-        Ok((Output { steps, onsets }, report))
+        Ok((
+            Output {
+                steps,
+                samples,
+                onsets,
+            },
+            report,
+        ))
     }
 }
 

@@ -18,7 +18,7 @@
 //! alone. s_∞ is the extrapolated shift; the two fits' difference shows how far the data are
 //! from the linear law.
 
-use super::{Onset, Spec, Step};
+use super::{Onset, Sample, Spec, Step};
 use crate::commands::study::fit;
 use crate::commands::study::harness::Report;
 use crate::commands::study::table::{self, Column, Format};
@@ -293,22 +293,8 @@ fn skewness_chart(spec: &Spec, steps: &[Step]) -> Figure {
     fig
 }
 
-/// The shift onset − sharp against ε/R0 for each seed and for a vanishing seed (`limits`),
-/// each series with its least-squares line over every R0 (dashed, to ε/R0 = 0), and the sharp
-/// value 0.
+/// The shift onset − sharp against ε/R0 for each seed and for a vanishing seed (`limits`).
 fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
-    let mut fig = Figure::new(
-        "Budding onset: shift from the sharp instability against eps/R0",
-        Axis::linear("eps / R0"),
-        Axis::linear("onset - sharp instability at the run's v (c0 R0)"),
-    );
-    fig.legend = Corner::LowerLeft;
-    let shapes = [
-        Shape::Circle,
-        Shape::Square,
-        Shape::Triangle,
-        Shape::Diamond,
-    ];
     let mut series: Vec<(String, Vec<(f64, f64)>)> = spec
         .seeds
         .iter()
@@ -325,6 +311,25 @@ fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
         let pts = limits.iter().map(|l| (1.0 / l.r0, l.shift)).collect();
         series.push(("phase field, seed -> 0".to_string(), pts));
     }
+    shift_chart(series, onsets)
+}
+
+/// The shifts of `series` (name, points (ε/R0, onset − sharp)) against ε/R0, each with its
+/// least-squares line (dashed, to ε/R0 = 0), and the sharp value 0, up to the largest ε/R0 of
+/// `onsets`.
+fn shift_chart(series: Vec<(String, Vec<(f64, f64)>)>, onsets: &[Onset]) -> Figure {
+    let mut fig = Figure::new(
+        "Budding onset: shift from the sharp instability against eps/R0",
+        Axis::linear("eps / R0"),
+        Axis::linear("onset - sharp instability at the run's v (c0 R0)"),
+    );
+    fig.legend = Corner::LowerLeft;
+    let shapes = [
+        Shape::Circle,
+        Shape::Square,
+        Shape::Triangle,
+        Shape::Diamond,
+    ];
     let top = onsets.iter().map(|o| 1.0 / o.r0).fold(0.0, f64::max);
     for (j, (name, pts)) in series.into_iter().enumerate() {
         let (x, y): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
@@ -352,6 +357,164 @@ fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
     fig.push(Series::new(
         "sharp instability",
         vec![(0.0, 0.0), (top, 0.0)],
+        colour(7),
+        Mark::Line,
+    ));
+    fig
+}
+
+impl table::Row for Sample {
+    fn columns() -> Vec<Column<Self>> {
+        vec![
+            Column::both("r0", "R0/eps", Format::Plain, |r| r.r0.into()),
+            Column::both("stage", "stage", Format::Plain, |r| r.stage.into()),
+            Column::both("c0", "c0R0", Format::Fixed(4), |r| r.c0.into()),
+            Column::both("iterations", "iters", Format::Plain, |r| {
+                r.iterations.into()
+            }),
+            Column::both("stopped", "stopped", Format::Plain, |r| {
+                r.stopped.as_str().into()
+            }),
+            Column::both("residual", "residual", Format::Sci(1), |r| {
+                r.residual.into()
+            }),
+            Column::both("e", "e", Format::Fixed(4), |r| r.e.into()),
+            Column::both("v", "v", Format::Fixed(4), |r| r.v.into()),
+            Column::both("sigma", "sigma", Format::Sci(3), |r| r.sigma.into()),
+            Column::both("eigenvalue", "lowest odd eigenvalue", Format::Sci(4), |r| {
+                r.eigenvalue.into()
+            }),
+            Column::both("eigen_residual", "eig. residual", Format::Sci(1), |r| {
+                r.eigen_residual.into()
+            }),
+            Column::both("products", "products", Format::Plain, |r| r.products.into()),
+            Column::both("translation", "translation", Format::Sci(1), |r| {
+                r.translation.into()
+            }),
+            Column::both("wall_seconds", "wall", Format::Fixed(1), |r: &Self| {
+                r.wall_seconds.into()
+            })
+            .unit("s"),
+        ]
+    }
+}
+
+/// The report of the Hessian method (`"method": "hessian"`): the symmetric states `samples`
+/// with their eigenvalues, the `onsets`, the shift's extrapolation in ε/R0, and the charts
+/// `onset_eigenvalue` and `onset_eps`.
+///
+/// # Errors
+/// `Error::Config` if a CSV row cannot be written (a bug).
+pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result<Report> {
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "budding onset without a seed: the up-down symmetric stationary state of the prolate \
+         at v = {} (sharp start at c0 R0 = {}), relaxed by L-BFGS on the box mirrored across \
+         x, y and z, and the lowest eigenvalue of its second variation on up-down odd fields \
+         (translation removed), c0 R0 stepped up until it is negative, then {} regula falsi \
+         steps",
+        spec.v, spec.c0[0], spec.bisections
+    );
+    text.push_str(&table::text(samples));
+    let unconverged = samples.iter().filter(|s| s.stopped != "stationary").count();
+    if unconverged > 0 {
+        let _ = writeln!(
+            text,
+            "warning: {unconverged} relaxations stopped before stop_residual: their state is \
+             not a stationary one"
+        );
+    }
+    let loose = samples
+        .iter()
+        .filter(|s| s.eigen_residual > spec.eigen_tolerance)
+        .count();
+    if loose > 0 {
+        let _ = writeln!(
+            text,
+            "warning: {loose} eigenvalues stopped at eigen_products before eigen_tolerance"
+        );
+    }
+    text.push('\n');
+    text.push_str(&table::text(onsets));
+    let _ = writeln!(
+        text,
+        "onset: the root of the line through the last bracket's (c0 R0, eigenvalue); v the \
+         phi = 0 reduced volume interpolated to it; sharp: the zero in c0 R0 of the \
+         axisymmetric prolate's up-down test function at that v; shift = onset - sharp"
+    );
+    let points: Vec<(f64, f64)> = onsets.iter().map(|o| (o.r0, o.shift)).collect();
+    let (all, finest) = intercepts(&points);
+    if all.is_finite() {
+        let _ = writeln!(
+            text,
+            "shift extrapolated to eps/R0 -> 0 (linear in eps/R0): {all:+.4} over every R0, \
+             {finest:+.4} through the two finest"
+        );
+    }
+    let mut report = Report {
+        text,
+        ..Report::default()
+    };
+    report.table("onset_eigen.csv", samples)?;
+    report.table("onset.csv", onsets)?;
+    report.chart("onset_eigenvalue", eigenvalue_chart(spec, samples, onsets));
+    let pts = onsets
+        .iter()
+        .filter(|o| o.shift.is_finite())
+        .map(|o| (1.0 / o.r0, o.shift))
+        .collect();
+    report.chart(
+        "onset_eps",
+        shift_chart(vec![("phase field, no seed".to_string(), pts)], onsets),
+    );
+    Ok(report)
+}
+
+/// The lowest odd eigenvalue against c̄0 for every R0 (by colour), sorted in c̄0, with the
+/// sharp instability at each run's v (a vertical line in its colour) and the zero.
+fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure {
+    let mut fig = Figure::new(
+        "Budding onset: lowest up-down odd eigenvalue of the symmetric state",
+        Axis::linear("c0 R0"),
+        Axis::linear("lowest eigenvalue of M^-1 H on odd fields"),
+    );
+    fig.legend = Corner::LowerLeft;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (i, &r0) in spec.r0.iter().enumerate() {
+        let mut pts: Vec<(f64, f64)> = samples
+            .iter()
+            .filter(|s| s.r0 == r0)
+            .map(|s| (s.c0, s.eigenvalue))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for p in &pts {
+            (lo, hi) = (lo.min(p.1), hi.max(p.1));
+        }
+        fig.push(Series::new(
+            format!("R0 = {r0} eps"),
+            pts,
+            colour(i),
+            Mark::LinePoints(Shape::Circle),
+        ));
+    }
+    for (i, o) in onsets.iter().enumerate() {
+        if o.sharp.is_finite() && lo < hi {
+            fig.push(
+                Series::new(
+                    "",
+                    vec![(o.sharp, lo), (o.sharp, hi)],
+                    colour(i),
+                    Mark::Dashed,
+                )
+                .unlisted(),
+            );
+        }
+    }
+    let (first, last) = (spec.c0[0], spec.c0[spec.c0.len() - 1]);
+    fig.push(Series::new(
+        "zero (dashed: sharp instability)",
+        vec![(first, 0.0), (last, 0.0)],
         colour(7),
         Mark::Line,
     ));

@@ -32,14 +32,49 @@ pub struct Spec {
     pub v: f64,
     /// The R0/ε of the runs, increasing.
     pub r0: Vec<f64>,
-    /// The seed strengths δ, each a run of its own at every R0, in (0, 0.1].
+    /// How the onset is found: `"seeded"` (default: seeded relaxations, the skewness
+    /// threshold, bisections) or `"hessian"` (the lowest up–down odd eigenvalue of the
+    /// symmetric state, regula falsi; [`super::hessian`]).
+    #[serde(default)]
+    pub method: Method,
+    /// The seed strengths δ, each a run of its own at every R0, in (0, 0.1] (`seeded` only).
+    #[serde(default)]
     pub seeds: Vec<f64>,
     /// The coarse path in c̄0 = c0 R0, increasing: stepped up until the first state that is
     /// not up–down symmetric.
     pub c0: Vec<f64>,
     /// Bisections of the bracket (last symmetric c̄0, first asymmetric c̄0), each from the last
-    /// symmetric state.
+    /// symmetric state; with `hessian`, regula falsi steps on the eigenvalue.
     pub bisections: usize,
+    /// `hessian`: the eigensolver's stop, ‖Bx − θx‖_M (the eigenvalue's error is below it).
+    #[serde(default = "default_eigen_tolerance")]
+    pub eigen_tolerance: f64,
+    /// `hessian`: the most products with the second variation per eigenvalue.
+    #[serde(default = "default_eigen_products")]
+    pub eigen_products: usize,
+}
+
+/// How the onset study finds the onset.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Seeded relaxations classified by their skewness.
+    #[default]
+    Seeded,
+    /// The sign of the symmetric state's lowest up–down odd eigenvalue.
+    Hessian,
+}
+
+/// The default eigensolver stop: near the onset the lowest eigenvalue moves by ~5e-7 per 0.1 of
+/// c̄0 at R0 = 20ε (h = 2ε/3), and its error is below the residual (below residual²/gap once
+/// converged), so 1e-9 places the zero to well under 1e-3 in c̄0.
+fn default_eigen_tolerance() -> f64 {
+    1e-9
+}
+
+/// The default cap on products per eigenvalue (130–360 were needed at R0 = 20ε).
+fn default_eigen_products() -> usize {
+    2000
 }
 
 /// Refuse a bad study file, naming the key.
@@ -59,11 +94,33 @@ pub fn check(spec: &Spec) -> Result<()> {
     if spec.r0.windows(2).any(|w| w[1] <= w[0]) {
         return Err(Error::config("r0", "must increase"));
     }
-    if spec.seeds.is_empty() || spec.seeds.iter().any(|s| !(*s > 0.0 && *s <= 0.1)) {
+    match spec.method {
+        Method::Seeded => {
+            if spec.seeds.is_empty() || spec.seeds.iter().any(|s| !(*s > 0.0 && *s <= 0.1)) {
+                return Err(Error::config(
+                    "seeds",
+                    "needs one or more seed strengths, each in (0, 0.1]",
+                ));
+            }
+        }
+        Method::Hessian => {
+            if !spec.seeds.is_empty() {
+                return Err(Error::config(
+                    "seeds",
+                    "the hessian method seeds nothing (it reads the symmetric state's \
+                     eigenvalue): remove seeds",
+                ));
+            }
+        }
+    }
+    if !(spec.eigen_tolerance > 0.0 && spec.eigen_tolerance < 1.0) {
         return Err(Error::config(
-            "seeds",
-            "needs one or more seed strengths, each in (0, 0.1]",
+            "eigen_tolerance",
+            format!("must lie in (0, 1), got {}", spec.eigen_tolerance),
         ));
+    }
+    if spec.eigen_products < 2 {
+        return Err(Error::config("eigen_products", "needs at least 2"));
     }
     if spec.c0.len() < 2 || spec.c0.windows(2).any(|w| w[1] <= w[0]) {
         return Err(Error::config(

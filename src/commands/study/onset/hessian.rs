@@ -1,0 +1,263 @@
+//! The onset without a seed (`"method": "hessian"`): the lowest eigenvalue of the symmetric
+//! state's second variation on up–down odd perturbations, followed in c̄0 to its zero.
+//!
+//! For each c̄0 of the path in turn, from the previous state: c0 = c̄0/R0 is set and the field
+//! relaxed by L-BFGS on the box mirrored across x, y *and z* (area held at the first step's
+//! A0, volume conserved), so that the state is the up–down symmetric stationary state whether
+//! or not it is stable. Its unfolded field is restricted to the box mirrored across x and y
+//! only, where up–down odd fields live, and [`OddHessian::lowest`] gives λ, the lowest
+//! eigenvalue of the constrained second variation on them, translation removed. λ > 0: the
+//! symmetric state is stable against every up–down odd perturbation the box holds; λ < 0: it is
+//! not. The path stops at the first λ < 0; the zero is then refined by regula falsi on λ(c̄0)
+//! (`bisections` more states, each relaxed from the nearest symmetric state below), and the
+//! onset is the last linear root. No seed, no skewness threshold and no early stop of a
+//! departing state enter it.
+
+use super::budding::{relax_seeded, within};
+use super::{sharp_onset, Onset, Spec};
+use crate::engines::stability::OddHessian;
+use crate::engines::Diverged;
+use crate::error::{Error, Result};
+use crate::problem::config::{C0Spec, Scene, Symmetry};
+use crate::problem::grid::Grid;
+use crate::problem::model::C0;
+use crate::problem::setup::{self, Problem};
+use ndarray::Array3;
+use num_complex::Complex64;
+use std::time::Instant;
+
+/// One symmetric state and its lowest odd eigenvalue; a row of `onset_eigen.csv`.
+#[derive(Clone, Debug)]
+pub struct Sample {
+    /// R0/ε.
+    pub r0: f64,
+    /// `path` or `refine`.
+    pub stage: &'static str,
+    /// c̄0 = c0 R0.
+    pub c0: f64,
+    /// L-BFGS iterations of the symmetric state.
+    pub iterations: usize,
+    /// How the relaxation ended (`stationary` when `stop_residual` was met).
+    pub stopped: String,
+    /// Final stationarity residual.
+    pub residual: f64,
+    /// Reduced bending energy e.
+    pub e: f64,
+    /// Reduced volume of the φ = 0 surface.
+    pub v: f64,
+    /// The area multiplier σ* of the state.
+    pub sigma: f64,
+    /// λ, the lowest eigenvalue of M⁻¹H on up–down odd fields, translation removed.
+    pub eigenvalue: f64,
+    /// ‖Bx − θx‖_M of its eigenvector.
+    pub eigen_residual: f64,
+    /// Products with the second variation taken.
+    pub products: usize,
+    /// ⟨t, Bt⟩_M of the unit translation along z (the lattice's pinning; 0 in the continuum).
+    pub translation: f64,
+    /// Wall seconds of the relaxation and the eigenvalue.
+    pub wall_seconds: f64,
+}
+
+/// One R0 of the Hessian method: the sized scene `base` (mirror planes x and y).
+pub struct EigenRun<'a> {
+    /// The scene of this R0.
+    pub base: &'a Scene,
+    /// R0/ε.
+    pub r0: f64,
+}
+
+/// What the eigenvalue solver keeps from state to state.
+struct Path {
+    /// The problem on the box mirrored across x, y and z.
+    problem: Problem,
+    /// The area held (the first relaxation's A0).
+    area: Option<f64>,
+    /// The last eigenvector (the next solve's start).
+    vector: Option<Array3<Complex64>>,
+    /// The states computed, as (c̄0, field on the reduced box) for warm starts.
+    states: Vec<(f64, Array3<f64>)>,
+}
+
+impl EigenRun<'_> {
+    /// The path, the refinement and the onset (its sharp columns filled) from the revolved start
+    /// contour `(r, z)`.
+    ///
+    /// # Errors
+    /// `Error::Config` for a start that does not fit, an unstable first state or a box that
+    /// cannot hold the odd fields; `Error::Blowup` if a relaxation diverges; `Error::Study` if a
+    /// second variation cannot be formed.
+    pub fn onset(&self, spec: &Spec, (r, z): (&[f64], &[f64])) -> Result<(Vec<Sample>, Onset)> {
+        let began = Instant::now();
+        let mut scene = self.base.clone();
+        scene.symmetry = Symmetry::Axes(vec!["x".into(), "y".into(), "z".into()]);
+        let mut problem = setup::build(&scene).map_err(within("scene"))?;
+        let full_grid = Grid::new(&scene.n, scene.h, &[false; 3]);
+        let start = super::budding::revolved(r, z, self.r0 * scene.eps, scene.eps, &full_grid);
+        super::budding::check_fits(&start)?;
+        problem.phi = problem.grid.restrict(&start);
+        let mut path = Path {
+            problem,
+            area: None,
+            vector: None,
+            states: Vec::new(),
+        };
+        let mut samples: Vec<Sample> = Vec::new();
+        for &c0 in &spec.c0 {
+            let s = self.sample(&scene, &mut path, c0, "path", spec)?;
+            let unstable = s.eigenvalue < 0.0;
+            samples.push(s);
+            if unstable {
+                break;
+            }
+        }
+        if samples[0].eigenvalue < 0.0 {
+            return Err(Error::config(
+                "c0",
+                format!(
+                    "the first symmetric state (c0 R0 = {}, R0 = {} eps) is already unstable \
+                     to up-down odd perturbations (lowest eigenvalue {:.3e}): start the path \
+                     lower",
+                    spec.c0[0], self.r0, samples[0].eigenvalue
+                ),
+            ));
+        }
+        let n = samples.len();
+        let mut bracket = (samples[n - 1].clone(), samples[n - 1].clone());
+        if samples[n - 1].eigenvalue < 0.0 {
+            bracket.0 = samples[n - 2].clone();
+            for _ in 0..spec.bisections {
+                let c0 = linear_root(&bracket.0, &bracket.1, |s| s.c0);
+                let c0 = (c0 * 1e9).round() / 1e9;
+                path.warm_start_below(c0);
+                let s = self.sample(&scene, &mut path, c0, "refine", spec)?;
+                if s.eigenvalue < 0.0 {
+                    bracket.1 = s.clone();
+                } else {
+                    bracket.0 = s.clone();
+                }
+                samples.push(s);
+            }
+        }
+        let (lo, hi) = &bracket;
+        let crossed = hi.eigenvalue < 0.0;
+        let (onset, v) = if crossed {
+            (linear_root(lo, hi, |s| s.c0), linear_root(lo, hi, |s| s.v))
+        } else {
+            (f64::NAN, lo.v)
+        };
+        let sharp = sharp_onset(v, spec.c0[0]).unwrap_or(f64::NAN);
+        let result = Onset {
+            r0: self.r0,
+            seed: 0.0,
+            below: lo.c0,
+            above: if crossed { hi.c0 } else { f64::NAN },
+            onset,
+            v,
+            sharp,
+            shift: onset - sharp,
+            relaxations: samples.len(),
+            wall_seconds: began.elapsed().as_secs_f64(),
+        };
+        Ok((samples, result))
+    }
+
+    /// Relax the symmetric state at c̄0 = `c0` from `path`'s current field and find its lowest
+    /// odd eigenvalue (from the last eigenvector).
+    fn sample(
+        &self,
+        scene: &Scene,
+        path: &mut Path,
+        c0: f64,
+        stage: &'static str,
+        spec: &Spec,
+    ) -> Result<Sample> {
+        let began = Instant::now();
+        let eps = scene.eps;
+        let c = c0 / (self.r0 * eps);
+        let mut at = scene.clone();
+        at.c0 = C0Spec::Uniform(c);
+        let relaxed = relax_seeded(
+            &mut path.problem,
+            at.clone(),
+            (self.r0 * eps, 0.0),
+            &mut path.area,
+        )?;
+        path.states.push((c0, path.problem.phi.clone()));
+        let odd_box = Grid::new(&scene.n, scene.h, &[true, true, false]);
+        let phi = odd_box.restrict(&relaxed.full);
+        let c0_field = C0::new(&at.c0, &odd_box, eps)?;
+        let mut hessian = OddHessian::new(
+            odd_box,
+            (eps, c0_field, scene.laplacian),
+            &phi,
+            scene.threads(),
+        )
+        .map_err(failed(c0))?;
+        let translation = hessian.translation_stiffness().map_err(failed(c0))?;
+        let lowest = hessian
+            .lowest(
+                path.vector.as_ref(),
+                spec.eigen_tolerance,
+                spec.eigen_products,
+            )
+            .map_err(failed(c0))?;
+        let (rec, m) = (&relaxed.record, &relaxed.measure);
+        let sample = Sample {
+            r0: self.r0,
+            stage,
+            c0,
+            iterations: rec.step,
+            stopped: relaxed.stopped.to_string(),
+            residual: rec.residual,
+            e: rec.reduced_energy,
+            v: m.surface.reduced_volume,
+            sigma: hessian.sigma(),
+            eigenvalue: lowest.value,
+            eigen_residual: lowest.residual,
+            products: lowest.products,
+            translation,
+            wall_seconds: began.elapsed().as_secs_f64(),
+        };
+        path.vector = Some(lowest.vector);
+        eprintln!(
+            "R0 = {} eps, c0 R0 = {c0} ({stage}): {} after {} iterations, lowest odd eigenvalue \
+             {:.4e} (residual {:.1e}, {} products), translation {:.1e}",
+            self.r0,
+            sample.stopped,
+            sample.iterations,
+            sample.eigenvalue,
+            sample.eigen_residual,
+            sample.products,
+            sample.translation
+        );
+        Ok(sample)
+    }
+}
+
+impl Path {
+    /// Start the next relaxation from the computed state of largest c̄0 below `c0` (the path
+    /// rises, so that is the nearest from below).
+    fn warm_start_below(&mut self, c0: f64) {
+        if let Some((_, phi)) = self
+            .states
+            .iter()
+            .filter(|(c, _)| *c < c0)
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+        {
+            self.problem.phi.assign(phi);
+        }
+    }
+}
+
+/// The error of a second variation that could not be formed at c̄0 = `c0`.
+fn failed(c0: f64) -> impl Fn(Diverged) -> Error {
+    move |d| Error::Study(format!("the second variation at c0 R0 = {c0}: {}", d.0))
+}
+
+/// The root of the line through (c̄0, λ) of `lo` and `hi`, read in `of` (c̄0, or v interpolated
+/// to the root).
+fn linear_root(lo: &Sample, hi: &Sample, of: impl Fn(&Sample) -> f64) -> f64 {
+    let t = lo.eigenvalue / (lo.eigenvalue - hi.eigenvalue);
+    of(lo) + t * (of(hi) - of(lo))
+}
