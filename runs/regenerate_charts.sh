@@ -25,6 +25,7 @@
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations, h = 2ε/3)   ~32 min (8.5 min CPU), measured
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
+#                    + onset_hessian{,_h1,_h05}.json (the seed-free onset at h/ε = 2/3, 1, 1/2)  ~TIMES
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     44 s, measured
@@ -122,6 +123,11 @@ group_onset() {
     out=$WORK/onset_seeds
     study onset onset_seeds.json
     same_names "$out" onset_seeds
+    for f in onset_hessian onset_hessian_h1 onset_hessian_h05; do
+        out=$WORK/$f
+        study onset "$f.json"
+        same_names "$out" "$f"
+    done
 }
 group_heating() {
     study heating heating.json
@@ -218,6 +224,8 @@ FIGURES=(
     onset_eps.png=onset/onset_eps.png
     onset_skewness.png=onset/onset_skewness.png
     onset_seeds_skewness.png=onset_seeds/onset_skewness.png
+    onset_eigenvalue.png=onset_hessian/onset_eigenvalue.png
+    onset_hessian_eps.png=onset_hessian/onset_eps.png
     heating_neck.png=heating/heating_neck.png
     heating_w.png=heating/heating_w.png
     heating_w_error.png=heating/heating_w_error.png

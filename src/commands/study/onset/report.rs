@@ -471,13 +471,15 @@ pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result
     Ok(report)
 }
 
-/// The lowest odd eigenvalue against c̄0 for every R0 (by colour), sorted in c̄0, with the
-/// sharp instability at each run's v (a vertical line in its colour) and the zero.
+/// The lowest odd eigenvalue scaled by (R0/ε)⁴ against c̄0 for every R0 (by colour), sorted in
+/// c̄0, with the sharp instability at each run's v (a vertical line in its colour) and the zero.
+/// The shape modes' eigenvalues fall about like (ε/R0)⁴ (measured at c̄0 = 3, h = 2ε/3: λ (R0/ε)⁴
+/// = 0.72, 0.75, 0.75, 0.76, 0.87 at R0 = 20, 24, 28, 32, 40ε), so the scaled curves compare.
 fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure {
     let mut fig = Figure::new(
         "Budding onset: lowest up-down odd eigenvalue of the symmetric state",
         Axis::linear("c0 R0"),
-        Axis::linear("lowest eigenvalue of M^-1 H on odd fields"),
+        Axis::linear("lowest odd eigenvalue of M^-1 H x (R0/eps)^4"),
     );
     fig.legend = Corner::LowerLeft;
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -485,7 +487,7 @@ fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure
         let mut pts: Vec<(f64, f64)> = samples
             .iter()
             .filter(|s| s.r0 == r0)
-            .map(|s| (s.c0, s.eigenvalue))
+            .map(|s| (s.c0, s.eigenvalue * r0.powi(4)))
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         for p in &pts {

@@ -198,7 +198,8 @@ mod tests {
     /// The file's refusals name the key: v outside (0, 1), R0 not increasing, a seed of 0 (no
     /// asymmetry: the symmetric state would never be left) or above 0.1, a path that does not
     /// increase, ε|c0| above 0.2 at the smallest R0 (c0 R0 = 2.5 at 10ε), too many bisections,
-    /// a scene key the study sets, and a scene without a stop residual.
+    /// a scene key the study sets, a scene without a stop residual, seeds given to the hessian
+    /// method (it seeds nothing) and an eigensolver tolerance or cap out of range.
     #[test]
     fn bad_files_are_refused_naming_the_key() {
         assert!(spec(|_| {}).is_ok());
@@ -218,5 +219,22 @@ mod tests {
                 .remove("stop_residual");
         });
         assert!(no_stop.contains("`scene.stop_residual`"), "{no_stop}");
+        assert!(refused(|v| v["method"] = json!("hessian")).contains("`seeds`"));
+        let hessian = |v: &mut Value| {
+            v["method"] = json!("hessian");
+            v.as_object_mut().expect("an object").remove("seeds");
+        };
+        assert!(spec(hessian).is_ok());
+        let tolerance = refused(|v| {
+            hessian(v);
+            v["eigen_tolerance"] = json!(0.0);
+        });
+        assert!(tolerance.contains("`eigen_tolerance`"), "{tolerance}");
+        let products = refused(|v| {
+            hessian(v);
+            v["eigen_products"] = json!(1);
+        });
+        assert!(products.contains("`eigen_products`"), "{products}");
+        assert!(refused(|v| v["method"] = json!("lanczos")).contains("unknown variant"));
     }
 }
