@@ -51,6 +51,7 @@ pub mod diagram;
 pub(crate) mod eigen;
 pub(crate) mod functional;
 pub mod limits;
+pub mod lowest;
 pub mod map;
 pub mod model;
 pub mod pear;
