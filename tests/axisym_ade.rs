@@ -312,3 +312,24 @@ fn bc_paths_end_at_their_limit_shapes() {
     println!("two inner spheres Δa = {two:.5}, lowest Δa of the oblate {end:.5}");
     assert!(end >= two && end < two + 0.02, "oblate to Δa = {end}");
 }
+
+/// A walk ends outside the Δa window only on the side it set out towards: at v = 0.70 the BC
+/// stomatocyte starts at Δa ≈ 0.55 (its SC shape at c̄0 = −1), below the window [0.70, 1.40]
+/// of `runs/results/axisym_bc`, and before this rule had no shape in it. Now the path walks up
+/// through the window to where it turns towards the symmetric shape (Δa ≈ 1.035).
+#[test]
+fn a_start_below_the_window_walks_into_it() {
+    let c = axisym::bc_curve(Branch::Stomatocyte, 0.70, (0.70, 1.40), &opts());
+    let (lo, hi) = c
+        .shapes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            (a.min(s.da()), b.max(s.da()))
+        });
+    println!("{} shapes, Δa {lo:.4}..{hi:.4}", c.shapes.len());
+    assert!(c.shapes.len() > 10, "{} shapes", c.shapes.len());
+    assert!(
+        lo >= 0.70 && lo < 0.72 && hi > 1.03 && hi <= 1.40,
+        "{lo}..{hi}"
+    );
+}

@@ -361,7 +361,9 @@ fn both_ways(
 /// free, from its SC shape at `v` both ways (the pear from its bifurcation off the prolate),
 /// keeping the shapes with `Δa` in `[lo, hi]`, in path order. `stop(shape, up)` ends the
 /// walk in the direction of increasing (`up`) or decreasing `Δa` after `shape` (e.g. when the
-/// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05),
+/// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05) on the
+/// side it set out towards (a start below the window, as the stomatocyte's at v ≤ 0.78 for
+/// `[0.70, 1.40]`, walks up into it),
 /// where the oblate first touches itself, where the stomatocyte passes its limit shape `L_sto`
 /// or the oblate invaginated at both poles its own (`past_limit`), at a neck below
 /// [`Options::neck_min`], or where `|c̄0,eff| > 150`. A branch without a start shape gives an empty curve.
@@ -375,8 +377,8 @@ pub fn bc_curve_until(
     let neck_min = opts.neck_min;
     let mut ends = move |s: &Solution, up: bool| {
         stop(s, up)
-            || s.da() < lo - 0.05
-            || s.da() > hi + 0.05
+            || (!up && s.da() < lo - 0.05)
+            || (up && s.da() > hi + 0.05)
             || s.neck().is_some_and(|r| r < neck_min)
             || (s.branch == Branch::Oblate && s.self_intersecting())
             || (s.branch == Branch::Pear && s.asymmetry() < 1e-4)
