@@ -329,7 +329,7 @@ fn a_start_below_the_window_walks_into_it() {
     println!("{} shapes, Δa {lo:.4}..{hi:.4}", c.shapes.len());
     assert!(c.shapes.len() > 10, "{} shapes", c.shapes.len());
     assert!(
-        lo >= 0.70 && lo < 0.72 && hi > 1.03 && hi <= 1.40,
+        (0.70..0.72).contains(&lo) && hi > 1.03 && hi <= 1.40,
         "{lo}..{hi}"
     );
 }
