@@ -363,10 +363,10 @@ fn both_ways(
 /// walk in the direction of increasing (`up`) or decreasing `Δa` after `shape` (e.g. when the
 /// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05) on the
 /// side it set out towards (a start below the window, as the stomatocyte's at v ≤ 0.78 for
-/// `[0.70, 1.40]`, walks up into it),
-/// where the oblate first touches itself, where the stomatocyte passes its limit shape `L_sto`
-/// or the oblate invaginated at both poles its own (`past_limit`), at a neck below
-/// [`Options::neck_min`], or where `|c̄0,eff| > 150`. A branch without a start shape gives an empty curve.
+/// `[0.70, 1.40]`, walks up into it), where the oblate first touches itself, where the
+/// stomatocyte passes its limit shape `L_sto` or the oblate invaginated at both poles its own
+/// (`past_limit`), at a neck below [`Options::neck_min`], or where `|c̄0,eff| > 150`. A branch
+/// without a start shape gives an empty curve.
 pub fn bc_curve_until(
     branch: Branch,
     v: f64,
