@@ -27,9 +27,9 @@
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
 #                    + onset_hessian{,_h1,_h05}.json (the seed-free onset at h/ε = 2/3, 1, 1/2)  ~TIMES
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
-#   axisym_c0        axisym --c0=-1,...,4 --nodes 481               1 590 s wall (538 s CPU), measured
-#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121                     44 s, measured
-#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121               59 s, measured
+#   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 797 s wall (570 s CPU, one thread), measured
+#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        63 s (41 s CPU, one thread), measured
+#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121 185 s (51 s CPU, one thread), measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)

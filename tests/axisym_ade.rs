@@ -5,8 +5,8 @@
 
 use std::f64::consts::{PI, SQRT_2};
 use vesicle::analysis::axisym::{
-    self, ade_phase, ade_solution, bc_solution, l_pear, l_pear_at, l_sto_at, limit_line, Branch,
-    Limit, LimitShape, Model, Options,
+    self, ade_phase, ade_solution, bc_solution, inner_spheres_da, l_pear, l_pear_at, l_sto_at,
+    limit_line, Branch, Limit, LimitShape, Model, Options,
 };
 
 /// 121 nodes (K = 40): the ADE/BC checks below are identities between solves of one
@@ -118,6 +118,14 @@ fn limit_lines_end_points() {
     assert!((q.v - 0.9).abs() < 1e-12 && q.da > 1.0 && q.da < SQRT_2);
     let r = l_sto_at(0.5).unwrap();
     assert!((r.v - 0.5).abs() < 1e-12 && r.da > 0.0 && r.da < 1.0);
+    // A sphere with one sphere inside is L_sto; with two (R1² + 2R2² = 1) Δa is smaller.
+    for v in [0.3, 0.6, 0.9, 0.99] {
+        let one = inner_spheres_da(v, 1).unwrap();
+        let two = inner_spheres_da(v, 2).unwrap();
+        assert!((one - l_sto_at(v).unwrap().da).abs() < 1e-12, "v = {v}");
+        assert!(two < one, "v = {v}: {two} against {one}");
+    }
+    assert!(inner_spheres_da(1.0, 1).is_none());
     assert!(l_pear_at(0.7).is_none());
 }
 
@@ -267,5 +275,61 @@ fn the_ade_pear_converges_to_a_narrow_neck() {
         (narrowest.1 - l).abs() < 0.03,
         "Δa0 {} vs L_pear {l}",
         narrowest.1
+    );
+}
+
+/// The BC stomatocyte ends at its limit shape L_sto (a sphere inside a sphere). At v = 0.92
+/// (L_sto at Δa = 0.7592) the path from Δa ≈ 1.02 narrows its neck towards L_sto; before the
+/// stop it ran past it to Δa = 0.705 with the neck held at 0.022–0.033 R0 by the modes and e
+/// rising to 2.67 (above the limit's 2), and the chart called the stomatocyte lowest there.
+/// Now no shape lies below L_sto's Δa, the path gets within 0.01 of it, and its neck is below
+/// 0.1 R0 only within 0.08 of L_sto. The oblate invaginated at both poles at v = 0.96 ran to
+/// Δa = 0.705 as well, past the sphere with two spheres inside (Δa = 0.764); now it stops there.
+#[test]
+fn bc_paths_end_at_their_limit_shapes() {
+    let v = 0.92;
+    let l = l_sto_at(v).unwrap();
+    assert!((l.da - 0.7592).abs() < 1e-4 && (l.e(0.0) - 2.0).abs() < 1e-14);
+    let c = axisym::bc_curve(Branch::Stomatocyte, v, (0.70, 1.05), &opts());
+    let lowest = |c: &axisym::BcCurve| {
+        c.shapes
+            .iter()
+            .map(|s| s.da())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let end = lowest(&c);
+    println!("L_sto Δa = {:.5}, lowest Δa of the path {end:.5}", l.da);
+    assert!(end >= l.da, "a stomatocyte past L_sto at Δa = {end}");
+    assert!(end < l.da + 0.01, "the path stops short: {end}");
+    for s in &c.shapes {
+        if s.neck().is_some_and(|r| r < 0.1) {
+            assert!(s.da() < l.da + 0.08, "Δa = {}, neck {:?}", s.da(), s.neck());
+        }
+    }
+    let two = inner_spheres_da(0.96, 2).unwrap();
+    let o = axisym::bc_curve(Branch::Oblate, 0.96, (0.70, 1.05), &opts());
+    let end = lowest(&o);
+    println!("two inner spheres Δa = {two:.5}, lowest Δa of the oblate {end:.5}");
+    assert!(end >= two && end < two + 0.02, "oblate to Δa = {end}");
+}
+
+/// A walk ends outside the Δa window only on the side it set out towards: at v = 0.70 the BC
+/// stomatocyte starts at Δa ≈ 0.55 (its SC shape at c̄0 = −1), below the window [0.70, 1.40]
+/// of `runs/results/axisym_bc`, and before this rule had no shape in it. Now the path walks up
+/// through the window to where it turns towards the symmetric shape (Δa ≈ 1.035).
+#[test]
+fn a_start_below_the_window_walks_into_it() {
+    let c = axisym::bc_curve(Branch::Stomatocyte, 0.70, (0.70, 1.40), &opts());
+    let (lo, hi) = c
+        .shapes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            (a.min(s.da()), b.max(s.da()))
+        });
+    println!("{} shapes, Δa {lo:.4}..{hi:.4}", c.shapes.len());
+    assert!(c.shapes.len() > 10, "{} shapes", c.shapes.len());
+    assert!(
+        (0.70..0.72).contains(&lo) && hi > 1.03 && hi <= 1.40,
+        "{lo}..{hi}"
     );
 }

@@ -66,11 +66,12 @@ fn c0_zero_reproduces_the_symmetric_diagram() {
         assert!((a.e - b.e).abs() < 1e-13);
     }
     let find = |lo: Branch, hi: Branch| {
-        s.transitions
+        s.lowest
+            .changes
             .iter()
             .find(|t| t.below == lo && t.above == hi && t.crossing)
-            .map(|t| t.v)
-            .unwrap_or_else(|| panic!("no {lo:?}/{hi:?} change in {:?}", s.transitions))
+            .map(|t| t.x)
+            .unwrap_or_else(|| panic!("no {lo:?}/{hi:?} change in {:?}", s.lowest.changes))
     };
     let po = find(Branch::Oblate, Branch::Prolate);
     let os = find(Branch::Stomatocyte, Branch::Oblate);

@@ -20,6 +20,7 @@
 //! the constant `−c̄0 Δa + c̄0²/4`).
 
 use super::functional::Basis;
+use super::limits::inner_spheres_da;
 use super::map::{new_map, reproject};
 use super::pear::{full_basis, odd_stability};
 use super::solver::{
@@ -360,9 +361,12 @@ fn both_ways(
 /// free, from its SC shape at `v` both ways (the pear from its bifurcation off the prolate),
 /// keeping the shapes with `Δa` in `[lo, hi]`, in path order. `stop(shape, up)` ends the
 /// walk in the direction of increasing (`up`) or decreasing `Δa` after `shape` (e.g. when the
-/// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05),
-/// where the oblate first touches itself, at a neck below [`Options::neck_min`], or where
-/// `|c̄0,eff| > 150`. A branch without a start shape gives an empty curve.
+/// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05) on the
+/// side it set out towards (a start below the window, as the stomatocyte's at v ≤ 0.78 for
+/// `[0.70, 1.40]`, walks up into it), where the oblate first touches itself, where the
+/// stomatocyte passes its limit shape `L_sto` or the oblate invaginated at both poles its own
+/// (`past_limit`), at a neck below [`Options::neck_min`], or where `|c̄0,eff| > 150`. A branch
+/// without a start shape gives an empty curve.
 pub fn bc_curve_until(
     branch: Branch,
     v: f64,
@@ -373,11 +377,12 @@ pub fn bc_curve_until(
     let neck_min = opts.neck_min;
     let mut ends = move |s: &Solution, up: bool| {
         stop(s, up)
-            || s.da() < lo - 0.05
-            || s.da() > hi + 0.05
+            || (!up && s.da() < lo - 0.05)
+            || (up && s.da() > hi + 0.05)
             || s.neck().is_some_and(|r| r < neck_min)
             || (s.branch == Branch::Oblate && s.self_intersecting())
             || (s.branch == Branch::Pear && s.asymmetry() < 1e-4)
+            || past_limit(s)
     };
     let (shapes, bifurcation) = if branch == Branch::Pear {
         pear_path(v, opts, &mut ends)
@@ -392,6 +397,7 @@ pub fn bc_curve_until(
         .into_iter()
         .filter(|s| s.da() >= lo && s.da() <= hi)
         .filter(|s| !(s.branch == Branch::Oblate && s.self_intersecting()))
+        .filter(|s| !past_limit(s))
         .collect();
     BcCurve {
         branch,
@@ -399,6 +405,22 @@ pub fn bc_curve_until(
         shapes,
         bifurcation,
     }
+}
+
+/// Whether `s` lies past the limit shape its path ends at: a stomatocyte with `Δa` below that
+/// of `L_sto` at its `v` (a sphere inside a sphere, [`inner_spheres_da`] with one), an oblate
+/// invaginated at both poles below that of a sphere with two inside. There the necks close.
+/// Past them the unmapped modes hold the neck at a width they can resolve (the stomatocyte at
+/// v = 0.92: 0.02–0.03 R0 at K = 40, 0.015–0.02 at K = 80) and the path runs on to smaller
+/// `Δa` with `e` above the limit's (2, 3) and `c̄0,eff` far beyond its neck condition: no
+/// stationary shape of the branch.
+fn past_limit(s: &Solution) -> bool {
+    let inner = match s.branch {
+        Branch::Stomatocyte => 1,
+        Branch::Oblate => 2,
+        _ => return false,
+    };
+    inner_spheres_da(s.v, inner).is_some_and(|da| s.da() < da)
 }
 
 /// The walker of `branch` at `v`, its SC shape as a BC state, and a second BC state: the SC

@@ -105,6 +105,32 @@ pub fn l_sto_at(v: f64) -> Option<LimitShape> {
     at_v(Limit::Stomatocyte, v)
 }
 
+/// `Δa` of a sphere holding `n ≥ 1` equal spheres inside it, each joined to it by an
+/// infinitesimal neck, at reduced volume `v ∈ (0, 1)` (radii `R1`, `R2`: `R1² + n R2² = 1`,
+/// `v = R1³ − n R2³`, `Δa = R1 − n R2`; bisection in `R2`, along which `v` falls): for `n = 1`
+/// `L_sto`, for `n = 2` the up–down symmetric shape invaginated at both poles. `None` for
+/// `v` outside `(0, 1)`.
+pub fn inner_spheres_da(v: f64, n: u32) -> Option<f64> {
+    let n = f64::from(n.max(1));
+    let of = |r2: f64| {
+        let r1 = (1.0 - n * r2 * r2).sqrt();
+        (r1.powi(3) - n * r2.powi(3), r1 - n * r2)
+    };
+    if !(v > 0.0 && v < 1.0) {
+        return None;
+    }
+    let (mut lo, mut hi) = (0.0, (1.0 / (n + 1.0)).sqrt());
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if of(mid).0 > v {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(of(0.5 * (lo + hi)).1)
+}
+
 /// Bisection for the limit shape of reduced volume `v` (`v` falls monotonically with `R2`).
 fn at_v(kind: Limit, v: f64) -> Option<LimitShape> {
     let v_of = |r2: f64| LimitShape::new(kind, r2).map_or(f64::NAN, |s| s.v);

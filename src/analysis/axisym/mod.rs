@@ -34,6 +34,8 @@
 //! further Newton constraint). [`bc`] follows the BC branches in `Δa` at fixed `v`, [`ade`]
 //! maps them to ADE and solves ADE shapes ([`ade_solution`]), [`ade_phase`] builds the
 //! `(v, Δa)` and `(v, Δa0)` diagrams and [`limits`] gives the limit lines `L_pear`, `L_sto`.
+//! Both phase charts, [`phase`] and [`ade_phase`], find the lowest branch and its transitions
+//! by [`lowest`].
 //!
 //! **Multipliers.** With `e*(v)` the branch energy at `R0 = 1`, the pressure difference and the
 //! tension of the shape equation `δE_b − P δV + σ δA = 0` (`E_b = (κ/2)∮(2H − c0)² dA =
@@ -51,6 +53,7 @@ pub mod diagram;
 pub(crate) mod eigen;
 pub(crate) mod functional;
 pub mod limits;
+pub mod lowest;
 pub mod map;
 pub mod model;
 pub mod pear;
@@ -61,7 +64,7 @@ pub(crate) mod solver;
 pub use ade::{ade_image, ade_solution, AdePoint};
 pub use bc::{bc_curve, bc_solution, BcCurve};
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
-pub use limits::{l_pear_at, l_sto_at, limit_line, Limit, LimitShape};
+pub use limits::{inner_spheres_da, l_pear_at, l_sto_at, limit_line, Limit, LimitShape};
 pub use model::{ade_c0_eff, ade_da0, Model};
 pub use pear::{
     follow_pear, l_pear, l_pear_radii, neck_limit, pear_at, pear_bifurcation, prolate_updown,

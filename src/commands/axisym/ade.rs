@@ -6,7 +6,8 @@
 //! `phase.svg`).
 
 use super::{io_err, AxisymArgs};
-use crate::analysis::axisym::ade_phase::{ade_lowest, bc_lowest, v_slice, Lowest, VSlice};
+use crate::analysis::axisym::ade_phase::{ade_lowest, bc_lowest, v_slice, VSlice};
+use crate::analysis::axisym::lowest::Lowest;
 use crate::analysis::axisym::{
     ade_da0, ade_image, l_pear_at, l_sto_at, limit_line, Branch, Limit, LimitShape, Options,
 };

@@ -117,7 +117,10 @@ fn narrowest(shapes: &[Solution]) -> Option<(f64, f64)> {
         .min_by(|a, b| a.1.total_cmp(&b.1))
 }
 
-/// `summary.csv`: per c̄0 and event, `c0,event,v,e,neck,detail`.
+/// `summary.csv`: per c̄0 and event, `c0,event,v,e,neck,detail`: the changes of the lowest
+/// branch (`lowest branch changes` where the energies cross, the transitions; `branch ends`
+/// where the lowest changes only because a branch ends or begins inside a grid interval), the
+/// pear's bifurcation, fold and end, L_pear, the narrowest necks and the branch ends.
 fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
     let mut f = create_file(path)?;
     let err = io_err(path);
@@ -135,21 +138,24 @@ fn write_summary(path: &Path, slices: &[Slice]) -> Result<()> {
                     fmt(neck, 5)
                 )
             };
-        for t in &s.transitions {
-            let how = if t.crossing {
-                "energies cross"
+        for c in &s.lowest.changes {
+            let (event, how) = if c.crossing {
+                ("lowest branch changes", "energies cross")
             } else {
-                "grid midpoint: a branch ends"
+                (
+                    "branch ends",
+                    "grid midpoint: no energy crossing, a branch ends or begins",
+                )
             };
             row(
-                "lowest branch changes",
-                Some(t.v),
+                event,
+                Some(c.x),
                 None,
                 None,
                 &format!(
                     "{} below / {} above ({how})",
-                    t.below.name(),
-                    t.above.name()
+                    c.below.name(),
+                    c.above.name()
                 ),
             )
             .map_err(&err)?;
@@ -278,9 +284,10 @@ pub fn phase_figure(slices: &[Slice]) -> Figure {
             .iter()
             .flat_map(|s| {
                 s.lowest
+                    .points
                     .iter()
-                    .filter(|(_, lb)| lb == b)
-                    .map(move |(v, _)| (*v, s.c0))
+                    .filter(|(_, lb, _)| lb == b)
+                    .map(move |(v, _, _)| (*v, s.c0))
             })
             .collect();
         if !pts.is_empty() {
@@ -348,13 +355,17 @@ fn print_slice(s: &Slice) {
             );
         }
     }
-    for t in &s.transitions {
+    for c in &s.lowest.changes {
         println!(
             "  lowest: {} below / {} above v = {:.4}{}",
-            t.below.name(),
-            t.above.name(),
-            t.v,
-            if t.crossing { "" } else { " (grid midpoint)" }
+            c.below.name(),
+            c.above.name(),
+            c.x,
+            if c.crossing {
+                ""
+            } else {
+                " (grid midpoint: a branch ends, no crossing)"
+            }
         );
     }
     match &s.pear.bifurcation {

@@ -253,14 +253,15 @@ fn phase_chart(slices: &[Slice]) -> Figure {
     let mut fig = phase_figure(&reference);
     fig.title = "lowest-energy shape: axisymmetric reference, phase-field transitions".into();
     fig.legend = Corner::UpperRight;
-    // The reference transitions between the same two branches, joined across c̄0.
+    // The reference transitions (energy crossings, not branch ends) between the same two
+    // branches, joined across c̄0.
     let mut lines: Vec<(BranchPair, Vec<(f64, f64)>)> = Vec::new();
     for r in &reference {
-        for t in &r.transitions {
+        for t in r.lowest.changes.iter().filter(|c| c.crossing) {
             let key = (t.below, t.above);
             match lines.iter_mut().find(|(k, _)| *k == key) {
-                Some((_, pts)) => pts.push((t.v, r.c0)),
-                None => lines.push((key, vec![(t.v, r.c0)])),
+                Some((_, pts)) => pts.push((t.x, r.c0)),
+                None => lines.push((key, vec![(t.x, r.c0)])),
             }
         }
     }
