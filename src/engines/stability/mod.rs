@@ -266,11 +266,17 @@ impl OddHessian {
         lobpcg::lowest(self, x, tolerance, max_iterations)
     }
 
+    /// The real field of spectrum `x` on the grid.
+    pub fn field(&mut self, x: &Array3<Complex64>) -> Array3<f64> {
+        let mut out = self.ev.grid.zeros();
+        let mut hat = x.clone();
+        self.ev.transform.inverse(&mut hat, &mut out);
+        out
+    }
+
     /// The spectrum of the odd field z³(1 − φ*²) (z from the box's centre).
     fn default_start(&mut self) -> Array3<Complex64> {
-        let mut phi = self.ev.grid.zeros();
-        let mut hat = self.hat.clone();
-        self.ev.transform.inverse(&mut hat, &mut phi);
+        let phi = self.field(&self.hat.clone());
         let z = self.ev.grid.coords(2);
         let scale = z.last().copied().unwrap_or(1.0);
         let mut field = phi;

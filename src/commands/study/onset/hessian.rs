@@ -261,3 +261,68 @@ fn linear_root(lo: &Sample, hi: &Sample, of: impl Fn(&Sample) -> f64) -> f64 {
     let t = lo.eigenvalue / (lo.eigenvalue - hi.eigenvalue);
     of(lo) + t * (of(hi) - of(lo))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::axisym::{self, Branch, Options};
+    use crate::commands::study::onset::spec::base_scene;
+
+    /// The sign of the lowest odd eigenvalue is the symmetric state's stability. The symmetric
+    /// prolate (v = 0.8, R0 = 20ε, h = ε, relaxed to 1e-6) displaced along its lowest odd
+    /// eigenvector by 0.02 at most and relaxed on the box mirrored across x and y only: at
+    /// c̄0 = 3 (λ < 0, measured −7.6e-6) it leaves the symmetric state (|skewness| above the
+    /// budding study's threshold 0.01; measured 0.062, a pear), at c̄0 = 2 (λ = +1.7e-5) it comes
+    /// back (|skewness| below 1e-3; measured 3.5e-5).
+    #[test]
+    fn a_negative_eigenvalue_is_a_state_that_departs() {
+        let spec: Spec = serde_json::from_value(serde_json::json!({
+            "study": "onset", "method": "hessian",
+            "scene": {"dim": 3, "h": 1.0, "eps": 1.0, "dt": 0.01, "stop_residual": 1e-6,
+                      "max_steps": 4000, "prepare_steps": 20, "threads": 1},
+            "v": 0.8, "r0": [20.0], "c0": [2.0, 3.0], "bisections": 0
+        }))
+        .expect("a spec");
+        let start = axisym::solve(Branch::Prolate, spec.v, &Options::default().with_c0(2.0))
+            .expect("the start prolate");
+        let base = base_scene(&spec, 20.0, &start.r, &start.z).expect("a scene");
+        for (c0, departs) in [(2.0, false), (3.0, true)] {
+            let mut scene = base.clone();
+            scene.symmetry = Symmetry::Axes(vec!["x".into(), "y".into(), "z".into()]);
+            scene.c0 = C0Spec::Uniform(c0 / 20.0);
+            let mut problem = setup::build(&scene).expect("a problem");
+            let full = Grid::new(&scene.n, scene.h, &[false; 3]);
+            let prolate = super::super::budding::revolved(&start.r, &start.z, 20.0, 1.0, &full);
+            problem.phi = problem.grid.restrict(&prolate);
+            let mut area = None;
+            let symmetric =
+                relax_seeded(&mut problem, scene.clone(), (20.0, 0.0), &mut area).expect("relaxed");
+            let odd_box = Grid::new(&scene.n, scene.h, &[true, true, false]);
+            let phi = odd_box.restrict(&symmetric.full);
+            let c = C0::new(&scene.c0, &odd_box, 1.0).expect("c0");
+            let mut hessian =
+                OddHessian::new(odd_box.clone(), (1.0, c, scene.laplacian), &phi, 1).expect("H");
+            let lowest = hessian.lowest(None, 1e-9, 2000).expect("an eigenvalue");
+            assert_eq!(
+                lowest.value < 0.0,
+                departs,
+                "c0 R0 = {c0}: {}",
+                lowest.value
+            );
+            let x = hessian.field(&lowest.vector);
+            let top = x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let mut displaced = scene.clone();
+            displaced.symmetry = Symmetry::Axes(vec!["x".into(), "y".into()]);
+            let mut problem = setup::build(&displaced).expect("a problem");
+            problem.phi = &phi + &(x * (0.02 / top));
+            let relaxed =
+                relax_seeded(&mut problem, displaced, (20.0, 0.0), &mut area).expect("relaxed");
+            let skew = relaxed.measure.skewness.abs();
+            if departs {
+                assert!(skew > 0.01, "c0 R0 = {c0}: skewness {skew}");
+            } else {
+                assert!(skew < 1e-3, "c0 R0 = {c0}: skewness {skew}");
+            }
+        }
+    }
+}
