@@ -232,6 +232,7 @@ fn a_vesicle_between_walls_tank_treads_at_the_linear_theorys_angle() {
             r0: 10.0,
             capillary: 1.0,
             channel: 6.0,
+            length: 6.0,
             profile: Profile::Walls,
         },
     )
