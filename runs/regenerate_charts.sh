@@ -25,8 +25,9 @@
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations, h = 2ε/3)   ~32 min (8.5 min CPU), measured
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
-#                    + onset_hessian{,_h1,_h05}.json (the seed-free onset at h/ε = 2/3, 1, 1/2)  ~TIMES
+#                    + onset_hessian{,_h1,_h05}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~58 min (36 + 10 + 12, one thread, loaded), measured
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
+#   shear3d          study shear shear3d.json + shear3d_box.json (3D)   29 + ~16 min on one thread, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 797 s wall (570 s CPU, one thread), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        63 s (41 s CPU, one thread), measured
 #   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121 185 s (51 s CPU, one thread), measured
@@ -50,7 +51,7 @@ cd "$(dirname "$0")/.."
 VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
-ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating axisym_c0 axisym_bc
+ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating shear3d axisym_c0 axisym_bc
      axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade diagram_bc budding3d deflation3d
      dumbbell3d pearling3d triaxial3d starfish3d)
 
@@ -132,6 +133,13 @@ group_onset() {
 group_heating() {
     study heating heating.json
     same_names "$out" heating
+}
+group_shear3d() {
+    study shear shear3d.json
+    same_names "$out" shear3d
+    out=$WORK/shear3d_box
+    study shear shear3d_box.json
+    same_names "$out" shear3d_box
 }
 # seq_list FROM STEP COUNT: the comma-separated list FROM, FROM + STEP, … (COUNT values).
 seq_list() {

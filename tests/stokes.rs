@@ -102,7 +102,8 @@ fn spurious_currents_vanish_with_the_residual() {
 /// `"symmetry": "auto"` under the Stokes dynamics keeps the planes the flow keeps: an ellipse
 /// at rest is mirrored about both axes, as under the conserved flow, and the quarter box runs
 /// (the flow moves it: max|u| > 0); under an imposed shear along x varying along y neither
-/// plane is a symmetry, and none is taken.
+/// plane is a symmetry, and none is taken; in 3D the shear keeps the plane z = 0 (normal to
+/// its vorticity), and only it is taken.
 #[test]
 fn auto_symmetry_keeps_the_planes_the_flow_keeps() {
     let base = json!({
@@ -123,6 +124,14 @@ fn auto_symmetry_keeps_the_planes_the_flow_keeps() {
     );
     let sheared = setup::build(&scene(sheared)).expect("problem");
     assert_eq!(sheared.mirror, vec![false, false]);
+    let sheared3d = common::with(
+        &base,
+        json!({"dim": 3, "n": [32, 32, 32],
+               "initial": {"shape": "ellipsoid", "axes": [9.0, 7.0, 6.0]},
+               "flow": {"viscosity": 1.0, "mobility": 0.01, "shear_rate": 1e-3}}),
+    );
+    let sheared3d = setup::build(&scene(sheared3d)).expect("problem");
+    assert_eq!(sheared3d.mirror, vec![false, false, true]);
 }
 
 /// A mirror-reduced box runs the full box's flow: an ellipse's half boxes about x and about y
@@ -232,6 +241,7 @@ fn a_vesicle_between_walls_tank_treads_at_the_linear_theorys_angle() {
             r0: 10.0,
             capillary: 1.0,
             channel: 6.0,
+            length: 6.0,
             profile: Profile::Walls,
         },
     )

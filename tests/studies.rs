@@ -426,6 +426,70 @@ fn bad_study_files_are_refused() {
     assert!(!out.exists());
 }
 
+/// `study shear runs/studies/shear3d.json --quick`: 3D vesicles (start v = 0.9) in plane
+/// Couette flow between walls on the half box mirrored about z = 0 (R0 = 6 and 8ε, h = ε/2, the
+/// box 4R0, 3 strain units; about 10 s). At R0 = 8ε the φ = 0 surface settles at v ≈ 0.944
+/// and tank-treads within 2° of the linear theory cos 2ψ = √(15Δ/2) at that v (measured
+/// +0.8°), the fluid inside turns at γ̇/2 to 1% (1.004), and the phase field's measures read
+/// a rounder vesicle than its surface (0.976). A bad `dimension` is refused with exit 2 naming
+/// it, before anything is written.
+#[test]
+fn shear3d_quick_study_tank_treads_near_the_linear_theory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("shear3d");
+    let o = vesicle(&[
+        "study",
+        "shear",
+        "runs/studies/shear3d.json",
+        "--quick",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let head = header(&out.join("cases.csv"));
+    let column = |name: &str| {
+        head.split(',')
+            .position(|c| c == name)
+            .unwrap_or_else(|| panic!("{name} in {head}"))
+    };
+    let rows = csv_fields(&out.join("cases.csv"));
+    assert_eq!(rows.len(), 2);
+    let r = rows
+        .iter()
+        .find(|r| r[column("r0")] == "8.0")
+        .expect("R0 = 8");
+    let at = |name: &str| -> f64 { r[column(name)].parse().unwrap() };
+    assert_eq!(at("points"), 64.0 * 64.0 * 64.0, "the full box's points");
+    let v = at("reduced_area");
+    assert!(v > 0.9 && v < 0.97, "v {v}");
+    assert!(at("field_reduced_area") > v);
+    assert!((at("excess") - (v.powf(-2.0 / 3.0) - 1.0)).abs() < 1e-9);
+    let (psi, linear) = (at("inclination"), at("linear"));
+    assert!((psi - linear).abs() < 2.0, "psi {psi} against {linear}");
+    assert!((at("tank_treading") - 1.0).abs() < 0.01);
+    assert_eq!(csv_fields(&out.join("angles.csv")).len(), 1);
+    charts_exist(&out, &["inclination"]);
+    assert!(out.join("shape_v0.90.png").exists());
+
+    let text = std::fs::read_to_string("runs/studies/shear3d.json").unwrap();
+    let mut bad: serde_json::Value = serde_json::from_str(&text).unwrap();
+    bad["dimension"] = serde_json::json!(4);
+    let file = tmp.path().join("bad.json");
+    std::fs::write(&file, bad.to_string()).unwrap();
+    let refused = tmp.path().join("refused");
+    let o = vesicle(&[
+        "study",
+        "shear",
+        file.to_str().unwrap(),
+        "--quick",
+        "--out",
+        refused.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("dimension"));
+    assert!(!refused.exists());
+}
+
 /// `study budding --quick`: the prolate at v = 0.8, R0 = 10ε, taken to c̄0 = 2 and back to
 /// 1.5. The sharp reference has no pear bifurcation for c̄0 ≤ 2 (`vesicle axisym --c0`: the
 /// prolate is stable to up–down asymmetry down to v = 0.3), so every step must relax to its

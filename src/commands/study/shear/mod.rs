@@ -1,17 +1,19 @@
-//! `vesicle study shear FILE`: 2D vesicles tank-treading in a steady shear, their inclination,
-//! deformation and tank-treading rate against the reduced area, beside the linear theory of
-//! this model (docs/src/theory/flow.md, "Shear"; docs/src/validation/flow.md).
+//! `vesicle study shear FILE`: 2D or 3D vesicles tank-treading in a steady shear, their
+//! inclination, deformation and tank-treading rate against the reduced area (volume), beside
+//! the linear theory of this model (docs/src/theory/flow.md, "Shear";
+//! docs/src/validation/flow.md).
 //!
 //! Each case runs a vesicle with its area held in plane Couette flow between walls (or the
 //! periodic Kolmogorov flow) at one capillary number until it is steady ([`measure`]). Per
-//! reduced area the sizes' departures ψ − ψ_lin(v) from the linear theory cos 2ψ = 2b (taken
-//! at each run's own reduced area, which the phase field measures slightly differently from the
-//! start's) are extrapolated to ε/R0 = 0 by the least-squares line through them (the sizes'
-//! departures differ by less than the runs' last drift, so a polynomial through them would
-//! extrapolate noise).
+//! reduced area the sizes' departures ψ − ψ_lin(v) from the linear theory, cos 2ψ = 2b in 2D
+//! and cos 2ψ = √(15Δ/2) in 3D (taken at each run's own reduced area, that of its final φ = 0
+//! contour or surface, which differs slightly from the start's), are extrapolated to ε/R0 = 0
+//! by the least-squares line through them (the sizes' departures differ by less than the runs'
+//! last drift, so a polynomial through them would extrapolate noise).
 //!
 //! Writes `shear.txt`, `cases.csv` (every run), `angles.csv` (per reduced area), the chart
-//! `inclination` (ψ against v with the theory) and `shapes.png` (the finest size's steady shapes).
+//! `inclination` (ψ against v with the theory) and `shape_vV.png` (the finest size's steady
+//! shape per reduced area; in 3D its three mid-planes).
 
 pub mod measure;
 pub mod spec;
@@ -22,7 +24,7 @@ use super::table::{self, Column, Format, Row};
 use crate::error::Result;
 use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use crate::output::image::slices_image;
-use measure::{linear_inclination, Case, Measured};
+use measure::{amplitude, first_order_inclination, linear_inclination, Case, Measured};
 pub use spec::Spec;
 use std::path::Path;
 
@@ -39,6 +41,9 @@ impl Row for Measured {
             Column::both("channel", "W/R0", Format::Plain, |r: &Self| {
                 r.case.channel.into()
             }),
+            Column::both("length", "L/R0", Format::Plain, |r: &Self| {
+                r.case.length.into()
+            }),
             Column::both("profile", "profile", Format::Plain, |r: &Self| {
                 r.case.profile.name().into()
             }),
@@ -48,6 +53,15 @@ impl Row for Measured {
             Column::both("reduced_area", "v", Format::Fixed(4), |r: &Self| {
                 r.reduced_area.into()
             }),
+            Column::both("excess", "Delta", Format::Fixed(4), |r: &Self| {
+                r.excess.into()
+            }),
+            Column::both(
+                "field_reduced_area",
+                "v field",
+                Format::Fixed(4),
+                |r: &Self| r.field_reduced_area.into(),
+            ),
             Column::both("inclination", "psi", Format::Fixed(2), |r: &Self| {
                 r.inclination.into()
             })
@@ -55,6 +69,13 @@ impl Row for Measured {
             Column::both("linear", "psi linear", Format::Fixed(2), |r: &Self| {
                 r.linear.into()
             })
+            .unit("deg"),
+            Column::both(
+                "linear_first_order",
+                "psi linear 1st order",
+                Format::Fixed(2),
+                |r: &Self| r.linear_first_order.into(),
+            )
             .unit("deg"),
             Column::both("drift", "drift", Format::Fixed(3), |r: &Self| {
                 r.drift.into()
@@ -91,6 +112,8 @@ pub struct Angle {
     pub start: f64,
     /// The reduced area at the finest size.
     pub reduced_area: f64,
+    /// Its excess Δ.
+    pub excess: f64,
     /// ψ_lin at it, degrees.
     pub linear: f64,
     /// ψ − ψ_lin per size, coarse to fine: "−0.41 −0.32".
@@ -99,9 +122,9 @@ pub struct Angle {
     pub extrapolated: f64,
     /// ψ_lin + the extrapolated departure, degrees.
     pub inclination: f64,
-    /// cos 2ψ/(2b) of that ψ: 1 where the linear theory holds.
+    /// cos 2ψ/(2b) of that ψ (2a in 3D): 1 where the linear theory holds.
     pub cos_ratio: f64,
-    /// cos 2ψ/(2b) at the finest size, its own ψ and v.
+    /// cos 2ψ/(2b) (2a) at the finest size, its own ψ and v.
     pub finest_cos_ratio: f64,
     /// Ω/(γ̇/2) at the finest size.
     pub tank_treading: f64,
@@ -119,6 +142,9 @@ impl Row for Angle {
                 Format::Fixed(4),
                 |r: &Self| r.reduced_area.into(),
             ),
+            Column::both("excess", "Delta", Format::Fixed(4), |r: &Self| {
+                r.excess.into()
+            }),
             Column::both("linear", "psi linear", Format::Fixed(2), |r: &Self| {
                 r.linear.into()
             })
@@ -208,18 +234,19 @@ impl Study for ShearStudy {
         let mut angles = Vec::new();
         for group in &groups {
             let measured = group.iter().map(&mut run).collect::<Result<Vec<_>>>()?;
-            angles.push(extrapolate(&measured));
+            angles.push(extrapolate(spec.dimension, &measured));
             cases.extend(measured);
         }
         for case in &variations {
             cases.push(run(case)?);
         }
-        let mut text = String::from("== every case ==\n");
+        let mut text = format!("== every case ({}D) ==\n", spec.dimension);
         text.push_str(&table::text(&cases));
-        text.push_str(
-            "\n== per reduced area: the departure from the linear theory cos 2psi = 2b, b = \
-             sqrt(2(1 - v)/3), extrapolated to eps/R0 = 0 ==\n",
-        );
+        text.push_str(&format!(
+            "\n== per reduced area: the departure from the linear theory {}, extrapolated to \
+             eps/R0 = 0 ==\n",
+            theory(spec.dimension)
+        ));
         text.push_str(&table::text(&angles));
         let mut report = Report {
             text,
@@ -227,7 +254,7 @@ impl Study for ShearStudy {
         };
         report.table("cases.csv", &cases)?;
         report.table("angles.csv", &angles)?;
-        report.chart("inclination", chart(&cases, &angles));
+        report.chart("inclination", chart(spec.dimension, &cases, &angles));
         let finest: Vec<&Measured> = groups
             .iter()
             .filter_map(|g| {
@@ -243,7 +270,7 @@ impl Study for ShearStudy {
                 m.reduced_area, m.case.r0, m.case.capillary, m.inclination
             );
             let name = format!("shape_v{:.2}.png", m.case.reduced_area);
-            let image = slices_image(Path::new(&name), &m.phi, 2, &title)?;
+            let image = slices_image(Path::new(&name), &m.phi, spec.dimension, &title)?;
             report.images.push((name, image));
         }
         Ok((Output { cases, angles }, report))
@@ -259,6 +286,7 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
         r0,
         capillary: spec.capillary,
         channel: spec.channel,
+        length: spec.length,
         profile: spec.profile,
     };
     let groups = spec
@@ -272,6 +300,7 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
         .map(|v| Case {
             capillary: v.capillary.unwrap_or(spec.capillary),
             channel: v.channel.unwrap_or(spec.channel),
+            length: v.length.unwrap_or(spec.length),
             profile: v.profile.unwrap_or(spec.profile),
             ..case(v.reduced_area, v.r0)
         })
@@ -279,9 +308,18 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
     (groups, variations)
 }
 
+/// The linear theory's formula in dimension `dim`, for the tables.
+fn theory(dim: usize) -> &'static str {
+    if dim == 3 {
+        "cos 2psi = sqrt(15 Delta/2), Delta = v^(-2/3) - 1"
+    } else {
+        "cos 2psi = 2b, b = sqrt(2(1 - v)/3)"
+    }
+}
+
 /// One reduced area's departures ψ − ψ_lin(v) and their extrapolation to ε/R0 = 0 by the
 /// least-squares line in ε/R0 through every size.
-fn extrapolate(group: &[Measured]) -> Angle {
+fn extrapolate(dim: usize, group: &[Measured]) -> Angle {
     let finest = group.last().expect("at least two sizes");
     let points: Vec<(f64, f64)> = group
         .iter()
@@ -291,10 +329,11 @@ fn extrapolate(group: &[Measured]) -> Angle {
     let extrapolated = fit::linear(&x, &y).map_or(f64::NAN, |line| line.intercept);
     let inclination = finest.linear + extrapolated;
     let cos_ratio =
-        |psi: f64| (2.0 * psi.to_radians()).cos() / (2.0 * measure::amplitude(finest.reduced_area));
+        |psi: f64| (2.0 * psi.to_radians()).cos() / (2.0 * amplitude(finest.reduced_area, dim));
     Angle {
         start: finest.case.reduced_area,
         reduced_area: finest.reduced_area,
+        excess: finest.excess,
         linear: finest.linear,
         departures: points
             .iter()
@@ -309,11 +348,18 @@ fn extrapolate(group: &[Measured]) -> Angle {
     }
 }
 
-/// ψ against v: every size of the main grid, the extrapolation, and the linear theory.
-fn chart(cases: &[Measured], angles: &[Angle]) -> Figure {
+/// ψ against v: every size of the main grid, the extrapolation, and the linear theory (in 3D
+/// also its first-order form in 1 − v).
+fn chart(dim: usize, cases: &[Measured], angles: &[Angle]) -> Figure {
     let mut fig = Figure::new(
-        "Inclination of a vesicle tank-treading in shear (2D, area held, equal viscosities)",
-        Axis::linear("reduced area v"),
+        format!(
+            "Inclination of a vesicle tank-treading in shear ({dim}D, area held, equal viscosities)"
+        ),
+        Axis::linear(if dim == 3 {
+            "reduced volume v"
+        } else {
+            "reduced area v"
+        }),
         Axis::linear("inclination psi (degrees)"),
     );
     fig.legend = Corner::LowerRight;
@@ -360,20 +406,39 @@ fn chart(cases: &[Measured], angles: &[Angle]) -> Figure {
         [0, 0, 0],
         Mark::LinePoints(Shape::Diamond),
     ));
-    let lo = angles
-        .iter()
-        .map(|a| a.reduced_area)
-        .fold(1.0, f64::min)
-        .max(0.625);
-    let theory = (0..=50)
-        .map(|i| lo + (1.0 - lo) * i as f64 / 50.0)
-        .map(|v| (v, linear_inclination(v)))
-        .collect();
+    // Where each form of the theory ends (its right side reaches 1).
+    let ends = if dim == 3 {
+        [(17.0f64 / 15.0).powf(-1.5), 0.8]
+    } else {
+        [0.625; 2]
+    };
+    let lo = angles.iter().map(|a| a.reduced_area).fold(1.0, f64::min);
+    let curve = |end: f64, f: fn(f64, usize) -> f64| {
+        let lo = lo.max(end);
+        (0..=50)
+            .map(|i| lo + (1.0 - lo) * i as f64 / 50.0)
+            .map(|v| (v, f(v, dim)))
+            .filter(|p| p.1.is_finite())
+            .collect()
+    };
+    let label = if dim == 3 {
+        "linear theory cos 2psi = sqrt(15 Delta/2)"
+    } else {
+        "linear theory cos 2psi = 2b"
+    };
     fig.push(Series::new(
-        "linear theory cos 2psi = 2b",
-        theory,
+        label,
+        curve(ends[0], linear_inclination),
         [0, 0, 0],
         Mark::Dashed,
     ));
+    if dim == 3 {
+        fig.push(Series::new(
+            "to first order in 1 - v: cos 2psi = sqrt(5(1 - v))",
+            curve(ends[1], first_order_inclination),
+            [120, 120, 120],
+            Mark::Dashed,
+        ));
+    }
     fig
 }

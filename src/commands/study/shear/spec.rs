@@ -1,6 +1,7 @@
-//! The shear study file (`runs/studies/shear.json`): the vesicles' reduced areas and sizes, the
-//! capillary number, the channel and the fluid, and single cases that vary one of them. Strict:
-//! unknown keys are refused, every value checked, errors name the key.
+//! The shear study file (`runs/studies/shear.json`, 2D; `runs/studies/shear3d.json`, 3D): the
+//! dimension, the vesicles' reduced areas (volumes in 3D) and sizes, the capillary number, the
+//! channel and the fluid, and single cases that vary one of them. Strict: unknown keys are
+//! refused, every value checked, errors name the key.
 
 use crate::commands::study::checks::{at_least, h_over_eps, positive};
 use crate::error::{Error, Result};
@@ -35,6 +36,10 @@ pub struct Spec {
     /// Free text.
     #[serde(default)]
     pub description: String,
+    /// 2 (a contour in the shear plane) or 3 (a surface on the half box mirrored about the
+    /// shear plane z = 0, the one mirror plane the shear keeps); default 2.
+    #[serde(default = "two")]
+    pub dimension: usize,
     /// h/ε of every case.
     pub h_over_eps: f64,
     /// η.
@@ -43,13 +48,14 @@ pub struct Spec {
     pub mobility: f64,
     /// Ca = ηγ̇R0³/κ.
     pub capillary: f64,
-    /// The vesicles' reduced areas (each started as an ellipse of that reduced area).
+    /// The vesicles' reduced areas (each started as an ellipse of that reduced area); in 3D
+    /// reduced volumes (each started as a prolate spheroid along the flow).
     pub reduced_areas: Vec<f64>,
     /// R0/ε of each size (at least two: the angle is extrapolated in ε/R0).
     pub r0: Vec<f64>,
     /// The channel's width (wall to wall, or the Kolmogorov period) over R0.
     pub channel: f64,
-    /// The periodic box's length along the flow over R0.
+    /// The periodic box's length along the flow (and in 3D along the vorticity z) over R0.
     pub length: f64,
     /// How the shear is imposed.
     pub profile: Profile,
@@ -58,7 +64,7 @@ pub struct Spec {
     /// The largest Δt of the adaptive SBDF2 steps.
     pub dt_max: f64,
     /// Single cases, each at one reduced area and size, varying the capillary number, the
-    /// channel or the profile (what the angle does not depend on, or how much it does).
+    /// channel, the box's length or the profile (what the angle does not depend on, or how much it does).
     #[serde(default)]
     pub variations: Vec<Variation>,
 }
@@ -77,6 +83,9 @@ pub struct Variation {
     /// W/R0, else the spec's.
     #[serde(default)]
     pub channel: Option<f64>,
+    /// L/R0, else the spec's.
+    #[serde(default)]
+    pub length: Option<f64>,
     /// The profile, else the spec's.
     #[serde(default)]
     pub profile: Option<Profile>,
@@ -88,6 +97,12 @@ impl Spec {
     /// # Errors
     /// `Error::Config` naming the key.
     pub fn validate(&self) -> Result<()> {
+        if !matches!(self.dimension, 2 | 3) {
+            return Err(Error::config(
+                "dimension",
+                format!("need 2 or 3, got {}", self.dimension),
+            ));
+        }
         h_over_eps(self.h_over_eps)?;
         for (key, v) in [
             ("viscosity", self.viscosity),
@@ -111,12 +126,7 @@ impl Spec {
             ));
         }
         channel("channel", self.channel)?;
-        if !at_least(self.length, 3.0) {
-            return Err(Error::config(
-                "length",
-                "need L/R0 ≥ 3 (the vesicle apart from its periodic images)",
-            ));
-        }
+        length("length", self.length)?;
         for (i, v) in self.variations.iter().enumerate() {
             let key = |k: &str| format!("variations[{i}].{k}");
             reduced_area(&key("reduced_area"), v.reduced_area)?;
@@ -129,9 +139,17 @@ impl Spec {
             if let Some(w) = v.channel {
                 channel(&key("channel"), w)?;
             }
+            if let Some(l) = v.length {
+                length(&key("length"), l)?;
+            }
         }
         Ok(())
     }
+}
+
+/// The default dimension.
+fn two() -> usize {
+    2
 }
 
 /// A reduced area the ellipse start can take and the tank-treading regime holds.
@@ -140,6 +158,18 @@ fn reduced_area(key: &str, v: f64) -> Result<()> {
         Ok(())
     } else {
         Err(Error::config(key, format!("need 0.3 < v < 1, got {v}")))
+    }
+}
+
+/// A periodic box long enough to keep the vesicle apart from its images.
+fn length(key: &str, l: f64) -> Result<()> {
+    if at_least(l, 3.0) {
+        Ok(())
+    } else {
+        Err(Error::config(
+            key,
+            format!("need L/R0 ≥ 3 (the vesicle apart from its periodic images), got {l}"),
+        ))
     }
 }
 
@@ -152,5 +182,51 @@ fn channel(key: &str, w: f64) -> Result<()> {
             key,
             format!("need W/R0 ≥ 3 (the vesicle clear of the walls), got {w}"),
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::{json, Value};
+
+    /// The study file `name` without its `quick` block (which the loader applies or drops).
+    fn file(name: &str) -> Value {
+        let text = std::fs::read_to_string(format!("runs/studies/{name}")).expect("the file");
+        let mut v: Value = serde_json::from_str(&text).expect("json");
+        v.as_object_mut().expect("an object").remove("quick");
+        v
+    }
+
+    /// The committed 3D file validates; a dimension other than 2 or 3 is refused naming
+    /// `dimension`, and a file without one (the 2D study) means 2.
+    #[test]
+    fn the_dimension_is_two_or_three() {
+        let spec: Spec = serde_json::from_value(file("shear3d.json")).expect("parses");
+        assert_eq!(spec.dimension, 3);
+        spec.validate().expect("valid");
+        for bad in [0, 1, 4] {
+            let mut v = file("shear3d.json");
+            v["dimension"] = json!(bad);
+            let spec: Spec = serde_json::from_value(v).expect("parses");
+            let e = spec.validate().expect_err("refused").to_string();
+            assert!(
+                e.contains("`dimension`") && e.contains("need 2 or 3"),
+                "{e}"
+            );
+        }
+        let spec: Spec = serde_json::from_value(file("shear.json")).expect("parses");
+        assert_eq!(spec.dimension, 2);
+        spec.validate().expect("valid");
+    }
+
+    /// A variation's box length below 3R0 is refused naming the variation's key.
+    #[test]
+    fn a_short_variation_box_is_refused() {
+        let mut v = file("shear3d.json");
+        v["variations"] = json!([{"reduced_area": 0.9, "r0": 8, "length": 2.5}]);
+        let spec: Spec = serde_json::from_value(v).expect("parses");
+        let e = spec.validate().expect_err("refused").to_string();
+        assert!(e.contains("`variations[0].length`"), "{e}");
     }
 }
