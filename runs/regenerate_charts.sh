@@ -25,7 +25,7 @@
 #   pear3d           run pear3d.json (40 000 steps), render --cut y --gif           11 s, measured
 #   budding          study budding budding.json (41 relaxations, h = 2ε/3)   ~32 min (8.5 min CPU), measured
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
-#                    + onset_hessian{,_h1,_h05}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~58 min (36 + 10 + 12, one thread, loaded), measured
+#                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 12 + 10, one thread, loaded), measured
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   shear3d          study shear shear3d.json + shear3d_box.json (3D)   29 + ~16 min on one thread, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 797 s wall (570 s CPU, one thread), measured
@@ -124,7 +124,7 @@ group_onset() {
     out=$WORK/onset_seeds
     study onset onset_seeds.json
     same_names "$out" onset_seeds
-    for f in onset_hessian onset_hessian_h1 onset_hessian_h05; do
+    for f in onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40; do
         out=$WORK/$f
         study onset "$f.json"
         same_names "$out" "$f"
@@ -233,7 +233,6 @@ FIGURES=(
     onset_skewness.png=onset/onset_skewness.png
     onset_seeds_skewness.png=onset_seeds/onset_skewness.png
     onset_eigenvalue.png=onset_hessian/onset_eigenvalue.png
-    onset_hessian_eps.png=onset_hessian/onset_eps.png
     heating_neck.png=heating/heating_neck.png
     heating_w.png=heating/heating_w.png
     heating_w_error.png=heating/heating_w_error.png
