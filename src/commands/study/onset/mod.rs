@@ -1,6 +1,10 @@
 //! `vesicle study onset FILE`: where the prolate leaves up–down symmetry as c̄0 grows (the
 //! onset of budding), converged in ε/R0 and set beside the sharp instability.
 //!
+//! Two methods. `"method": "hessian"` follows the lowest up–down odd eigenvalue of the
+//! symmetric state's second variation to its zero, with no seed ([`hessian`]). The default,
+//! `"seeded"`, described below, relaxes seeded states and classifies them by their skewness.
+//!
 //! For each `R0` of the file (in ε) and each seed strength δ of `seeds`, the start is the
 //! axisymmetric prolate of the reference solver at `v` and `c0[0]`, scaled to `R0` on a box
 //! mirrored across x and y only (a pear breaks the up–down mirror), sized by the heating
