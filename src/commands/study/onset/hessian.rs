@@ -14,7 +14,7 @@
 //! departing state enter it.
 
 use super::budding::{relax_seeded, within};
-use super::{sharp_onset, Onset, Spec};
+use super::{Onset, Relaxation, Spec};
 use crate::engines::stability::OddHessian;
 use crate::engines::Diverged;
 use crate::error::{Error, Result};
@@ -31,20 +31,8 @@ use std::time::Instant;
 pub struct Sample {
     /// R0/ε.
     pub r0: f64,
-    /// `path` or `refine`.
-    pub stage: &'static str,
-    /// c̄0 = c0 R0.
-    pub c0: f64,
-    /// L-BFGS iterations of the symmetric state.
-    pub iterations: usize,
-    /// How the relaxation ended (`stationary` when `stop_residual` was met).
-    pub stopped: String,
-    /// Final stationarity residual.
-    pub residual: f64,
-    /// Reduced bending energy e.
-    pub e: f64,
-    /// Reduced volume of the φ = 0 surface.
-    pub v: f64,
+    /// The relaxation of the symmetric state (stage `path` or `refine`).
+    pub relaxation: Relaxation,
     /// The area multiplier σ* of the state.
     pub sigma: f64,
     /// λ, the lowest eigenvalue of M⁻¹H on up–down odd fields, translation removed.
@@ -80,7 +68,7 @@ struct Path {
 }
 
 impl EigenRun<'_> {
-    /// The path, the refinement and the onset (its sharp columns filled) from the revolved start
+    /// The path, the refinement and the onset (its sharp columns NaN) from the revolved start
     /// contour `(r, z)`.
     ///
     /// # Errors
@@ -127,7 +115,7 @@ impl EigenRun<'_> {
         if samples[n - 1].eigenvalue < 0.0 {
             bracket.0 = samples[n - 2].clone();
             for _ in 0..spec.bisections {
-                let c0 = linear_root(&bracket.0, &bracket.1, |s| s.c0);
+                let c0 = linear_root(&bracket.0, &bracket.1, |s| s.relaxation.c0);
                 let c0 = (c0 * 1e9).round() / 1e9;
                 path.warm_start_below(c0);
                 let s = self.sample(&scene, &mut path, c0, "refine", spec)?;
@@ -142,20 +130,22 @@ impl EigenRun<'_> {
         let (lo, hi) = &bracket;
         let crossed = hi.eigenvalue < 0.0;
         let (onset, v) = if crossed {
-            (linear_root(lo, hi, |s| s.c0), linear_root(lo, hi, |s| s.v))
+            (
+                linear_root(lo, hi, |s| s.relaxation.c0),
+                linear_root(lo, hi, |s| s.relaxation.v),
+            )
         } else {
-            (f64::NAN, lo.v)
+            (f64::NAN, lo.relaxation.v)
         };
-        let sharp = sharp_onset(v, spec.c0[0]).unwrap_or(f64::NAN);
         let result = Onset {
             r0: self.r0,
             seed: 0.0,
-            below: lo.c0,
-            above: if crossed { hi.c0 } else { f64::NAN },
+            below: lo.relaxation.c0,
+            above: if crossed { hi.relaxation.c0 } else { f64::NAN },
             onset,
             v,
-            sharp,
-            shift: onset - sharp,
+            sharp: f64::NAN,
+            shift: f64::NAN,
             relaxations: samples.len(),
             wall_seconds: began.elapsed().as_secs_f64(),
         };
@@ -202,16 +192,9 @@ impl EigenRun<'_> {
                 spec.eigen_products,
             )
             .map_err(failed(c0))?;
-        let (rec, m) = (&relaxed.record, &relaxed.measure);
         let sample = Sample {
             r0: self.r0,
-            stage,
-            c0,
-            iterations: rec.step,
-            stopped: relaxed.stopped.to_string(),
-            residual: rec.residual,
-            e: rec.reduced_energy,
-            v: m.surface.reduced_volume,
+            relaxation: Relaxation::of(stage, c0, &relaxed),
             sigma: hessian.sigma(),
             eigenvalue: lowest.value,
             eigen_residual: lowest.residual,
@@ -224,8 +207,8 @@ impl EigenRun<'_> {
             "R0 = {} eps, c0 R0 = {c0} ({stage}): {} after {} iterations, lowest odd eigenvalue \
              {:.4e} (residual {:.1e}, {} products), translation {:.1e}",
             self.r0,
-            sample.stopped,
-            sample.iterations,
+            sample.relaxation.stopped,
+            sample.relaxation.iterations,
             sample.eigenvalue,
             sample.eigen_residual,
             sample.products,

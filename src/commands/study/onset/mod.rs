@@ -53,14 +53,11 @@ pub use spec::{Method, Spec};
 use std::path::Path;
 use std::time::Instant;
 
-/// One relaxation; a row of `onset_steps.csv`.
+/// What every relaxed state of the study reports, seeded (`Step`) or symmetric (`Sample`): the
+/// columns the two tables share.
 #[derive(Clone, Debug)]
-pub struct Step {
-    /// R0/ε of the run.
-    pub r0: f64,
-    /// Seed strength δ.
-    pub seed: f64,
-    /// `path` (the coarse path) or `bisection`.
+pub struct Relaxation {
+    /// `path` (the coarse path), `bisection` (seeded) or `refine` (hessian).
     pub stage: &'static str,
     /// c̄0 = c0 R0.
     pub c0: f64,
@@ -74,6 +71,33 @@ pub struct Step {
     pub e: f64,
     /// Reduced volume of the φ = 0 surface.
     pub v: f64,
+}
+
+impl Relaxation {
+    /// The relaxation `relaxed` at c̄0 = `c0`, in `stage`.
+    fn of(stage: &'static str, c0: f64, relaxed: &budding::Relaxed) -> Self {
+        let rec = &relaxed.record;
+        Relaxation {
+            stage,
+            c0,
+            iterations: rec.step,
+            stopped: relaxed.stopped.to_string(),
+            residual: rec.residual,
+            e: rec.reduced_energy,
+            v: relaxed.measure.surface.reduced_volume,
+        }
+    }
+}
+
+/// One seeded relaxation; a row of `onset_steps.csv`.
+#[derive(Clone, Debug)]
+pub struct Step {
+    /// R0/ε of the run.
+    pub r0: f64,
+    /// Seed strength δ.
+    pub seed: f64,
+    /// The relaxation.
+    pub relaxation: Relaxation,
     /// Skewness of the volume along z.
     pub skewness: f64,
     /// Neck radius in ε (NaN: none).
@@ -144,31 +168,20 @@ impl Study for OnsetStudy {
         let mut steps = Vec::new();
         let mut samples = Vec::new();
         let mut onsets = Vec::new();
-        if spec.method == Method::Hessian {
-            for &r0 in &spec.r0 {
-                let scene = base_scene(spec, r0, &start.r, &start.z)?;
+        for &r0 in &spec.r0 {
+            let scene = base_scene(spec, r0, &start.r, &start.z)?;
+            if spec.method == Method::Hessian {
                 let run = EigenRun { base: &scene, r0 };
                 let (path, onset) = run.onset(spec, (&start.r, &start.z))?;
                 eprintln!(
-                    "R0 = {r0} eps: lowest odd eigenvalue crosses 0 at c0 R0 = {:.4} (sharp {:.4} \
-                     at v = {:.4}; {} states, {:.0} s)",
-                    onset.onset, onset.sharp, onset.v, onset.relaxations, onset.wall_seconds
+                    "R0 = {r0} eps: lowest odd eigenvalue crosses 0 at c0 R0 = {:.4} (v = {:.4}; \
+                     {} states, {:.0} s)",
+                    onset.onset, onset.v, onset.relaxations, onset.wall_seconds
                 );
                 samples.extend(path);
                 onsets.push(onset);
+                continue;
             }
-            let report = report::eigen_report(spec, &samples, &onsets)?;
-            return Ok((
-                Output {
-                    steps,
-                    samples,
-                    onsets,
-                },
-                report,
-            ));
-        }
-        for &r0 in &spec.r0 {
-            let scene = base_scene(spec, r0, &start.r, &start.z)?;
             for &delta in &spec.seeds {
                 let began = Instant::now();
                 let run = Run {
@@ -192,7 +205,10 @@ impl Study for OnsetStudy {
             o.sharp = sharp_onset(o.v, spec.c0[0]).unwrap_or(f64::NAN);
             o.shift = o.onset - o.sharp;
         });
-        let report = report::report(spec, &steps, &onsets)?;
+        let report = match spec.method {
+            Method::Hessian => report::eigen_report(spec, &samples, &onsets)?,
+            Method::Seeded => report::report(spec, &steps, &onsets)?,
+        };
         Ok((
             Output {
                 steps,
@@ -255,7 +271,7 @@ impl Run<'_> {
             let step = self.relax(&mut problem, c0, "path", &mut area)?;
             let keep = step.symmetric();
             if keep {
-                symmetric = Some((c0, problem.phi.clone(), step.v));
+                symmetric = Some((c0, problem.phi.clone(), step.relaxation.v));
             }
             steps.push(step);
             if !keep {
@@ -280,7 +296,7 @@ impl Run<'_> {
                 problem.phi.assign(&phi_below);
                 let step = self.relax(&mut problem, mid, "bisection", &mut area)?;
                 if step.symmetric() {
-                    (below, v_below) = (mid, step.v);
+                    (below, v_below) = (mid, step.relaxation.v);
                     phi_below = problem.phi.clone();
                 } else {
                     above = mid;
@@ -318,17 +334,11 @@ impl Run<'_> {
         let mut scene = self.base.clone();
         scene.c0 = C0Spec::Uniform(c0 / (self.r0 * eps));
         let relaxed = relax_seeded(problem, scene, (self.r0 * eps, self.seed), area)?;
-        let (rec, m) = (&relaxed.record, &relaxed.measure);
+        let m = &relaxed.measure;
         let step = Step {
             r0: self.r0,
             seed: self.seed,
-            stage,
-            c0,
-            iterations: rec.step,
-            stopped: relaxed.stopped.to_string(),
-            residual: rec.residual,
-            e: rec.reduced_energy,
-            v: m.surface.reduced_volume,
+            relaxation: Relaxation::of(stage, c0, &relaxed),
             skewness: m.skewness,
             neck: m.neck.map_or(f64::NAN, |(r, _)| r / eps),
             pieces: m.pieces,
@@ -338,7 +348,12 @@ impl Run<'_> {
         eprintln!(
             "R0 = {} eps, seed {}, c0 R0 = {c0} ({stage}): {} after {} iterations, skewness \
              {:.4}, {}",
-            self.r0, self.seed, step.stopped, step.iterations, step.skewness, step.state
+            self.r0,
+            self.seed,
+            step.relaxation.stopped,
+            step.relaxation.iterations,
+            step.skewness,
+            step.state
         );
         Ok(step)
     }

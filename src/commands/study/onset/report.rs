@@ -18,7 +18,7 @@
 //! alone. s_∞ is the extrapolated shift; the two fits' difference shows how far the data are
 //! from the linear law.
 
-use super::{Onset, Sample, Spec, Step};
+use super::{Onset, Relaxation, Sample, Spec, Step};
 use crate::commands::study::fit;
 use crate::commands::study::harness::Report;
 use crate::commands::study::table::{self, Column, Format};
@@ -26,25 +26,68 @@ use crate::error::Result;
 use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use std::fmt::Write as _;
 
+/// A row that carries a [`Relaxation`] (its shared columns, [`relaxation_columns`]).
+trait Relaxed {
+    fn relaxation(&self) -> &Relaxation;
+}
+
+impl Relaxed for Step {
+    fn relaxation(&self) -> &Relaxation {
+        &self.relaxation
+    }
+}
+
+impl Relaxed for Sample {
+    fn relaxation(&self) -> &Relaxation {
+        &self.relaxation
+    }
+}
+
+/// The columns of a row's [`Relaxation`]: stage, c̄0, iterations, how it stopped, residual, e, v.
+fn relaxation_columns<R: Relaxed>() -> Vec<Column<R>> {
+    vec![
+        Column::both("stage", "stage", Format::Plain, |r| {
+            r.relaxation().stage.into()
+        }),
+        Column::both("c0", "c0R0", Format::Fixed(4), |r| r.relaxation().c0.into()),
+        Column::both("iterations", "iters", Format::Plain, |r| {
+            r.relaxation().iterations.into()
+        }),
+        Column::both("stopped", "stopped", Format::Plain, |r| {
+            r.relaxation().stopped.as_str().into()
+        }),
+        Column::both("residual", "residual", Format::Sci(1), |r| {
+            r.relaxation().residual.into()
+        }),
+        Column::both("e", "e", Format::Fixed(4), |r| r.relaxation().e.into()),
+        Column::both("v", "v", Format::Fixed(4), |r| r.relaxation().v.into()),
+    ]
+}
+
+/// The warning line for the relaxations of `rows` that stopped before `stop_residual` (none
+/// when every one is stationary).
+fn unconverged<'a>(text: &mut String, rows: impl Iterator<Item = &'a Relaxation>) {
+    let n = rows.filter(|r| r.stopped != "stationary").count();
+    if n > 0 {
+        let _ = writeln!(
+            text,
+            "warning: {n} relaxations stopped before stop_residual: their state is not a \
+             stationary one"
+        );
+    }
+}
+
 impl table::Row for Step {
     fn columns() -> Vec<Column<Self>> {
-        vec![
-            Column::both("r0", "R0/eps", Format::Plain, |r| r.r0.into()),
+        let mut columns = vec![
+            Column::both("r0", "R0/eps", Format::Plain, |r: &Self| r.r0.into()),
             Column::both("seed", "seed", Format::Plain, |r| r.seed.into()),
-            Column::both("stage", "stage", Format::Plain, |r| r.stage.into()),
-            Column::both("c0", "c0R0", Format::Fixed(4), |r| r.c0.into()),
-            Column::both("iterations", "iters", Format::Plain, |r| {
-                r.iterations.into()
+        ];
+        columns.extend(relaxation_columns());
+        columns.extend([
+            Column::both("skewness", "skew", Format::Fixed(4), |r: &Self| {
+                r.skewness.into()
             }),
-            Column::both("stopped", "stopped", Format::Plain, |r| {
-                r.stopped.as_str().into()
-            }),
-            Column::both("residual", "residual", Format::Sci(1), |r| {
-                r.residual.into()
-            }),
-            Column::both("e", "e", Format::Fixed(4), |r| r.e.into()),
-            Column::both("v", "v", Format::Fixed(4), |r| r.v.into()),
-            Column::both("skewness", "skew", Format::Fixed(4), |r| r.skewness.into()),
             Column::both("neck", "neck/eps", Format::Fixed(2), |r| r.neck.into()),
             Column::both("pieces", "pieces", Format::Plain, |r| r.pieces.into()),
             Column::both("state", "state", Format::Plain, |r| r.state.as_str().into()),
@@ -52,7 +95,8 @@ impl table::Row for Step {
                 r.wall_seconds.into()
             })
             .unit("s"),
-        ]
+        ]);
+        columns
     }
 }
 
@@ -195,14 +239,7 @@ pub fn report(spec: &Spec, steps: &[Step], onsets: &[Onset]) -> Result<Report> {
         spec.v, spec.c0[0], spec.bisections
     );
     text.push_str(&table::text(steps));
-    let unconverged = steps.iter().filter(|s| s.stopped != "stationary").count();
-    if unconverged > 0 {
-        let _ = writeln!(
-            text,
-            "warning: {unconverged} relaxations stopped before stop_residual: their state is \
-             not a stationary one"
-        );
-    }
+    unconverged(&mut text, steps.iter().map(|s| &s.relaxation));
     text.push('\n');
     text.push_str(&table::text(onsets));
     let _ = writeln!(
@@ -269,7 +306,7 @@ fn skewness_chart(spec: &Spec, steps: &[Step]) -> Figure {
             let mut pts: Vec<(f64, f64)> = steps
                 .iter()
                 .filter(|s| s.r0 == r0 && s.seed == seed && s.skewness != 0.0)
-                .map(|s| (s.c0, s.skewness.abs()))
+                .map(|s| (s.relaxation.c0, s.skewness.abs()))
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             fig.push(Series::new(
@@ -365,22 +402,12 @@ fn shift_chart(series: Vec<(String, Vec<(f64, f64)>)>, onsets: &[Onset]) -> Figu
 
 impl table::Row for Sample {
     fn columns() -> Vec<Column<Self>> {
-        vec![
-            Column::both("r0", "R0/eps", Format::Plain, |r| r.r0.into()),
-            Column::both("stage", "stage", Format::Plain, |r| r.stage.into()),
-            Column::both("c0", "c0R0", Format::Fixed(4), |r| r.c0.into()),
-            Column::both("iterations", "iters", Format::Plain, |r| {
-                r.iterations.into()
-            }),
-            Column::both("stopped", "stopped", Format::Plain, |r| {
-                r.stopped.as_str().into()
-            }),
-            Column::both("residual", "residual", Format::Sci(1), |r| {
-                r.residual.into()
-            }),
-            Column::both("e", "e", Format::Fixed(4), |r| r.e.into()),
-            Column::both("v", "v", Format::Fixed(4), |r| r.v.into()),
-            Column::both("sigma", "sigma", Format::Sci(3), |r| r.sigma.into()),
+        let mut columns = vec![Column::both("r0", "R0/eps", Format::Plain, |r: &Self| {
+            r.r0.into()
+        })];
+        columns.extend(relaxation_columns());
+        columns.extend([
+            Column::both("sigma", "sigma", Format::Sci(3), |r: &Self| r.sigma.into()),
             Column::both("eigenvalue", "lowest odd eigenvalue", Format::Sci(4), |r| {
                 r.eigenvalue.into()
             }),
@@ -395,7 +422,8 @@ impl table::Row for Sample {
                 r.wall_seconds.into()
             })
             .unit("s"),
-        ]
+        ]);
+        columns
     }
 }
 
@@ -417,14 +445,7 @@ pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result
         spec.v, spec.c0[0], spec.bisections
     );
     text.push_str(&table::text(samples));
-    let unconverged = samples.iter().filter(|s| s.stopped != "stationary").count();
-    if unconverged > 0 {
-        let _ = writeln!(
-            text,
-            "warning: {unconverged} relaxations stopped before stop_residual: their state is \
-             not a stationary one"
-        );
-    }
+    unconverged(&mut text, samples.iter().map(|s| &s.relaxation));
     let loose = samples
         .iter()
         .filter(|s| s.eigen_residual > spec.eigen_tolerance)
@@ -487,7 +508,7 @@ fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure
         let mut pts: Vec<(f64, f64)> = samples
             .iter()
             .filter(|s| s.r0 == r0)
-            .map(|s| (s.c0, s.eigenvalue * r0.powi(4)))
+            .map(|s| (s.relaxation.c0, s.eigenvalue * r0.powi(4)))
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         for p in &pts {
