@@ -57,6 +57,7 @@
 
 use super::evaluator::Symbols;
 use super::transform::Transform;
+use super::viscous::{SolveStats, Viscosities};
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::problem::config::FlowSpec;
 use crate::problem::grid::{AxisKind, Grid};
@@ -72,8 +73,12 @@ use std::ops::{Add, Div, Mul, Neg, Range, Sub};
 pub struct FlowStats {
     /// max over the grid of |u|.
     pub max_speed: f64,
-    /// η∫|∇u|² = η Σ_k w |k|² |û|², the rate at which the fluid dissipates energy.
+    /// η∫|∇u|² = η Σ_k w |k|² |û|², the rate at which the fluid dissipates energy (with
+    /// unequal viscosities ∫2η|D(u)|², [`super::viscous`]).
     pub dissipation: f64,
+    /// The most conjugate-gradient iterations one Stokes solve took (0 at equal viscosities,
+    /// whose solve is direct).
+    pub solve_iterations: usize,
 }
 
 /// The flow's constants, tables and scratch (two spectra per velocity component and one
@@ -112,6 +117,10 @@ pub struct Flow {
     shear: Option<Vec<f64>>,
     /// σ_f of a fixed tension: one flow at μ_b + σ_fμ_σ, no part per unit σ (`None`: split).
     fixed_tension: Option<f64>,
+    /// The variable-viscosity solve when η_in ≠ η_out ([`super::viscous`]; periodic boxes).
+    viscosities: Option<Viscosities>,
+    /// What its solves of the last evaluation did.
+    solve_stats: SolveStats,
 }
 
 impl Flow {
@@ -176,6 +185,11 @@ impl Flow {
             component: [zeros(), zeros()],
             speed_sq: zeros(),
             shear,
+            viscosities: spec
+                .viscosity_inside
+                .filter(|&inside| inside != spec.viscosity)
+                .map(|inside| Viscosities::new(spec.viscosity, inside, axes.len(), transform)),
+            solve_stats: SolveStats::default(),
             axes,
             fixed_tension: None,
         }
@@ -232,6 +246,7 @@ impl Flow {
     ) -> FlowStats {
         let e4x2 = 2.0 * eps.powi(4);
         let c_sigma = TENSION_FACTOR * eps;
+        let hat_spectrum = hat;
         // The flows: at σ = 0 and per unit σ, or the one at the fixed tension.
         let (parts, fixed, sigma) = match self.fixed_tension {
             None => (2, 0.0, sigma),
@@ -294,7 +309,27 @@ impl Flow {
             self.turn::<T>(part, T::picture);
             self.project::<T>(sym, part);
         }
-        let dissipation = self.dissipation::<T>(sym, sigma);
+        let dissipation = match self.viscosities.as_mut() {
+            Some(viscous) => {
+                // Periodic axes only: no component is odd, so the picture is the storage.
+                viscous.set_state(transform, hat_spectrum);
+                let mut stats = SolveStats::default();
+                for part in 0..parts {
+                    let s = viscous.solve(
+                        transform,
+                        sym,
+                        (&self.kappa, &self.axes),
+                        part,
+                        &mut self.components[part],
+                    );
+                    stats.iterations = stats.iterations.max(s.iterations);
+                    stats.residual = stats.residual.max(s.residual);
+                }
+                self.solve_stats = stats;
+                viscous.dissipation(sym, &self.components, parts, sigma)
+            }
+            None => self.dissipation::<T>(sym, sigma),
+        };
         for part in 0..parts {
             self.turn::<T>(part, T::stored);
         }
@@ -344,6 +379,7 @@ impl Flow {
         FlowStats {
             max_speed: max_speed_sq.sqrt(),
             dissipation,
+            solve_iterations: self.solve_stats.iterations,
         }
     }
 
@@ -498,7 +534,7 @@ impl Flow {
 /// picture is the sine coefficients themselves — the periodic picture times i, a factor common
 /// to every component, which the linear projection carries through — so no complex arithmetic
 /// is done.
-trait Coefficient:
+pub(super) trait Coefficient:
     Pod
     + Default
     + Send
@@ -568,7 +604,7 @@ impl Coefficient for f64 {
 
 /// Call `f(i, [j0, j1, j2], (|k|², w), &mut out)` on every mode `i` of `spectrum` (its modes'
 /// indices of shape `modes`, [`Coefficient`] `T` each) in parallel chunks.
-fn modes_mut<T: Coefficient>(
+pub(super) fn modes_mut<T: Coefficient>(
     spectrum: &mut Array3<Complex64>,
     modes: [usize; 3],
     sym: &Symbols,
@@ -589,7 +625,10 @@ fn modes_mut<T: Coefficient>(
 /// (j0, j1, j2): [`index_of`] of the first, the others counted on along the last axis (no
 /// division a mode).
 #[inline]
-fn indexed(range: Range<usize>, modes: [usize; 3]) -> impl Iterator<Item = (usize, [usize; 3])> {
+pub(super) fn indexed(
+    range: Range<usize>,
+    modes: [usize; 3],
+) -> impl Iterator<Item = (usize, [usize; 3])> {
     let [_, s1, s2] = modes;
     let mut idx = index_of(range.start, modes);
     range.map(move |i| {
@@ -615,7 +654,7 @@ fn index_of(i: usize, [_, s1, s2]: [usize; 3]) -> [usize; 3] {
 
 /// |k|² and the Parseval weight w of the mode at `idx`.
 #[inline]
-fn mode_symbols(sym: &Symbols, [i0, i1, i2]: [usize; 3]) -> (f64, f64) {
+pub(super) fn mode_symbols(sym: &Symbols, [i0, i1, i2]: [usize; 3]) -> (f64, f64) {
     (
         sym.k2[0][i0] + sym.k2[1][i1] + sym.k2[2][i2],
         sym.weight[0][i0] * sym.weight[1][i1] * sym.weight[2][i2],
@@ -671,6 +710,7 @@ mod tests {
                 viscosity: 1.0,
                 mobility: 0.01,
                 shear_rate: Some(rate),
+                viscosity_inside: None,
             });
             let u = ev
                 .velocity_at(&Array3::from_elem(grid.shape, -1.0), 0.0)
@@ -711,6 +751,7 @@ mod tests {
                 viscosity: 1.7,
                 mobility: 0.05,
                 shear_rate: None,
+                viscosity_inside: None,
             },
         );
         let boxes: [(&[usize], &[bool], &[bool]); 9] = [

@@ -10,6 +10,7 @@ pub(crate) mod pieces;
 pub(crate) mod saved;
 pub mod stepper;
 pub mod update;
+pub mod viscous;
 
 pub use engine::{stability_bound, CpuPasses, SpectralEngine};
 pub use stepper::{DeviceFailure, DeviceState, Passes, States, Stepper};

@@ -250,6 +250,10 @@ pub struct FlowSpec {
     /// centre), the Stokes flow of the body force ηγ̇k₀ sin(k₀y) x̂: shear rate γ̇ at y = 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shear_rate: Option<f64>,
+    /// η_in > 0, the viscosity inside the membrane (χ = (1 + φ)/2 > 1/2), when it differs from
+    /// the outside's `viscosity`: η(x) = η_out + (η_in − η_out)χ (periodic boxes only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub viscosity_inside: Option<f64>,
 }
 
 /// `adaptive`: a flag or the controller's settings.

@@ -3,7 +3,7 @@
 
 use super::c0::{C0Field, C0Spec};
 use super::scene::{
-    axis_index, AreaMethod, Dynamics, Method, Scene, Scheme, Symmetry, MAX_LBFGS_MEMORY,
+    axis_index, AreaMethod, Dynamics, FlowSpec, Method, Scene, Scheme, Symmetry, MAX_LBFGS_MEMORY,
 };
 use super::shapes::{AxisymBranch, Initial, Shape};
 use crate::error::{Error, Result};
@@ -241,6 +241,38 @@ impl Scene {
         }
     }
 
+    /// Unequal viscosities (`flow.viscosity_inside` ≠ `flow.viscosity`) run on the periodic
+    /// box: no declared mirror plane, no walls, and no imposed shear (whose profile is the
+    /// equal-viscosity Stokes flow).
+    fn validate_contrast(&self, flow: FlowSpec) -> Result<()> {
+        if flow.viscosity_inside == Some(flow.viscosity) {
+            return Ok(());
+        }
+        if let Symmetry::Axes(axes) = &self.symmetry {
+            if !axes.is_empty() {
+                return Err(Error::config(
+                    "symmetry",
+                    "unequal viscosities (flow.viscosity_inside) run on the periodic box: drop the \
+                     mirror planes (\"symmetry\": [] or \"auto\", which then takes none)",
+                ));
+            }
+        }
+        if !self.walls.is_empty() {
+            return Err(Error::config(
+                "walls",
+                "unequal viscosities (flow.viscosity_inside) run on the periodic box: drop the walls",
+            ));
+        }
+        if flow.shear_rate.is_some() {
+            return Err(Error::config(
+                "flow.shear_rate",
+                "the imposed shear is the equal-viscosity Stokes flow; it is not taken with \
+                 flow.viscosity_inside",
+            ));
+        }
+        Ok(())
+    }
+
     /// `dynamics: "stokes"` needs `flow` with η > 0 and M > 0, the spectral CPU engine with its
     /// spectral Laplacian (on any box: periodic, mirrored or walled axes in any mix), and no
     /// area-difference term; an imposed shear along x, varying along y, takes neither an x nor
@@ -265,6 +297,10 @@ impl Scene {
         positive("flow.mobility", flow.mobility)?;
         if let Some(g) = flow.shear_rate {
             finite("flow.shear_rate", g)?;
+        }
+        if let Some(inside) = flow.viscosity_inside {
+            positive("flow.viscosity_inside", inside)?;
+            self.validate_contrast(flow)?;
         }
         if self.method == Method::Fd {
             return Err(Error::config(

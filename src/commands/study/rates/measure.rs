@@ -70,6 +70,8 @@ pub struct Case {
     pub box_ratio: f64,
     /// Run on the quarter box mirrored about x and y (the sphere only: `"symmetry": ["x", "y"]`).
     pub mirror: bool,
+    /// λ = η_in/η_out.
+    pub viscosity_ratio: f64,
 }
 
 /// What one case measured; a row of `cases.csv`.
@@ -108,19 +110,23 @@ fn kappa() -> f64 {
     bending_modulus(1.0)
 }
 
-/// The sharp rate of `case` in free space, in units of 1/time, at viscosity `eta`.
+/// The sharp rate of `case` in free space, in units of 1/time, at the outside viscosity `eta`
+/// (η_in = λη): the equal-viscosity rate times the contrast's factor.
 pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
-    let r = case.size;
+    let (r, lambda) = (case.size, case.viscosity_ratio);
     match case.kind {
         Kind::Circle => {
             theory::circle_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3))
+                * theory::planar_contrast_factor(lambda)
         }
         Kind::Sphere => {
             theory::sphere_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3))
+                * theory::sphere_contrast_factor(case.mode, lambda)
         }
         Kind::Flat => {
             let k = 2.0 * PI / r;
             theory::flat_rate(k, kappa(), case.sigma_bar * kappa() * k * k, eta)
+                * theory::planar_contrast_factor(lambda)
         }
     }
 }
@@ -128,7 +134,11 @@ pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
 /// The box factor of `case`.
 pub fn box_factor(case: &Case) -> f64 {
     match case.kind {
-        Kind::Circle => theory::box_factor(2, case.mode, 1.0 / case.box_ratio),
+        Kind::Circle => theory::circle_box_factor_with_contrast(
+            case.mode,
+            1.0 / case.box_ratio,
+            case.viscosity_ratio,
+        ),
         Kind::Sphere => theory::box_factor(3, case.mode, 1.0 / case.box_ratio),
         Kind::Flat => 1.0,
     }
@@ -177,13 +187,14 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
         ),
     };
     let mut value = json!({
-        "description": format!("rates study: {} mode {} sigma_bar {} size {}",
-            case.kind.name(), case.mode, case.sigma_bar, r),
+        "description": format!("rates study: {} mode {} sigma_bar {} size {} viscosity ratio {}",
+            case.kind.name(), case.mode, case.sigma_bar, r, case.viscosity_ratio),
         "dim": dim, "n": n, "h": h, "eps": 1.0,
         "scheme": "sbdf2", "dt": dt, "t_end": t_end,
         "prepare_steps": spec.prepare_steps,
         "dynamics": "stokes",
-        "flow": {"viscosity": spec.viscosity, "mobility": spec.mobility},
+        "flow": {"viscosity": spec.viscosity, "mobility": spec.mobility,
+                 "viscosity_inside": case.viscosity_ratio * spec.viscosity},
         "area": {"method": "fixed", "sigma": sigma},
         "initial": initial,
     });

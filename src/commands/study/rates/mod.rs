@@ -34,6 +34,9 @@ impl Row for Measured {
             Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| {
                 r.case.sigma_bar.into()
             }),
+            Column::both("viscosity_ratio", "eta_in/eta_out", Format::Plain, |r| {
+                r.case.viscosity_ratio.into()
+            }),
             Column::both("size", "R or lambda", Format::Plain, |r: &Self| {
                 r.case.size.into()
             })
@@ -81,7 +84,9 @@ pub struct Rate {
     pub mode: usize,
     /// σ̄.
     pub sigma_bar: f64,
-    /// Γ ηR³/κ of the sharp theory (closed vesicles), or Γ/(κk³/4η) − 1 = σ̄ (flat: NaN).
+    /// η_in/η_out.
+    pub viscosity_ratio: f64,
+    /// Γ η_outR³/κ of the sharp theory (closed vesicles; with the contrast's factor), or Γ/(κk³/4η) − 1 = σ̄ (flat: NaN).
     pub reduced_theory: f64,
     /// The ratio at each size, smallest ε/R last: "0.9519 0.9730 0.9829".
     pub ratios: String,
@@ -100,6 +105,9 @@ impl Row for Rate {
             Column::both("mode", "mode", Format::Plain, |r| r.mode.into()),
             Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| {
                 r.sigma_bar.into()
+            }),
+            Column::both("viscosity_ratio", "eta_in/eta_out", Format::Plain, |r| {
+                r.viscosity_ratio.into()
             }),
             Column::both("reduced_theory", "G eta R^3/kappa", Format::Fixed(4), |r| {
                 r.reduced_theory.into()
@@ -182,19 +190,22 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
             sizes.sort_by(f64::total_cmp);
             for &mode in &g.modes {
                 for &sigma_bar in &g.sigma_bar {
-                    out.push(
-                        sizes
-                            .iter()
-                            .map(|&size| Case {
-                                kind,
-                                mode,
-                                sigma_bar,
-                                size,
-                                box_ratio: f.box_over_r,
-                                mirror: f.mirror,
-                            })
-                            .collect(),
-                    );
+                    for &viscosity_ratio in &g.viscosity_ratio {
+                        out.push(
+                            sizes
+                                .iter()
+                                .map(|&size| Case {
+                                    kind,
+                                    mode,
+                                    sigma_bar,
+                                    size,
+                                    box_ratio: f.box_over_r,
+                                    mirror: f.mirror,
+                                    viscosity_ratio,
+                                })
+                                .collect(),
+                        );
+                    }
                 }
             }
         }
@@ -203,19 +214,22 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
         let mut sizes = f.wavelengths.clone();
         sizes.sort_by(f64::total_cmp);
         for &sigma_bar in &f.sigma_bar {
-            out.push(
-                sizes
-                    .iter()
-                    .map(|&size| Case {
-                        kind: Kind::Flat,
-                        mode: 0,
-                        sigma_bar,
-                        size,
-                        box_ratio: f.height,
-                        mirror: false,
-                    })
-                    .collect(),
-            );
+            for &viscosity_ratio in &f.viscosity_ratio {
+                out.push(
+                    sizes
+                        .iter()
+                        .map(|&size| Case {
+                            kind: Kind::Flat,
+                            mode: 0,
+                            sigma_bar,
+                            size,
+                            box_ratio: f.height,
+                            mirror: false,
+                            viscosity_ratio,
+                        })
+                        .collect(),
+                );
+            }
         }
     }
     out
@@ -249,10 +263,13 @@ fn extrapolate(group: &[Measured]) -> Rate {
         membrane: first.kind.name(),
         mode: first.mode,
         sigma_bar: first.sigma_bar,
+        viscosity_ratio: first.viscosity_ratio,
         reduced_theory: match first.kind {
-            Kind::Circle => crate::problem::flow::circle_rate(first.mode, first.sigma_bar),
-            Kind::Sphere => crate::problem::flow::sphere_rate(first.mode, first.sigma_bar),
             Kind::Flat => f64::NAN,
+            _ => {
+                first.size.powi(3) * measure::sharp_rate(first, 1.0)
+                    / crate::problem::flow::bending_modulus(1.0)
+            }
         },
         ratios: group
             .iter()
@@ -279,22 +296,30 @@ fn chart(cases: &[Measured]) -> Figure {
         Shape::Triangle,
         Shape::Diamond,
     ];
-    let mut keys: Vec<(Kind, usize, f64)> = Vec::new();
+    let key = |m: &Measured| {
+        let c = &m.case;
+        (c.kind, c.mode, c.sigma_bar, c.viscosity_ratio)
+    };
+    let mut keys: Vec<(Kind, usize, f64, f64)> = Vec::new();
     for m in cases {
-        let key = (m.case.kind, m.case.mode, m.case.sigma_bar);
-        if !keys.contains(&key) {
-            keys.push(key);
+        if !keys.contains(&key(m)) {
+            keys.push(key(m));
         }
     }
-    for (i, &(kind, mode, sigma_bar)) in keys.iter().enumerate() {
+    for (i, &(kind, mode, sigma_bar, lambda)) in keys.iter().enumerate() {
         let pts = cases
             .iter()
-            .filter(|m| (m.case.kind, m.case.mode, m.case.sigma_bar) == (kind, mode, sigma_bar))
+            .filter(|m| key(m) == (kind, mode, sigma_bar, lambda))
             .map(|m| (1.0 / m.case.size, m.ratio))
             .collect();
+        let contrast = if lambda == 1.0 {
+            String::new()
+        } else {
+            format!(", eta_in/eta_out {lambda}")
+        };
         let label = match kind {
-            Kind::Flat => format!("flat, sigma_bar {sigma_bar}"),
-            _ => format!("{} {mode}, sigma_bar {sigma_bar}", kind.name()),
+            Kind::Flat => format!("flat, sigma_bar {sigma_bar}{contrast}"),
+            _ => format!("{} {mode}, sigma_bar {sigma_bar}{contrast}", kind.name()),
         };
         fig.push(Series::new(
             label,

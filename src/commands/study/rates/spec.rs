@@ -72,6 +72,16 @@ pub struct Group {
     pub sigma_bar: Vec<f64>,
     /// R/ε of each size (at least two: the rate is extrapolated in ε/R).
     pub r0: Vec<f64>,
+    /// λ = η_in/η_out of each case (η_out the spec's `viscosity`; unequal viscosities run the
+    /// circle on the full periodic box; the sphere is not taken, its box factor being known at
+    /// λ = 1 only).
+    #[serde(default = "equal_viscosities")]
+    pub viscosity_ratio: Vec<f64>,
+}
+
+/// λ = 1.
+fn equal_viscosities() -> Vec<f64> {
+    vec![1.0]
 }
 
 /// Wavelengths of the flat membrane.
@@ -84,6 +94,9 @@ pub struct Flat {
     pub sigma_bar: Vec<f64>,
     /// The box's height over λ (the slab is half of it: the two interfaces λ·height/2 apart).
     pub height: f64,
+    /// η_in/η_out of each case (inside the slab over outside).
+    #[serde(default = "equal_viscosities")]
+    pub viscosity_ratio: Vec<f64>,
 }
 
 impl Spec {
@@ -116,6 +129,19 @@ impl Spec {
                 f.validate().map_err(|e| within(key, e))?;
             }
         }
+        if let Some(f) = &self.sphere {
+            if f.groups
+                .iter()
+                .flat_map(|g| &g.viscosity_ratio)
+                .any(|&l| l != 1.0)
+            {
+                return Err(Error::config(
+                    "sphere.groups.viscosity_ratio",
+                    "the quasi-sphere's box factor is known at equal viscosities only: run \
+                     unequal viscosities on the circle or the flat membrane",
+                ));
+            }
+        }
         let mirrored_circle = self.circle.as_ref().filter(|f| f.mirror);
         if let Some(n) = mirrored_circle.and_then(|f| {
             f.groups
@@ -144,6 +170,7 @@ impl Spec {
                     "need values ≥ 0, at least one",
                 ));
             }
+            ratios(&f.viscosity_ratio).map_err(|e| within("flat", e))?;
             if !at_least(f.height, 2.0) {
                 return Err(Error::config(
                     "flat.height",
@@ -155,8 +182,31 @@ impl Spec {
     }
 }
 
+/// Every λ = η_in/η_out > 0, at least one.
+fn ratios(values: &[f64]) -> Result<()> {
+    if values.is_empty() || values.iter().any(|&l| !(l > 0.0 && l.is_finite())) {
+        return Err(Error::config(
+            "viscosity_ratio",
+            "need values η_in/η_out > 0, at least one",
+        ));
+    }
+    Ok(())
+}
+
 impl Family {
     fn validate(&self) -> Result<()> {
+        if self.mirror
+            && self
+                .groups
+                .iter()
+                .flat_map(|g| &g.viscosity_ratio)
+                .any(|&l| l != 1.0)
+        {
+            return Err(Error::config(
+                "mirror",
+                "unequal viscosities run on the full periodic box: drop mirror",
+            ));
+        }
         if !at_least(self.box_over_r, 2.5) {
             return Err(Error::config(
                 "box",
@@ -182,6 +232,7 @@ impl Group {
         if self.sigma_bar.is_empty() || self.sigma_bar.iter().any(|s| !at_least(*s, 0.0)) {
             return Err(Error::config("sigma_bar", "need values ≥ 0, at least one"));
         }
+        ratios(&self.viscosity_ratio)?;
         if self.r0.len() < 2 || self.r0.iter().any(|r| !at_least(*r, 6.0)) {
             return Err(Error::config(
                 "r0",
