@@ -1057,6 +1057,34 @@ fn a_mirrored_circle_in_the_rates_study_is_exit_2() {
     assert!(!out.exists());
 }
 
+/// The rates study takes unequal viscosities on the circle and the flat membrane only: the
+/// quasi-sphere's box factor is known at equal viscosities, so a sphere group with a
+/// `viscosity_ratio` other than 1 is refused with exit 2 naming it, before anything is written.
+#[test]
+fn a_sphere_with_unequal_viscosities_in_the_rates_study_is_exit_2() {
+    let tmp = TempDir::new().unwrap();
+    let text = fs::read_to_string(runs_dir().join("studies").join("rates.json")).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["sphere"]["groups"][0]["viscosity_ratio"] = serde_json::json!([1, 5]);
+    let bad = tmp.path().join("rates_sphere_contrast.json");
+    fs::write(&bad, v.to_string()).unwrap();
+    let out = tmp.path().join("o");
+    let o = vesicle([
+        OsStr::new("study"),
+        OsStr::new("rates"),
+        bad.as_os_str(),
+        OsStr::new("--out"),
+        out.as_os_str(),
+    ]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("sphere.groups.viscosity_ratio"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+}
+
 // ---------------------------------------------------------------------------------------------
 // Blow-up
 // ---------------------------------------------------------------------------------------------

@@ -52,17 +52,21 @@ pub struct Record {
 pub struct FlowColumns {
     /// max|u| over the grid.
     pub max_speed: f64,
-    /// η∫|∇u|², the energy the fluid dissipates per unit time.
+    /// η∫|∇u|² (∫2η|D(u)|² with unequal viscosities), the energy the fluid dissipates per
+    /// unit time.
     pub dissipation: f64,
+    /// The most conjugate-gradient iterations one Stokes solve of the step's last evaluation
+    /// took (0 at equal viscosities, whose solve is direct).
+    pub stokes_iterations: f64,
 }
 
 /// The names of [`FlowColumns`], as the CSV header appends them.
-pub const FLOW_COLUMNS: [&str; 2] = ["max_speed", "dissipation"];
+pub const FLOW_COLUMNS: [&str; 3] = ["max_speed", "dissipation", "stokes_iterations"];
 
 impl FlowColumns {
     /// The values in the order of [`FLOW_COLUMNS`].
-    pub fn values(&self) -> [f64; 2] {
-        [self.max_speed, self.dissipation]
+    pub fn values(&self) -> [f64; 3] {
+        [self.max_speed, self.dissipation, self.stokes_iterations]
     }
 }
 
@@ -185,6 +189,7 @@ impl Record {
             flow: engine.flow().map(|f| FlowColumns {
                 max_speed: f.max_speed,
                 dissipation: f.dissipation,
+                stokes_iterations: f.solve_iterations as f64,
             }),
         }
     }
@@ -369,9 +374,10 @@ fn parse_row(line: &str) -> Option<Record> {
         _ => None,
     };
     let flow = match rest[..] {
-        [max_speed, dissipation] => Some(FlowColumns {
+        [max_speed, dissipation, stokes_iterations] => Some(FlowColumns {
             max_speed,
             dissipation,
+            stokes_iterations,
         }),
         _ => None,
     };
