@@ -56,3 +56,22 @@ def test_walls_bound_a_couette_flow():
     with pytest.raises(vesicle.InvalidInput) as err:
         vesicle.Scene(stokes(walls=["x"], **sheared))
     assert err.value.field == "walls"
+
+
+def test_unequal_viscosities_solve_iteratively_and_refuse_mirror_planes():
+    """`flow.viscosity_inside` passes through `Scene`: the Stokes solve then iterates (the
+    records' `stokes_iterations` > 0, against 0 at equal viscosities), a more viscous inside
+    moves the fluid more slowly (smaller max|u| after the same steps from the same start), and a
+    mirror plane is refused naming the key."""
+    equal = vesicle.Simulation(stokes(max_steps=4))
+    viscous = vesicle.Simulation(
+        stokes(max_steps=4, flow={"viscosity": 1.0, "mobility": 0.01, "viscosity_inside": 5.0}))
+    equal.run()
+    viscous.run()
+    assert equal.record["stokes_iterations"] == 0
+    assert viscous.record["stokes_iterations"] > 0
+    assert viscous.record["max_speed"] < equal.record["max_speed"]
+    contrast = {"viscosity": 1.0, "mobility": 0.01, "viscosity_inside": 5.0}
+    with pytest.raises(vesicle.InvalidInput) as err:
+        vesicle.Scene(stokes(symmetry=["x"], flow=contrast))
+    assert err.value.field == "symmetry"

@@ -115,6 +115,9 @@ pub struct Flow {
     speed_sq: Array3<f64>,
     /// The imposed shear flow u_x(y) along the y axis's points (`None`: no imposed flow).
     shear: Option<Vec<f64>>,
+    /// Its strain rate u_x'(y) along the y axis's points, with unequal viscosities (periodic
+    /// Kolmogorov flow only).
+    shear_gradient: Option<Vec<f64>>,
     /// σ_f of a fixed tension: one flow at μ_b + σ_fμ_σ, no part per unit σ (`None`: split).
     fixed_tension: Option<f64>,
     /// The variable-viscosity solve when η_in ≠ η_out ([`super::viscous`]; periodic boxes).
@@ -170,6 +173,17 @@ impl Flow {
                 coords.map(|y| rate / k0 * (k0 * y).sin()).collect()
             }
         });
+        // With unequal viscosities the imposed flow is not the Stokes flow of the body force
+        // that drives it: its strain rate u_x'(y) = γ̇cos(k₀y) is kept for the force it then
+        // exerts ([`Viscosities::add_imposed_strain_force`]).
+        let contrast = spec.viscosity_inside.is_some_and(|v| v != spec.viscosity);
+        let shear_gradient = spec.shear_rate.filter(|_| contrast).map(|rate| {
+            let n = real[axes[1]];
+            let k0 = 2.0 * std::f64::consts::PI / (n as f64 * h);
+            (0..n)
+                .map(|j| rate * (k0 * (j as f64 + 0.5 - n as f64 / 2.0) * h).cos())
+                .collect()
+        });
         Flow {
             viscosity: spec.viscosity,
             mobility: spec.mobility,
@@ -185,6 +199,7 @@ impl Flow {
             component: [zeros(), zeros()],
             speed_sq: zeros(),
             shear,
+            shear_gradient,
             viscosities: spec
                 .viscosity_inside
                 .filter(|&inside| inside != spec.viscosity)
@@ -305,14 +320,24 @@ impl Flow {
                 transform.forward(&mut self.component[0], &mut self.components[part][c]);
             }
         }
+        if let Some(viscous) = self.viscosities.as_mut() {
+            // Periodic axes only: no component is odd, so the picture is the storage.
+            viscous.set_state(transform, hat_spectrum);
+            if let Some(gradient) = &self.shear_gradient {
+                viscous.add_imposed_strain_force(
+                    transform,
+                    (&self.kappa, &self.axes),
+                    gradient,
+                    &mut self.components[0],
+                );
+            }
+        }
         for part in 0..parts {
             self.turn::<T>(part, T::picture);
             self.project::<T>(sym, part);
         }
         let dissipation = match self.viscosities.as_mut() {
             Some(viscous) => {
-                // Periodic axes only: no component is odd, so the picture is the storage.
-                viscous.set_state(transform, hat_spectrum);
                 let mut stats = SolveStats::default();
                 for part in 0..parts {
                     let s = viscous.solve(
@@ -731,6 +756,42 @@ mod tests {
                     (ux - expected).abs() < 1e-14 && uy.abs() < 1e-14,
                     "walls {walls}: {ux} {uy}"
                 );
+            }
+        }
+    }
+
+    /// Unequal viscosities under the imposed Kolmogorov shear: a box filled with the inside's
+    /// fluid (φ ≡ 1: μ = 0, no membrane force; η = η_in everywhere) is driven by the same body
+    /// force η_out γ̇k₀ sin(k₀y) x̂ as the outside's, so its flow is the imposed one slowed by
+    /// η_out/η_in: u_x = (η_out/η_in)(γ̇/k₀) sin(k₀y), u_y = 0, to the solve's tolerance (1e-9
+    /// of γ̇/k₀), at η_in/η_out = 4 and 1/4. A box of the outside's fluid (φ ≡ −1) carries the
+    /// imposed flow unchanged. Leaving the imposed strain's force out would give the imposed
+    /// flow in both.
+    #[test]
+    fn the_inside_fluid_carries_the_shear_slowed_by_its_viscosity() {
+        let rate = 0.01;
+        let grid = Grid::new(&[12, 16], 0.5, &[false, false]);
+        let k0 = 2.0 * std::f64::consts::PI / 8.0;
+        for inside in [4.0, 0.25] {
+            for (phi, slowed) in [(1.0, 1.0 / inside), (-1.0, 1.0)] {
+                let mut ev = plain_evaluator(&grid).with_flow(FlowSpec {
+                    viscosity: 1.0,
+                    mobility: 0.01,
+                    shear_rate: Some(rate),
+                    viscosity_inside: Some(inside),
+                });
+                let u = ev
+                    .velocity_at(&Array3::from_elem(grid.shape, phi), 0.0)
+                    .expect("finite")
+                    .expect("a flow");
+                for (((_, _, j), &ux), &uy) in u[0].indexed_iter().zip(u[1].iter()) {
+                    let y = grid.coords(2)[j];
+                    let expected = slowed * rate / k0 * (k0 * y).sin();
+                    assert!(
+                        (ux - expected).abs() < 1e-9 * rate / k0 && uy.abs() < 1e-9 * rate / k0,
+                        "inside {inside}, φ {phi}: {ux} against {expected}, u_y {uy}"
+                    );
+                }
             }
         }
     }

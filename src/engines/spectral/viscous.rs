@@ -107,6 +107,38 @@ impl Viscosities {
             .par_for_each(|e, &phi| *e = jump * (0.5 * (1.0 + phi)).clamp(0.0, 1.0));
     }
 
+    /// Add to the force spectra `forces` (x, y, …) the force the imposed shear u_imp = u(y)x̂
+    /// exerts where the viscosity differs from the outside's: the imposed flow is the Stokes
+    /// flow of its body force at η_out, so the disturbance u' = u − u_imp obeys the equations
+    /// above with the extra force ∇·(2η₁D(u_imp)). Its only strain is 2D_xy = u'(y)
+    /// (`gradient`, along the y axis's points), so with τ = η₁u'(y): f_x = ∂_yτ, f_y = ∂_xτ.
+    pub fn add_imposed_strain_force(
+        &mut self,
+        transform: &mut Transform,
+        (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+        gradient: &[f64],
+        forces: &mut [Array3<Complex64>],
+    ) {
+        let (x, y) = (axes[0], axes[1]);
+        Zip::indexed(&mut self.grid)
+            .and(&self.excess)
+            .par_for_each(|idx, g, &e| {
+                let j = [idx.0, idx.1, idx.2][y];
+                *g = e * gradient[j];
+            });
+        transform.forward(&mut self.grid, &mut self.spectrum);
+        let tau = self.spectrum.as_slice().expect("standard layout");
+        let modes = transform.spectral_shape();
+        for (c, along) in [(0, y), (1, x)] {
+            let add =
+                |i: usize, idx: [usize; 3]| Complex64::new(0.0, kappa[along][idx[along]]) * tau[i];
+            let f = forces[c].as_slice_mut().expect("standard layout");
+            for (i, idx) in indexed(0..f.len(), modes) {
+                f[i] += add(i, idx);
+            }
+        }
+    }
+
     /// Solve A û = P f̂ in place for `part` (0: σ = 0, 1: per unit σ): `velocity` holds on entry
     /// the equal-viscosity solve u₀ = P f̂/(η_out|k|²) (so P f̂ = η_out|k|² u₀ on every mode
     /// the flow moves), on return the solution. `kappa` holds κ per axis and `axes` the box's

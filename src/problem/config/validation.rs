@@ -242,8 +242,8 @@ impl Scene {
     }
 
     /// Unequal viscosities (`flow.viscosity_inside` ≠ `flow.viscosity`) run on the periodic
-    /// box: no declared mirror plane, no walls, and no imposed shear (whose profile is the
-    /// equal-viscosity Stokes flow).
+    /// box: no declared mirror plane and no walls (an imposed shear is then the periodic
+    /// Kolmogorov flow).
     fn validate_contrast(&self, flow: FlowSpec) -> Result<()> {
         if flow.viscosity_inside == Some(flow.viscosity) {
             return Ok(());
@@ -261,13 +261,6 @@ impl Scene {
             return Err(Error::config(
                 "walls",
                 "unequal viscosities (flow.viscosity_inside) run on the periodic box: drop the walls",
-            ));
-        }
-        if flow.shear_rate.is_some() {
-            return Err(Error::config(
-                "flow.shear_rate",
-                "the imposed shear is the equal-viscosity Stokes flow; it is not taken with \
-                 flow.viscosity_inside",
             ));
         }
         Ok(())
