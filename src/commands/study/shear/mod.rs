@@ -47,6 +47,12 @@ impl Row for Measured {
             Column::both("profile", "profile", Format::Plain, |r: &Self| {
                 r.case.profile.name().into()
             }),
+            Column::both(
+                "viscosity_ratio",
+                "eta_in/eta_out",
+                Format::Plain,
+                |r: &Self| r.case.viscosity_ratio.into(),
+            ),
             Column::csv("points", |r: &Self| {
                 r.points.iter().product::<usize>().into()
             }),
@@ -288,6 +294,7 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
         channel: spec.channel,
         length: spec.length,
         profile: spec.profile,
+        viscosity_ratio: 1.0,
     };
     let groups = spec
         .reduced_areas
@@ -302,6 +309,7 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
             channel: v.channel.unwrap_or(spec.channel),
             length: v.length.unwrap_or(spec.length),
             profile: v.profile.unwrap_or(spec.profile),
+            viscosity_ratio: v.viscosity_ratio.unwrap_or(1.0),
             ..case(v.reduced_area, v.r0)
         })
         .collect();
@@ -413,11 +421,11 @@ fn chart(dim: usize, cases: &[Measured], angles: &[Angle]) -> Figure {
         [0.625; 2]
     };
     let lo = angles.iter().map(|a| a.reduced_area).fold(1.0, f64::min);
-    let curve = |end: f64, f: fn(f64, usize) -> f64| {
+    let curve = |end: f64, f: fn(f64, usize, f64) -> f64| {
         let lo = lo.max(end);
         (0..=50)
             .map(|i| lo + (1.0 - lo) * i as f64 / 50.0)
-            .map(|v| (v, f(v, dim)))
+            .map(|v| (v, f(v, dim, 1.0)))
             .filter(|p| p.1.is_finite())
             .collect()
     };

@@ -89,6 +89,10 @@ pub struct Variation {
     /// The profile, else the spec's.
     #[serde(default)]
     pub profile: Option<Profile>,
+    /// η_in/η_out (`viscosity` is then the outside's), else 1: 2D on the periodic Kolmogorov
+    /// profile only (unequal viscosities run on the periodic box).
+    #[serde(default)]
+    pub viscosity_ratio: Option<f64>,
 }
 
 impl Spec {
@@ -141,6 +145,16 @@ impl Spec {
             }
             if let Some(l) = v.length {
                 length(&key("length"), l)?;
+            }
+            if let Some(ratio) = v.viscosity_ratio {
+                positive(&key("viscosity_ratio"), ratio)?;
+                let profile = v.profile.unwrap_or(self.profile);
+                if ratio != 1.0 && (self.dimension != 2 || profile != Profile::Kolmogorov) {
+                    return Err(Error::config(
+                        key("viscosity_ratio"),
+                        "unequal viscosities run on the periodic box: 2D, profile kolmogorov",
+                    ));
+                }
             }
         }
         Ok(())
