@@ -448,4 +448,22 @@ mod tests {
         assert!((psi - 30.0).abs() < 0.2, "{psi}");
         assert!((d - 0.2).abs() < 0.005, "{d}");
     }
+
+    /// The contrast's slowing of the strain response: at λ = 1 nothing changes (2D and 3D); in
+    /// 2D cos 2ψ = 2b(1 + λ)/2, so at v = 0.9 (2b = 0.5164) λ = 2 gives ψ = ½ arccos(0.7746) =
+    /// 19.616°, the angle reaches 0 at λ_c = 1/b − 1 = 2.873 and there is none beyond (NaN: the
+    /// vesicle tumbles); in 3D the factor is (2λ + 3)/5 (the l = 2 drop's response 5/(2λ + 3)).
+    #[test]
+    fn a_viscous_inside_lowers_the_angle_to_tumbling() {
+        for dim in [2, 3] {
+            assert_eq!(strain_slowing(dim, 1.0), 1.0);
+        }
+        assert!((linear_inclination(0.9, 2, 2.0) - 19.616).abs() < 1e-3);
+        let b = amplitude(0.9, 2);
+        let critical = 1.0 / b - 1.0;
+        assert!((critical - 2.873).abs() < 1e-3, "{critical}");
+        assert!(linear_inclination(0.9, 2, critical - 1e-9).abs() < 1e-3);
+        assert!(linear_inclination(0.9, 2, critical + 1e-3).is_nan());
+        assert!((strain_slowing(3, 4.0) - 11.0 / 5.0).abs() < 1e-15);
+    }
 }

@@ -243,4 +243,27 @@ mod tests {
         let e = spec.validate().expect_err("refused").to_string();
         assert!(e.contains("`variations[0].length`"), "{e}");
     }
+
+    /// Unequal viscosities run on the periodic box: the committed contrast study validates (2D,
+    /// Kolmogorov); a variation with η_in/η_out ≠ 1 is refused naming its key in 3D, between
+    /// walls, and for a ratio ≤ 0.
+    #[test]
+    fn unequal_viscosities_need_the_periodic_2d_box() {
+        let spec: Spec = serde_json::from_value(file("shear_contrast.json")).expect("parses");
+        spec.validate().expect("valid");
+        for (name, variation) in [
+            ("shear3d.json", json!({"reduced_area": 0.9, "r0": 8, "viscosity_ratio": 2})),
+            ("shear.json", json!({"reduced_area": 0.9, "r0": 12, "viscosity_ratio": 2})),
+            (
+                "shear_contrast.json",
+                json!({"reduced_area": 0.9, "r0": 12, "viscosity_ratio": -1}),
+            ),
+        ] {
+            let mut v = file(name);
+            v["variations"] = json!([variation]);
+            let spec: Spec = serde_json::from_value(v).expect("parses");
+            let e = spec.validate().expect_err("refused").to_string();
+            assert!(e.contains("`variations[0].viscosity_ratio`"), "{name}: {e}");
+        }
+    }
 }
