@@ -24,7 +24,7 @@
 
 use super::functional::Basis;
 use super::limits::inner_spheres_da;
-use super::map::{new_map, reproject};
+use super::map::{moved_map, new_map, reproject};
 use super::pear::{full_basis, odd_stability};
 use super::solver::{
     constraints, fd_hessian, kkt_matrix, lagrangian_grad, lu_solve, minimise, newton, Converged,
@@ -106,7 +106,8 @@ impl Walker {
     }
 
     /// For the pear and the stomatocyte, once the neck of `s` (the state `cur`) calls for a
-    /// new map ([`new_map`]: below 0.1 R0, or narrowed or moved since the last one): the basis
+    /// new map ([`new_map`]: below 0.1 R0, or narrowed or moved since the last one; or, on a
+    /// stretched basis, moved at any width, [`moved_map`]): the basis
     /// stretched at the neck, `prev` and `cur` re-projected onto it ([`reproject`]) and each
     /// solved again at its own `Δa` (`prev` kept re-projected if its solve fails), so that
     /// the secant `cur − prev` that sets the next step runs along the path and not along the
@@ -123,7 +124,8 @@ impl Walker {
         if !matches!(self.branch, Branch::Pear | Branch::Stomatocyte) {
             return None;
         }
-        let (map, neck) = new_map(s, &self.basis.map, self.mapped)?;
+        let (map, neck) =
+            new_map(s, &self.basis.map, self.mapped).or_else(|| moved_map(s, &self.basis.map))?;
         let old = self.basis.map;
         let modes = self.basis.modes.clone();
         let nb = self.basis.clone().with_map(map);
@@ -133,7 +135,7 @@ impl Walker {
             self.basis = saved;
             return None;
         };
-        self.mapped = Some(neck);
+        self.mapped = (!map.is_identity()).then_some(neck);
         let a_prev = reproject(&prev.a, &old, &map, &modes);
         let p = self.solve_at(prev.eval.j, &a_prev).unwrap_or_else(|| {
             let mut p = prev.clone();
@@ -353,7 +355,8 @@ fn multipliers(c: &Converged, closure: bool) -> Vec<f64> {
 /// until `stop` holds (that shape included), `|c̄0,eff| > C_MAX`, the step falls below
 /// `H_MIN` or `MAX_STEPS` are taken. On the pear and the stomatocyte the modes cluster at a
 /// neck below 0.1 R0 ([`Walker::remap`]), so the path reaches [`Options::neck_min`] (the
-/// stomatocyte within 0.003 of `L_sto`'s `Δa`); each shape carries its map.
+/// stomatocyte within 0.003 of `L_sto`'s `Δa`); each shape carries its map (where the map
+/// changes, the shape is the one solved again in the new basis).
 fn arc_follow(
     w: &mut Walker,
     mut prev: Converged,
@@ -403,7 +406,14 @@ fn arc_follow(
         let s = solution(w.branch, &w.basis, &next);
         let done = stop(&s) || s.c0_eff.abs() > C_MAX;
         let remapped = if done { None } else { w.remap(&s, &cur, &next) };
-        out.push(s);
+        // The shape as solved again in the new basis, where it has one.
+        out.push(match &remapped {
+            Some((_, c)) => {
+                w.basis.model = Model::Bc { da: c.eval.j };
+                solution(w.branch, &w.basis, c)
+            }
+            None => s,
+        });
         if done {
             break;
         }
