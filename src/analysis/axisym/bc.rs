@@ -111,10 +111,10 @@ impl Walker {
     /// stretched at the neck, `prev` and `cur` re-projected onto it ([`reproject`]) and each
     /// solved again at its own `Δa` (`prev` kept re-projected if its solve fails), so that
     /// the secant `cur − prev` that sets the next step runs along the path and not along the
-    /// change of resolution. (A stomatocyte whose start has a neck of 0.058 R0, at v = 0.88,
-    /// gains 0.007 in `e` from the map; with `prev` only re-projected, that difference turned
-    /// the walk back on its first step.) Returns the pair in the new coordinates, or `None`
-    /// (basis unchanged) if no map is due or the solve of `cur` fails.
+    /// change of resolution. (The stomatocyte's start at v = 0.88, neck 0.058 R0, gains 0.007
+    /// in `e` from the map; with `prev` only re-projected and the start unstretched, that
+    /// difference turned the walk back on its first step.) Returns the pair in the new
+    /// coordinates, or `None` (basis unchanged) if no map is due or the solve of `cur` fails.
     fn remap(
         &mut self,
         s: &Solution,
@@ -534,8 +534,8 @@ fn start_pair(branch: Branch, v: f64, opts: &Options) -> Option<(Walker, Converg
         let Some(a2) = newton(&sc, &first.a, v, w.closure, &w.set) else {
             continue;
         };
-        let j2 = w.basis.eval(&a2.a)?.j;
-        if let Some(second) = w.solve_at(j2, &a2.a) {
+        let second = w.basis.eval(&a2.a).and_then(|ev| w.solve_at(ev.j, &a2.a));
+        if let Some(second) = second {
             return Some((w, first, second));
         }
     }
