@@ -514,7 +514,7 @@ fn past_limit(s: &Solution) -> bool {
 /// The walker of `branch` at `v`, its SC shape as a BC state, and a second BC state: the SC
 /// shape at `c̄0,eff + 0.1`, or at `c̄0,eff − 0.1` where that does not converge, solved from
 /// the first, or failing both the BC shape at `Δa ± 0.005`. (The stomatocyte's SC start at
-/// v = 0.64, 0.66 and 0.86 lies within 0.02 of the SC branch's turning point in `v`, 0.661
+/// v = 0.64, 0.66 and 0.86 lies within 0.021 of the SC branch's turning point in `v`, 0.661
 /// at `c̄0` = 0 and 0.868 at −1, which raising `c̄0` moves below `v`: there only the lowered
 /// `c̄0` has a shape. At v = 0.96, 0.002 below the turning point at `c̄0` = −3, neither has
 /// one once the start is solved in the stretched basis.)
