@@ -29,8 +29,8 @@
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   shear3d          study shear shear3d.json + shear3d_box.json (3D)   29 + ~16 min on one thread, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 797 s wall (570 s CPU, one thread), measured
-#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        63 s (41 s CPU, one thread), measured
-#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121 185 s (51 s CPU, one thread), measured
+#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        49 s (47 s CPU, one thread), measured
+#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121 67 s (65 s CPU, one thread), measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)

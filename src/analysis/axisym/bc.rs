@@ -3,12 +3,15 @@
 //! branch followed at fixed `v` with `Δa` free ([`bc_curve`]).
 //!
 //! * Prolate, oblate, stomatocyte: the branch's SC shape at `v` (at `c̄0`, or for a stomatocyte
-//!   that does not reach `v` there at `c̄0` lowered in steps of 1) is the BC shape at its own
-//!   `Δa`; a second one is the SC shape at `c̄0,eff + 0.1`. From these two the branch is
-//!   followed both ways by pseudo-arclength in the coefficients (the BC Newton system with the
-//!   row of `Δa` replaced by the arclength condition): near `v = 1` the branches are so stiff
-//!   in `Δa` (at `v = 0.9` the SC prolate's `Δa` moves by 2e-5 between `c̄0 = −1` and 2) that
-//!   neither `Δa` nor `c̄0` is a usable parameter.
+//!   that does not reach `v` there at `c̄0` lowered in steps of 1, or for one that reaches it
+//!   at none of them the BC shape continued in `v` from a smaller `v`, [`start_below`]) is the
+//!   BC shape at its own `Δa`; a second one is the SC shape at `c̄0,eff ± 0.1`. From these
+//!   two the branch is followed both ways by pseudo-arclength in the coefficients (the BC
+//!   Newton system with the row of `Δa` replaced by the arclength condition): near `v = 1`
+//!   the branches are so stiff in `Δa` (at `v = 0.9` the SC prolate's `Δa` moves by 2e-5
+//!   between `c̄0 = −1` and 2) that neither `Δa` nor `c̄0` is a usable parameter. The
+//!   stomatocyte's modes are stretched at its neck once it is below 0.1 R0, as the pear's
+//!   ([`super::map`]), so its path closes the neck towards `L_sto`.
 //! * Pear: the up–down test function of the prolate ([`super::prolate_updown`]'s `μ`, the
 //!   smallest eigenvalue of the odd Hessian block of the BC Lagrangian, which is that of the
 //!   SC Lagrangian at `c̄0,eff`) is evaluated along the prolate's path towards larger `Δa`; its
@@ -21,7 +24,7 @@
 
 use super::functional::Basis;
 use super::limits::inner_spheres_da;
-use super::map::{new_map, reproject};
+use super::map::{moved_map, new_map, reproject};
 use super::pear::{full_basis, odd_stability};
 use super::solver::{
     constraints, fd_hessian, kkt_matrix, lagrangian_grad, lu_solve, minimise, newton, Converged,
@@ -102,21 +105,27 @@ impl Walker {
         solution(self.branch, &self.basis, self.current())
     }
 
-    /// For the pear, once its neck `s` (the state `cur`) calls for a new map
-    /// ([`new_map`]: below 0.1 R0, or narrowed or moved since the last one): the basis
-    /// stretched at the neck, `prev` and `cur` re-projected onto it ([`reproject`]) and `cur`
-    /// solved again at its `Δa`. Returns the pair in the new coordinates, or `None` (basis
-    /// unchanged) if no map is due or the solve fails.
+    /// For the pear and the stomatocyte, once the neck of `s` (the state `cur`) calls for a
+    /// new map ([`new_map`]: below 0.1 R0, or narrowed or moved since the last one; or, on a
+    /// stretched basis, moved at any width, [`moved_map`]): the basis
+    /// stretched at the neck, `prev` and `cur` re-projected onto it ([`reproject`]) and each
+    /// solved again at its own `Δa` (`prev` kept re-projected if its solve fails), so that
+    /// the secant `cur − prev` that sets the next step runs along the path and not along the
+    /// change of resolution. (The stomatocyte's start at v = 0.88, neck 0.058 R0, gains 0.007
+    /// in `e` from the map; with `prev` only re-projected and the start unstretched, that
+    /// difference turned the walk back on its first step.) Returns the pair in the new
+    /// coordinates, or `None` (basis unchanged) if no map is due or the solve of `cur` fails.
     fn remap(
         &mut self,
         s: &Solution,
         prev: &Converged,
         cur: &Converged,
     ) -> Option<(Converged, Converged)> {
-        if self.branch != Branch::Pear {
+        if !matches!(self.branch, Branch::Pear | Branch::Stomatocyte) {
             return None;
         }
-        let (map, neck) = new_map(s, &self.basis.map, self.mapped)?;
+        let (map, neck) =
+            new_map(s, &self.basis.map, self.mapped).or_else(|| moved_map(s, &self.basis.map))?;
         let old = self.basis.map;
         let modes = self.basis.modes.clone();
         let nb = self.basis.clone().with_map(map);
@@ -126,9 +135,13 @@ impl Walker {
             self.basis = saved;
             return None;
         };
-        self.mapped = Some(neck);
-        let mut p = prev.clone();
-        p.a = reproject(&prev.a, &old, &map, &modes);
+        self.mapped = (!map.is_identity()).then_some(neck);
+        let a_prev = reproject(&prev.a, &old, &map, &modes);
+        let p = self.solve_at(prev.eval.j, &a_prev).unwrap_or_else(|| {
+            let mut p = prev.clone();
+            p.a = a_prev;
+            p
+        });
         Some((p, c))
     }
 }
@@ -159,8 +172,19 @@ fn sc_start(branch: Branch, v: f64, opts: &Options) -> Option<Solution> {
         .filter(|s| branch.up_down_symmetric() || s.asymmetry() > super::phase::ASYMMETRIC)
 }
 
-/// A walker of `branch` (not the pear) started at its SC shape at `v`.
+/// A walker of `branch` (not the pear) started at its SC shape at `v` ([`start_sc`]); for a
+/// stomatocyte whose SC branch reaches `v` at none of the `c̄0` of [`sc_start`], from a
+/// smaller `v` ([`start_below`]).
 fn start(branch: Branch, v: f64, opts: &Options) -> Option<Walker> {
+    start_sc(branch, v, opts).or_else(|| {
+        (branch == Branch::Stomatocyte)
+            .then(|| start_below(v, opts))
+            .flatten()
+    })
+}
+
+/// A walker of `branch` (not the pear) started at its SC shape at `v` ([`sc_start`]).
+fn start_sc(branch: Branch, v: f64, opts: &Options) -> Option<Walker> {
     let s = sc_start(branch, v, opts)?;
     let mut w = Walker::new(
         branch,
@@ -173,6 +197,61 @@ fn start(branch: Branch, v: f64, opts: &Options) -> Option<Walker> {
     // difference); the basis keeps opts.c0.
     let c = w.solve_at(s.da(), &s.coefficients)?;
     w.push(c);
+    Some(w)
+}
+
+/// [`start_below`] looks for an SC start at `v − k DV_BELOW`, `k = 1 … K_BELOW`.
+const DV_BELOW: f64 = 0.01;
+/// See [`DV_BELOW`].
+const K_BELOW: usize = 10;
+
+/// A stomatocyte walker at `v` from the nearest smaller `v' = v − k DV_BELOW` where its SC
+/// start exists (as at v = 0.98, which the SC stomatocyte reaches at none of `c̄0` = 0 … −4:
+/// it turns back in `v` at 0.661, 0.868, 0.936, 0.962, 0.975 at 121 nodes), followed in `v`
+/// at fixed height above `L_sto`: the BC shape at
+///
+/// ```text
+/// Δa(u) = Δa' + Δa_Lsto(u) − Δa_Lsto(v'),    u from v' to v
+/// ```
+///
+/// (`Δa'` the start's), by Newton at each `u` from the secant predictor, steps of at most
+/// 0.005 in `u` halved on failure down to 1e-4. Holding the distance to `L_sto` keeps the
+/// neck from closing as `u` grows (at fixed `Δa` the path would run into `L_sto`, whose `Δa`
+/// rises with `v`).
+fn start_below(v: f64, opts: &Options) -> Option<Walker> {
+    let (mut w, v0) = (1..=K_BELOW).find_map(|k| {
+        let v0 = v - k as f64 * DV_BELOW;
+        start_sc(Branch::Stomatocyte, v0, opts).map(|w| (w, v0))
+    })?;
+    let l0 = inner_spheres_da(v0, 1)?;
+    let da0 = w.current().eval.j;
+    let da_at = |u: f64| inner_spheres_da(u, 1).map(|l| da0 + l - l0);
+    let mut step = 0.0025;
+    while w.v < v {
+        let u = (w.v + step).min(v);
+        let a0: Vec<f64> = match w.last.as_slice() {
+            [p, c] if c.eval.v != p.eval.v => {
+                let f = (u - c.eval.v) / (c.eval.v - p.eval.v);
+                c.a.iter().zip(&p.a).map(|(x, y)| x + f * (x - y)).collect()
+            }
+            _ => w.current().a.clone(),
+        };
+        let v_last = w.v;
+        w.v = u;
+        match w.solve_at(da_at(u)?, &a0) {
+            Some(c) => {
+                w.push(c);
+                step = (2.0 * step).min(0.005);
+            }
+            None => {
+                w.v = v_last;
+                step *= 0.5;
+                if step < 1e-4 {
+                    return None;
+                }
+            }
+        }
+    }
     Some(w)
 }
 
@@ -274,8 +353,10 @@ fn multipliers(c: &Converged, closure: bool) -> Vec<f64> {
 /// (`d` the unit secant), the corrector [`newton_arc`]. Steps grow by 1.5 after a success (at
 /// most `H_MAX`) and halve after a failure. Returns the shapes after `cur`, in path order,
 /// until `stop` holds (that shape included), `|c̄0,eff| > C_MAX`, the step falls below
-/// `H_MIN` or `MAX_STEPS` are taken. On the pear the modes cluster at a neck below 0.1 R0
-/// ([`Walker::remap`]), so the path reaches [`Options::neck_min`]; each shape carries its map.
+/// `H_MIN` or `MAX_STEPS` are taken. On the pear and the stomatocyte the modes cluster at a
+/// neck below 0.1 R0 ([`Walker::remap`]), so the path reaches [`Options::neck_min`] (the
+/// stomatocyte within 0.003 of `L_sto`'s `Δa`); each shape carries its map (where the map
+/// changes, the shape is the one solved again in the new basis).
 fn arc_follow(
     w: &mut Walker,
     mut prev: Converged,
@@ -325,7 +406,14 @@ fn arc_follow(
         let s = solution(w.branch, &w.basis, &next);
         let done = stop(&s) || s.c0_eff.abs() > C_MAX;
         let remapped = if done { None } else { w.remap(&s, &cur, &next) };
-        out.push(s);
+        // The shape as solved again in the new basis, where it has one.
+        out.push(match &remapped {
+            Some((_, c)) => {
+                w.basis.model = Model::Bc { da: c.eval.j };
+                solution(w.branch, &w.basis, c)
+            }
+            None => s,
+        });
         if done {
             break;
         }
@@ -424,15 +512,36 @@ fn past_limit(s: &Solution) -> bool {
 }
 
 /// The walker of `branch` at `v`, its SC shape as a BC state, and a second BC state: the SC
-/// shape at `c̄0` raised by 0.1, solved from the first.
+/// shape at `c̄0,eff + 0.1`, or at `c̄0,eff − 0.1` where that does not converge, solved from
+/// the first, or failing both the BC shape at `Δa ± 0.005`. (The stomatocyte's SC start at
+/// v = 0.64, 0.66 and 0.86 lies within 0.021 of the SC branch's turning point in `v`, 0.661
+/// at `c̄0` = 0 and 0.868 at −1, which raising `c̄0` moves below `v`: there only the lowered
+/// `c̄0` has a shape. At v = 0.96, 0.002 below the turning point at `c̄0` = −3, neither has
+/// one once the start is solved in the stretched basis.)
 fn start_pair(branch: Branch, v: f64, opts: &Options) -> Option<(Walker, Converged, Converged)> {
     let mut w = start(branch, v, opts)?;
-    let first = w.current().clone();
-    let c1 = opts.c0 - first.lambda_j + 0.1;
-    let sc = w.basis.clone().with_model(Model::Sc).with_c0(c1);
-    let a2 = newton(&sc, &first.a, v, w.closure, &w.set)?.a;
-    let j2 = w.basis.eval(&a2)?.j;
-    let second = w.solve_at(j2, &a2)?;
+    let mut first = w.current().clone();
+    // A start whose neck is already narrow is solved in the stretched basis from the outset
+    // ([`Walker::remap`]): at 241 nodes and v = 0.88 (neck 0.04 R0) the walk from the
+    // unstretched start failed to remap at its next shape and ran unstretched for three more.
+    let s = w.solution();
+    if let Some((_, c)) = w.remap(&s, &first, &first) {
+        first = c;
+    }
+    for d in [0.1, -0.1] {
+        let c1 = opts.c0 - first.lambda_j + d;
+        let sc = w.basis.clone().with_model(Model::Sc).with_c0(c1);
+        let Some(a2) = newton(&sc, &first.a, v, w.closure, &w.set) else {
+            continue;
+        };
+        let second = w.basis.eval(&a2.a).and_then(|ev| w.solve_at(ev.j, &a2.a));
+        if let Some(second) = second {
+            return Some((w, first, second));
+        }
+    }
+    let second = [0.005, -0.005]
+        .iter()
+        .find_map(|d| w.solve_at(first.eval.j + d, &first.a))?;
     Some((w, first, second))
 }
 

@@ -161,6 +161,24 @@ pub(super) fn new_map(s: &Solution, map: &NeckMap, mapped: Option<f64>) -> Optio
     (narrowed || moved).then(|| (NeckMap::at_neck(s_n, b, l), b))
 }
 
+/// On a stretched map `map`, the map `s` calls for whatever the width of its neck: the map at
+/// its neck if the neck has moved from `map`'s centre by more than half the kernel's
+/// half-width, or the identity if `s` has no neck (a path that has passed through wider necks,
+/// or none, and narrows again elsewhere: the stomatocyte's mirror image beyond its fold in
+/// `Δa`, whose invagination lies at the other pole). `None` on the identity or where `map`
+/// still fits. Returns the new map and its neck (infinite for the identity).
+pub(super) fn moved_map(s: &Solution, map: &NeckMap) -> Option<(NeckMap, f64)> {
+    if map.is_identity() {
+        return None;
+    }
+    let Some((s_n, b)) = s.neck_at() else {
+        return Some((NeckMap::IDENTITY, f64::INFINITY));
+    };
+    let l = s.length();
+    ((s_n / l - map.centre).abs() > 0.5 * map.half_width())
+        .then(|| (NeckMap::at_neck(s_n, b, l), b))
+}
+
 /// The coefficients, in the basis of `to` (modes `modes`), of the shape with coefficients
 /// `a` in the basis of `from`: `ψ` is a function of the arclength fraction `t`, so at
 /// `τ_j = j/N` of the new parameter, `ψ = π τ_old + Σ a_k sin(kπ τ_old)` with
