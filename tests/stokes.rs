@@ -243,6 +243,7 @@ fn a_vesicle_between_walls_tank_treads_at_the_linear_theorys_angle() {
             channel: 6.0,
             length: 6.0,
             profile: Profile::Walls,
+            viscosity_ratio: 1.0,
         },
     )
     .expect("runs");

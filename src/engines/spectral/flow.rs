@@ -871,8 +871,8 @@ mod tests {
         assert_eq!(flowing.curvature_hat.is_empty(), fixed);
         let reduced = (0..3).filter(|&a| grid.shape[a] > 1);
         let all_reduced = reduced
-            .map(|a| grid.kinds[a] != AxisKind::Periodic)
-            .all(|r| r);
+            .into_iter()
+            .all(|a| grid.kinds[a] != AxisKind::Periodic);
         assert_eq!(t.packed(), all_reduced);
         // Every spectrum in the index layout (a packed one's reals as complex values).
         let index = |s: &Array3<Complex64>| t.unpacked(s.view());
@@ -981,7 +981,7 @@ mod tests {
             let n = grid.shape[a];
             for (idx, c) in spectrum.indexed_iter_mut() {
                 let j = [idx.0, idx.1, idx.2][a];
-                let nyquist = n % 2 == 0 && j == n / 2;
+                let nyquist = n.is_multiple_of(2) && j == n / 2;
                 let k = if nyquist { 0.0 } else { ks[a][j] };
                 *c *= Complex64::new(0.0, k);
             }

@@ -252,8 +252,14 @@ mod tests {
         let spec: Spec = serde_json::from_value(file("shear_contrast.json")).expect("parses");
         spec.validate().expect("valid");
         for (name, variation) in [
-            ("shear3d.json", json!({"reduced_area": 0.9, "r0": 8, "viscosity_ratio": 2})),
-            ("shear.json", json!({"reduced_area": 0.9, "r0": 12, "viscosity_ratio": 2})),
+            (
+                "shear3d.json",
+                json!({"reduced_area": 0.9, "r0": 8, "viscosity_ratio": 2}),
+            ),
+            (
+                "shear.json",
+                json!({"reduced_area": 0.9, "r0": 12, "viscosity_ratio": 2}),
+            ),
             (
                 "shear_contrast.json",
                 json!({"reduced_area": 0.9, "r0": 12, "viscosity_ratio": -1}),
