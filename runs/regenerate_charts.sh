@@ -28,6 +28,7 @@
 #                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 5 + 10, one thread, loaded), measured
 #   heating          study heating heating.json (51 relaxations, 14 references)   410 s, measured
 #   shear3d          study shear shear3d.json + shear3d_box.json (3D)   29 + ~16 min on one thread, measured
+#   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   RATES_WALL + SHEAR_WALL on one thread, measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 797 s wall (570 s CPU, one thread), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        49 s (47 s CPU, one thread), measured
 #   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121 67 s (65 s CPU, one thread), measured
@@ -51,7 +52,7 @@ cd "$(dirname "$0")/.."
 VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
-ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating shear3d axisym_c0 axisym_bc
+ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating shear3d contrast axisym_c0 axisym_bc
      axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade diagram_bc budding3d deflation3d
      dumbbell3d pearling3d triaxial3d starfish3d)
 
@@ -140,6 +141,13 @@ group_shear3d() {
     out=$WORK/shear3d_box
     study shear shear3d_box.json
     same_names "$out" shear3d_box
+}
+group_contrast() {
+    study rates rates_contrast.json
+    same_names "$out" rates_contrast
+    out=$WORK/shear_contrast
+    study shear shear_contrast.json
+    same_names "$out" shear_contrast
 }
 # seq_list FROM STEP COUNT: the comma-separated list FROM, FROM + STEP, … (COUNT values).
 seq_list() {

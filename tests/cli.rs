@@ -1038,23 +1038,10 @@ fn huge_max_steps_runs_and_a_folder_as_scene_is_exit_2() {
 /// file, not a scene: `tests/bad_scenes/` holds scenes for `check` and `run`.)
 #[test]
 fn a_mirrored_circle_in_the_rates_study_is_exit_2() {
-    let tmp = TempDir::new().unwrap();
-    let text = fs::read_to_string(runs_dir().join("studies").join("rates.json")).unwrap();
-    let mut v: Value = serde_json::from_str(&text).unwrap();
-    v["circle"]["mirror"] = Value::Bool(true);
-    let bad = tmp.path().join("rates_mirrored_circle.json");
-    fs::write(&bad, v.to_string()).unwrap();
-    let out = tmp.path().join("o");
-    let o = vesicle([
-        OsStr::new("study"),
-        OsStr::new("rates"),
-        bad.as_os_str(),
-        OsStr::new("--out"),
-        out.as_os_str(),
-    ]);
-    assert_eq!(code(&o), 2, "{}", stderr(&o));
-    assert!(stderr(&o).contains("`circle.mirror`"), "{}", stderr(&o));
-    assert!(!out.exists());
+    rates_study_is_refused(
+        |v| v["circle"]["mirror"] = Value::Bool(true),
+        "`circle.mirror`",
+    );
 }
 
 /// The rates study takes unequal viscosities on the circle and the flat membrane only: the
@@ -1062,11 +1049,20 @@ fn a_mirrored_circle_in_the_rates_study_is_exit_2() {
 /// `viscosity_ratio` other than 1 is refused with exit 2 naming it, before anything is written.
 #[test]
 fn a_sphere_with_unequal_viscosities_in_the_rates_study_is_exit_2() {
+    rates_study_is_refused(
+        |v| v["sphere"]["groups"][0]["viscosity_ratio"] = serde_json::json!([1, 5]),
+        "sphere.groups.viscosity_ratio",
+    );
+}
+
+/// `runs/studies/rates.json` changed by `edit` is refused with exit 2, a message holding `key`,
+/// and no output folder.
+fn rates_study_is_refused(edit: impl FnOnce(&mut Value), key: &str) {
     let tmp = TempDir::new().unwrap();
     let text = fs::read_to_string(runs_dir().join("studies").join("rates.json")).unwrap();
     let mut v: Value = serde_json::from_str(&text).unwrap();
-    v["sphere"]["groups"][0]["viscosity_ratio"] = serde_json::json!([1, 5]);
-    let bad = tmp.path().join("rates_sphere_contrast.json");
+    edit(&mut v);
+    let bad = tmp.path().join("rates_refused.json");
     fs::write(&bad, v.to_string()).unwrap();
     let out = tmp.path().join("o");
     let o = vesicle([
@@ -1077,11 +1073,7 @@ fn a_sphere_with_unequal_viscosities_in_the_rates_study_is_exit_2() {
         out.as_os_str(),
     ]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("sphere.groups.viscosity_ratio"),
-        "{}",
-        stderr(&o)
-    );
+    assert!(stderr(&o).contains(key), "{}", stderr(&o));
     assert!(!out.exists());
 }
 
