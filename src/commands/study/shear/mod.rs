@@ -261,6 +261,9 @@ impl Study for ShearStudy {
         report.table("cases.csv", &cases)?;
         report.table("angles.csv", &angles)?;
         report.chart("inclination", chart(spec.dimension, &cases, &angles));
+        if cases.iter().any(|m| m.case.viscosity_ratio != 1.0) {
+            report.chart("inclination_contrast", contrast_chart(spec.dimension, &cases));
+        }
         let finest: Vec<&Measured> = groups
             .iter()
             .filter_map(|g| {
@@ -314,6 +317,61 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
         })
         .collect();
     (groups, variations)
+}
+
+/// ψ against λ = η_in/η_out for the reduced area of the first case with unequal viscosities:
+/// each size's cases at that start (equal viscosities included), and the linear theory
+/// cos 2ψ = 2b(1 + λ)/2 (3D √(15Δ/2)(2λ + 3)/5) at their mean φ = 0 reduced area, which ends
+/// at ψ = 0 where the vesicle should start to tumble.
+fn contrast_chart(dim: usize, cases: &[Measured]) -> Figure {
+    let start = cases
+        .iter()
+        .find(|m| m.case.viscosity_ratio != 1.0)
+        .map_or(f64::NAN, |m| m.case.reduced_area);
+    let at_start: Vec<&Measured> = cases
+        .iter()
+        .filter(|m| m.case.reduced_area == start)
+        .collect();
+    let mut fig = Figure::new(
+        format!("Inclination against the viscosity ratio ({dim}D, start v {start})"),
+        Axis::linear("eta_in / eta_out"),
+        Axis::linear("inclination psi (degrees)"),
+    );
+    fig.legend = Corner::UpperRight;
+    let mut sizes: Vec<f64> = at_start.iter().map(|m| m.case.r0).collect();
+    sizes.sort_by(f64::total_cmp);
+    sizes.dedup();
+    for (i, &r0) in sizes.iter().enumerate() {
+        let mut pts: Vec<(f64, f64)> = at_start
+            .iter()
+            .filter(|m| m.case.r0 == r0)
+            .map(|m| (m.case.viscosity_ratio, m.inclination))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        fig.push(Series::new(
+            format!("R0 = {r0} eps"),
+            pts,
+            colour(i),
+            Mark::LinePoints(Shape::Circle),
+        ));
+    }
+    let v = at_start.iter().map(|m| m.reduced_area).sum::<f64>() / at_start.len() as f64;
+    let top = at_start
+        .iter()
+        .map(|m| m.case.viscosity_ratio)
+        .fold(1.0, f64::max);
+    let theory = (0..=100)
+        .map(|i| top * i as f64 / 100.0)
+        .map(|lambda| (lambda, linear_inclination(v, dim, lambda)))
+        .filter(|p| p.1.is_finite())
+        .collect();
+    fig.push(Series::new(
+        format!("linear theory at v = {v:.3}"),
+        theory,
+        [0, 0, 0],
+        Mark::Dashed,
+    ));
+    fig
 }
 
 /// The linear theory's formula in dimension `dim`, for the tables.
