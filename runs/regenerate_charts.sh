@@ -242,6 +242,7 @@ FIGURES=(
     onset_seeds_skewness.png=onset_seeds/onset_skewness.png
     onset_eigenvalue.png=onset_hessian/onset_eigenvalue.png
     heating_neck.png=heating/heating_neck.png
+    shear_contrast.png=shear_contrast/inclination_contrast.png
     heating_w.png=heating/heating_w.png
     heating_w_error.png=heating/heating_w_error.png
     heating_departure.png=heating/heating_departure.png
