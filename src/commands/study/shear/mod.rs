@@ -262,7 +262,10 @@ impl Study for ShearStudy {
         report.table("angles.csv", &angles)?;
         report.chart("inclination", chart(spec.dimension, &cases, &angles));
         if cases.iter().any(|m| m.case.viscosity_ratio != 1.0) {
-            report.chart("inclination_contrast", contrast_chart(spec.dimension, &cases));
+            report.chart(
+                "inclination_contrast",
+                contrast_chart(spec.dimension, &cases),
+            );
         }
         let finest: Vec<&Measured> = groups
             .iter()
