@@ -322,8 +322,12 @@ fn cases(spec: &Spec) -> (Vec<Vec<Case>>, Vec<Case>) {
     (groups, variations)
 }
 
+/// The drift of ψ over a run's last quarter (degrees) above which it has no steady angle.
+const UNSTEADY_DRIFT: f64 = 1.0;
+
 /// ψ against λ = η_in/η_out for the reduced area of the first case with unequal viscosities:
-/// each size's cases at that start (equal viscosities included), and the linear theory
+/// each size's steady cases at that start (equal viscosities included), the unsteady ones
+/// (|drift| above [`UNSTEADY_DRIFT`]) at ψ = 0, and the linear theory
 /// cos 2ψ = 2b(1 + λ)/2 (3D √(15Δ/2)(2λ + 3)/5) at their mean φ = 0 reduced area, which ends
 /// at ψ = 0 where the vesicle should start to tumble.
 fn contrast_chart(dim: usize, cases: &[Measured]) -> Figure {
@@ -344,10 +348,14 @@ fn contrast_chart(dim: usize, cases: &[Measured]) -> Figure {
     let mut sizes: Vec<f64> = at_start.iter().map(|m| m.case.r0).collect();
     sizes.sort_by(f64::total_cmp);
     sizes.dedup();
+    // A case whose angle still moves by more than a degree over the last quarter has no steady
+    // angle: it is drawn at ψ = 0 apart, not joined to the steady ones.
+    let steady = |m: &&&Measured| m.drift.abs() <= UNSTEADY_DRIFT;
     for (i, &r0) in sizes.iter().enumerate() {
         let mut pts: Vec<(f64, f64)> = at_start
             .iter()
             .filter(|m| m.case.r0 == r0)
+            .filter(steady)
             .map(|m| (m.case.viscosity_ratio, m.inclination))
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -356,6 +364,19 @@ fn contrast_chart(dim: usize, cases: &[Measured]) -> Figure {
             pts,
             colour(i),
             Mark::LinePoints(Shape::Circle),
+        ));
+    }
+    let unsteady: Vec<(f64, f64)> = at_start
+        .iter()
+        .filter(|m| !steady(m))
+        .map(|m| (m.case.viscosity_ratio, 0.0))
+        .collect();
+    if !unsteady.is_empty() {
+        fig.push(Series::new(
+            format!("no steady angle (drift > {UNSTEADY_DRIFT} deg): tumbling"),
+            unsteady,
+            [0, 0, 0],
+            Mark::Points(Shape::Diamond),
         ));
     }
     let v = at_start.iter().map(|m| m.reduced_area).sum::<f64>() / at_start.len() as f64;
