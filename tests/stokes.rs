@@ -222,8 +222,10 @@ fn a_vesicle_between_walls_measures_itself() {
 /// h = ε/2, Ca = 1, walls 6R0 apart, 4 strain units) reaches the inclination of the linear
 /// theory cos 2ψ = 2b at its own reduced area within 1° (measured 28.87° against 29.03°:
 /// the rest is O(b²) and O(ε/R0)), it is steady (the last quarter's drift under 0.2°), and the
-/// fluid inside turns at the imposed shear's rate γ̇/2 (to 1e-3; measured 1.0001). The shear
-/// of the wrong sign or axis reads −29° or 61°.
+/// fluid inside turns with the shear but slower than its rate γ̇/2: Ω/(γ̇/2) between 0.6 and 0.95
+/// (measured 0.800). The imposed flow alone gives exactly 1 between walls, so a velocity that
+/// lost the membrane's flow (as `Flow::velocity` did until the advection inverted a copy of
+/// the spectra) reads 1. The shear of the wrong sign or axis reads −29° or 61°.
 #[test]
 fn a_vesicle_between_walls_tank_treads_at_the_linear_theorys_angle() {
     use vesicle::commands::study::shear::measure::{run, Case};
@@ -254,7 +256,11 @@ fn a_vesicle_between_walls_tank_treads_at_the_linear_theorys_angle() {
         m.linear
     );
     assert!(m.drift.abs() < 0.2, "drift {}", m.drift);
-    assert!((m.tank_treading - 1.0).abs() < 1e-3, "{}", m.tank_treading);
+    assert!(
+        m.tank_treading > 0.6 && m.tank_treading < 0.95,
+        "{}",
+        m.tank_treading
+    );
 }
 
 /// The quasi-circle's mode n = 3 at σ = 0 (R = 10 and 14ε, L = 4R, h = ε/2, M = 0.01):

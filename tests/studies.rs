@@ -430,7 +430,8 @@ fn bad_study_files_are_refused() {
 /// Couette flow between walls on the half box mirrored about z = 0 (R0 = 6 and 8ε, h = ε/2, the
 /// box 4R0, 3 strain units; about 10 s). At R0 = 8ε the φ = 0 surface settles at v ≈ 0.944
 /// and tank-treads within 2° of the linear theory cos 2ψ = √(15Δ/2) at that v (measured
-/// +0.8°), the fluid inside turns at γ̇/2 to 1% (1.004), and the phase field's measures read
+/// +0.8°), the fluid inside turns with the shear but slower than γ̇/2 (Ω/(γ̇/2) between 0.6 and
+/// 0.95, measured 0.794; the imposed flow alone reads 1), and the phase field's measures read
 /// a rounder vesicle than its surface (0.976). A bad `dimension` is refused with exit 2 naming
 /// it, before anything is written.
 #[test]
@@ -466,7 +467,8 @@ fn shear3d_quick_study_tank_treads_near_the_linear_theory() {
     assert!((at("excess") - (v.powf(-2.0 / 3.0) - 1.0)).abs() < 1e-9);
     let (psi, linear) = (at("inclination"), at("linear"));
     assert!((psi - linear).abs() < 2.0, "psi {psi} against {linear}");
-    assert!((at("tank_treading") - 1.0).abs() < 0.01);
+    let omega = at("tank_treading");
+    assert!(omega > 0.6 && omega < 0.95, "Ω/(γ̇/2) {omega}");
     assert_eq!(csv_fields(&out.join("angles.csv")).len(), 1);
     charts_exist(&out, &["inclination"]);
     assert!(out.join("shape_v0.90.png").exists());
