@@ -181,9 +181,7 @@ fn mirror_axes(scene: &Scene, grid: &Grid, phi: &Array3<f64>, c0: &C0) -> Result
             // An imposed shear along x varying along y is even about neither plane.
             let sheared = scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some());
             // Unequal viscosities run on the periodic box.
-            let contrast = scene
-                .stokes_flow()
-                .is_some_and(|f| f.viscosity_inside.is_some_and(|v| v != f.viscosity));
+            let contrast = scene.stokes_flow().is_some_and(|f| f.contrast().is_some());
             for (s, m) in mirror.iter_mut().enumerate() {
                 let a = internal(s);
                 let kept_by_flow = !(sheared && s < 2);

@@ -419,7 +419,7 @@ impl Evaluator {
                 &mut self.transform,
                 &self.symbols,
                 tension,
-                &state.hat,
+                (&state.hat, &state.phi),
                 [&mut state.nonlinear, &mut state.curvature_hat],
             );
         }

@@ -57,7 +57,7 @@
 
 use super::evaluator::Symbols;
 use super::transform::Transform;
-use super::viscous::{SolveStats, Viscosities};
+use super::viscous::Viscosities;
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use crate::problem::config::FlowSpec;
 use crate::problem::grid::{AxisKind, Grid};
@@ -122,8 +122,6 @@ pub struct Flow {
     fixed_tension: Option<f64>,
     /// The variable-viscosity solve when η_in ≠ η_out ([`super::viscous`]; periodic boxes).
     viscosities: Option<Viscosities>,
-    /// What its solves of the last evaluation did.
-    solve_stats: SolveStats,
 }
 
 impl Flow {
@@ -176,14 +174,16 @@ impl Flow {
         // With unequal viscosities the imposed flow is not the Stokes flow of the body force
         // that drives it: its strain rate u_x'(y) = γ̇cos(k₀y) is kept for the force it then
         // exerts ([`Viscosities::add_imposed_strain_force`]).
-        let contrast = spec.viscosity_inside.is_some_and(|v| v != spec.viscosity);
-        let shear_gradient = spec.shear_rate.filter(|_| contrast).map(|rate| {
-            let n = real[axes[1]];
-            let k0 = 2.0 * std::f64::consts::PI / (n as f64 * h);
-            (0..n)
-                .map(|j| rate * (k0 * (j as f64 + 0.5 - n as f64 / 2.0) * h).cos())
-                .collect()
-        });
+        let shear_gradient = spec
+            .shear_rate
+            .filter(|_| spec.contrast().is_some())
+            .map(|rate| {
+                let n = real[axes[1]];
+                let k0 = 2.0 * std::f64::consts::PI / (n as f64 * h);
+                (0..n)
+                    .map(|j| rate * (k0 * (j as f64 + 0.5 - n as f64 / 2.0) * h).cos())
+                    .collect()
+            });
         Flow {
             viscosity: spec.viscosity,
             mobility: spec.mobility,
@@ -201,10 +201,8 @@ impl Flow {
             shear,
             shear_gradient,
             viscosities: spec
-                .viscosity_inside
-                .filter(|&inside| inside != spec.viscosity)
+                .contrast()
                 .map(|inside| Viscosities::new(spec.viscosity, inside, axes.len(), transform)),
-            solve_stats: SolveStats::default(),
             axes,
             fixed_tension: None,
         }
@@ -226,7 +224,8 @@ impl Flow {
     }
 
     /// Split the flow's advection into its part at σ = 0 and its part per unit σ, both of
-    /// the state φ̂ = `hat`: replace the conserved flow's explicit term `nonlinear` (N̂) by
+    /// the state `(φ̂, φ)` (its spectrum and its grid field, which sets the viscosity where the
+    /// two differ): replace the conserved flow's explicit term `nonlinear` (N̂) by
     /// M N̂ − FT[u_b·∇φ] and write T̂ = FT[u_σ·∇φ] into `tension`, where u_b is the Stokes flow
     /// of the force μ_b∇φ (μ at σ = 0, plus the imposed shear) and u_σ that of μ_σ∇φ with
     /// μ̂_σ = c_σ|k|²φ̂, the tension's part of μ per unit σ. The step then advects with
@@ -240,13 +239,13 @@ impl Flow {
         transform: &mut Transform,
         sym: &Symbols,
         tension: (f64, f64),
-        hat: &Array3<Complex64>,
+        state: (&Array3<Complex64>, &Array3<f64>),
         out: [&mut Array3<Complex64>; 2],
     ) -> FlowStats {
         if self.packed {
-            self.advect_as::<f64>(transform, sym, tension, hat, out)
+            self.advect_as::<f64>(transform, sym, tension, state, out)
         } else {
-            self.advect_as::<Complex64>(transform, sym, tension, hat, out)
+            self.advect_as::<Complex64>(transform, sym, tension, state, out)
         }
     }
 
@@ -256,12 +255,14 @@ impl Flow {
         transform: &mut Transform,
         sym: &Symbols,
         (eps, sigma): (f64, f64),
-        hat: &Array3<Complex64>,
+        (hat, phi): (&Array3<Complex64>, &Array3<f64>),
         [nonlinear, tension]: [&mut Array3<Complex64>; 2],
     ) -> FlowStats {
         let e4x2 = 2.0 * eps.powi(4);
         let c_sigma = TENSION_FACTOR * eps;
-        let hat_spectrum = hat;
+        if let Some(viscous) = self.viscosities.as_mut() {
+            viscous.set_state(phi);
+        }
         // The flows: at σ = 0 and per unit σ, or the one at the fixed tension.
         let (parts, fixed, sigma) = match self.fixed_tension {
             None => (2, 0.0, sigma),
@@ -320,37 +321,32 @@ impl Flow {
                 transform.forward(&mut self.component[0], &mut self.components[part][c]);
             }
         }
-        if let Some(viscous) = self.viscosities.as_mut() {
+        if let (Some(viscous), Some(gradient)) = (self.viscosities.as_mut(), &self.shear_gradient) {
             // Periodic axes only: no component is odd, so the picture is the storage.
-            viscous.set_state(transform, hat_spectrum);
-            if let Some(gradient) = &self.shear_gradient {
-                viscous.add_imposed_strain_force(
-                    transform,
-                    (&self.kappa, &self.axes),
-                    gradient,
-                    &mut self.components[0],
-                );
-            }
+            viscous.add_imposed_strain_force(
+                transform,
+                (&self.kappa, &self.axes),
+                gradient,
+                &mut self.components[0],
+            );
         }
         for part in 0..parts {
             self.turn::<T>(part, T::picture);
             self.project::<T>(sym, part);
         }
+        let mut solve_iterations = 0;
         let dissipation = match self.viscosities.as_mut() {
             Some(viscous) => {
-                let mut stats = SolveStats::default();
                 for part in 0..parts {
-                    let s = viscous.solve(
+                    let iterations = viscous.solve(
                         transform,
                         sym,
                         (&self.kappa, &self.axes),
                         part,
                         &mut self.components[part],
                     );
-                    stats.iterations = stats.iterations.max(s.iterations);
-                    stats.residual = stats.residual.max(s.residual);
+                    solve_iterations = solve_iterations.max(iterations);
                 }
-                self.solve_stats = stats;
                 viscous.dissipation(sym, &self.components, parts, sigma)
             }
             None => self.dissipation::<T>(sym, sigma),
@@ -407,7 +403,7 @@ impl Flow {
         FlowStats {
             max_speed: max_speed_sq.sqrt(),
             dissipation,
-            solve_iterations: self.solve_stats.iterations,
+            solve_iterations,
         }
     }
 

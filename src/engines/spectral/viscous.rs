@@ -47,25 +47,15 @@ pub const TOLERANCE: f64 = 1e-10;
 /// that conjugate gradients need at a viscosity ratio of 1000 (69 were measured at 50).
 pub const MAX_ITERATIONS: usize = 2000;
 
-/// What the last solves did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SolveStats {
-    /// The most iterations one solve of the evaluation took.
-    pub iterations: usize,
-    /// Its relative preconditioned residual at the end (below [`TOLERANCE`] unless the solve
-    /// reached [`MAX_ITERATIONS`]).
-    pub residual: f64,
-}
-
 /// The variable-viscosity solve's constants and scratch.
 pub struct Viscosities {
     outside: f64,
     inside: f64,
     /// η₁(x) = η(x) − η_out on the grid.
     excess: Array3<f64>,
-    /// A grid field: φ, then each strain component.
+    /// A grid field: each strain component (or the imposed strain's stress).
     grid: Array3<f64>,
-    /// A spectrum: φ̂, then each strain component's.
+    /// A spectrum: each strain component's, then κ·v̂/|κ|² of the projection.
     spectrum: Array3<Complex64>,
     /// Per component: the right-hand side P f̂ of each part (σ = 0, per unit σ).
     rhs: [Vec<Array3<Complex64>>; 2],
@@ -97,13 +87,11 @@ impl Viscosities {
         }
     }
 
-    /// η₁(x) = (η_in − η_out) clamp((1 + φ)/2, 0, 1) of the state φ̂ = `hat`.
-    pub fn set_state(&mut self, transform: &mut Transform, hat: &Array3<Complex64>) {
-        self.spectrum.assign(hat);
-        transform.inverse(&mut self.spectrum, &mut self.grid);
+    /// η₁(x) = (η_in − η_out) clamp((1 + φ)/2, 0, 1) of the state's grid field `phi`.
+    pub fn set_state(&mut self, phi: &Array3<f64>) {
         let jump = self.inside - self.outside;
         Zip::from(&mut self.excess)
-            .and(&self.grid)
+            .and(phi)
             .par_for_each(|e, &phi| *e = jump * (0.5 * (1.0 + phi)).clamp(0.0, 1.0));
     }
 
@@ -143,7 +131,8 @@ impl Viscosities {
     /// the equal-viscosity solve u₀ = P f̂/(η_out|k|²) (so P f̂ = η_out|k|² u₀ on every mode
     /// the flow moves), on return the solution. `kappa` holds κ per axis and `axes` the box's
     /// axes longer than 1 (the components'). Preconditioned conjugate gradients from u₀, with
-    /// z = r/(η_out|k|²) (module documentation).
+    /// z = r/(η_out|k|²) (module documentation). Returns the iterations taken ([`MAX_ITERATIONS`]
+    /// where the residual stayed above [`TOLERANCE`]).
     pub fn solve(
         &mut self,
         transform: &mut Transform,
@@ -151,7 +140,7 @@ impl Viscosities {
         (kappa, axes): (&[Vec<f64>; 3], &[usize]),
         part: usize,
         velocity: &mut [Array3<Complex64>],
-    ) -> SolveStats {
+    ) -> usize {
         let eta = self.outside;
         let modes = transform.spectral_shape();
         for (b, u) in self.rhs[part].iter_mut().zip(velocity.iter()) {
@@ -162,7 +151,7 @@ impl Viscosities {
         }
         let scale = self.preconditioned_dot(sym, &self.rhs[part], &self.rhs[part]);
         if scale == 0.0 {
-            return SolveStats::default();
+            return 0;
         }
         // r₀ = P f̂ − A u₀ = −P FT[−∇·(2η₁ D(u₀))].
         let mut product = std::mem::take(&mut self.product);
@@ -176,11 +165,8 @@ impl Viscosities {
             precondition(p, modes, sym, eta);
         }
         let mut rz = self.preconditioned_dot(sym, &self.residual, &self.residual);
-        let mut stats = SolveStats {
-            iterations: 0,
-            residual: (rz / scale).sqrt(),
-        };
-        while stats.residual > TOLERANCE && stats.iterations < MAX_ITERATIONS {
+        let mut iterations = 0;
+        while rz > TOLERANCE * TOLERANCE * scale && iterations < MAX_ITERATIONS {
             // A p = η_out|k|² p + P FT[−∇·(2η₁ D(p))].
             let direction = std::mem::take(&mut self.direction);
             self.apply_excess(transform, sym, (kappa, axes), &direction, &mut product);
@@ -214,15 +200,15 @@ impl Viscosities {
                     *p = z + *p * beta;
                 });
             }
-            stats.iterations += 1;
-            stats.residual = (rz / scale).sqrt();
+            iterations += 1;
         }
         self.product = product;
-        stats
+        iterations
     }
 
     /// The power Σ_x u·f = Σ_k w Re(û*·P f̂) of u = u_b + σu_σ, f = f_b + σf_σ (u_b, u_σ in
-    /// `velocity`; `parts` 1 at a fixed tension, whose one flow is u_b).
+    /// `velocity`; `parts` 1 at a fixed tension, whose one flow is u_b), expanded in σ so that
+    /// no sum field is formed.
     pub fn dissipation(
         &self,
         sym: &Symbols,
@@ -230,18 +216,13 @@ impl Viscosities {
         parts: usize,
         sigma: f64,
     ) -> f64 {
-        let total = |set: &[Vec<Array3<Complex64>>; 2]| -> Vec<Array3<Complex64>> {
-            (0..set[0].len())
-                .map(|c| {
-                    if parts == 2 {
-                        &set[0][c] + &set[1][c].mapv(|s| s * sigma)
-                    } else {
-                        set[0][c].clone()
-                    }
-                })
-                .collect()
-        };
-        dot(sym, &total(velocity), &total(&self.rhs))
+        let [u, b] = [velocity, &self.rhs];
+        let base = dot(sym, &u[0], &b[0]);
+        if parts == 1 {
+            return base;
+        }
+        let cross = dot(sym, &u[0], &b[1]) + dot(sym, &u[1], &b[0]);
+        base + sigma * cross + sigma * sigma * dot(sym, &u[1], &b[1])
     }
 
     /// `out` = P FT[−∇·(2η₁ D(v))] of the divergence-free field v̂ = `v`: for each pair a ≤ b,

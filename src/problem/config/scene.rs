@@ -256,6 +256,14 @@ pub struct FlowSpec {
     pub viscosity_inside: Option<f64>,
 }
 
+impl FlowSpec {
+    /// η_in where it differs from η_out (`viscosity`): the flow then has unequal viscosities.
+    pub fn contrast(&self) -> Option<f64> {
+        self.viscosity_inside
+            .filter(|&inside| inside != self.viscosity)
+    }
+}
+
 /// `adaptive`: a flag or the controller's settings.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(untagged)]
