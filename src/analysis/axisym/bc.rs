@@ -22,6 +22,7 @@
 //! The BC energy is `e` (at [`super::Options::c0`], usually 0: at fixed `Δa`, `c̄0` only adds
 //! the constant `−c̄0 Δa + c̄0²/4`).
 
+use super::branches::secant_in_v;
 use super::functional::Basis;
 use super::limits::inner_spheres_da;
 use super::map::{moved_map, new_map, reproject};
@@ -229,13 +230,7 @@ fn start_below(v: f64, opts: &Options) -> Option<Walker> {
     let mut step = 0.0025;
     while w.v < v {
         let u = (w.v + step).min(v);
-        let a0: Vec<f64> = match w.last.as_slice() {
-            [p, c] if c.eval.v != p.eval.v => {
-                let f = (u - c.eval.v) / (c.eval.v - p.eval.v);
-                c.a.iter().zip(&p.a).map(|(x, y)| x + f * (x - y)).collect()
-            }
-            _ => w.current().a.clone(),
-        };
+        let a0 = secant_in_v(&w.last, u);
         let v_last = w.v;
         w.v = u;
         match w.solve_at(da_at(u)?, &a0) {

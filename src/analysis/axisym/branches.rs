@@ -182,16 +182,7 @@ impl Tracker {
         if c1.a.iter().all(|a| *a == 0.0) && self.branch.up_down_symmetric() {
             return self.one_mode(v);
         }
-        match self.last.as_slice() {
-            [c0, c1] if (c1.eval.v - c0.eval.v).abs() > 1e-12 => {
-                let f = (v - c1.eval.v) / (c1.eval.v - c0.eval.v);
-                c1.a.iter()
-                    .zip(&c0.a)
-                    .map(|(a1, a0)| a1 + f * (a1 - a0))
-                    .collect()
-            }
-            _ => c1.a.clone(),
-        }
+        secant_in_v(&self.last, v)
     }
 
     /// Continue to `target`; `false` (and the tracker at the last solution reached) if the step
@@ -345,6 +336,23 @@ pub fn follow(branch: Branch, vs: &[f64], opts: &Options) -> Followed {
     out.shapes.reverse();
     out.shapes.extend(above);
     out
+}
+
+/// The secant extrapolation to `v` of the last two solutions of `last` (in `v`),
+/// a1 + (v − v1)/(v1 − v0)·(a1 − a0), or the last one's coefficients where there is one or
+/// the two share their `v`.
+pub(super) fn secant_in_v(last: &[Converged], v: f64) -> Vec<f64> {
+    match last {
+        [c0, c1] if (c1.eval.v - c0.eval.v).abs() > 1e-12 => {
+            let f = (v - c1.eval.v) / (c1.eval.v - c0.eval.v);
+            c1.a.iter()
+                .zip(&c0.a)
+                .map(|(a1, a0)| a1 + f * (a1 - a0))
+                .collect()
+        }
+        [.., c] => c.a.clone(),
+        [] => Vec::new(),
+    }
 }
 
 /// Bisection for the first self-contact between the tracker state `good` (not

@@ -130,11 +130,7 @@ impl Spec {
             }
         }
         if let Some(f) = &self.sphere {
-            if f.groups
-                .iter()
-                .flat_map(|g| &g.viscosity_ratio)
-                .any(|&l| l != 1.0)
-            {
+            if f.unequal_viscosities() {
                 return Err(Error::config(
                     "sphere.groups.viscosity_ratio",
                     "the quasi-sphere's box factor is known at equal viscosities only: run \
@@ -194,14 +190,16 @@ fn ratios(values: &[f64]) -> Result<()> {
 }
 
 impl Family {
+    /// Whether any group runs a viscosity ratio other than 1.
+    fn unequal_viscosities(&self) -> bool {
+        self.groups
+            .iter()
+            .flat_map(|g| &g.viscosity_ratio)
+            .any(|&l| l != 1.0)
+    }
+
     fn validate(&self) -> Result<()> {
-        if self.mirror
-            && self
-                .groups
-                .iter()
-                .flat_map(|g| &g.viscosity_ratio)
-                .any(|&l| l != 1.0)
-        {
+        if self.mirror && self.unequal_viscosities() {
             return Err(Error::config(
                 "mirror",
                 "unequal viscosities run on the full periodic box: drop mirror",
