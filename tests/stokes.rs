@@ -223,9 +223,9 @@ fn a_vesicle_between_walls_measures_itself() {
 /// theory cos 2ψ = 2b at its own reduced area within 1° (measured 28.87° against 29.03°:
 /// the rest is O(b²) and O(ε/R0)), it is steady (the last quarter's drift under 0.2°), and the
 /// fluid inside turns with the shear but slower than its rate γ̇/2: Ω/(γ̇/2) between 0.6 and 0.95
-/// (measured 0.800). The imposed flow alone gives exactly 1 between walls, so a velocity that
-/// lost the membrane's flow (as `Flow::velocity` did until the advection inverted a copy of
-/// the spectra) reads 1. The shear of the wrong sign or axis reads −29° or 61°.
+/// (measured 0.804, the mean over the last quarter). The imposed flow alone gives exactly 1
+/// between walls, so a velocity that lost the membrane's flow (as `Flow::velocity` did until the
+/// advection inverted a copy of the spectra) reads 1. The shear of the wrong sign or axis reads −29° or 61°.
 #[test]
 fn a_vesicle_between_walls_tank_treads_at_the_linear_theorys_angle() {
     use vesicle::commands::study::shear::measure::{run, Case};
