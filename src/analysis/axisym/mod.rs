@@ -296,14 +296,10 @@ impl Solution {
             .min_by(|a, b| a.1.total_cmp(&b.1))
     }
 
-    /// Size of the up–down asymmetric part: `√Σ_{k odd} a_k²` (0 on symmetric branches).
+    /// Size of the up–down asymmetric part of the contour ([`map::mirror_asymmetry`]): 0 on
+    /// symmetric branches, `√Σ_{k odd} a_k²` in the identity map.
     pub fn asymmetry(&self) -> f64 {
-        self.modes
-            .iter()
-            .zip(&self.coefficients)
-            .filter(|(k, _)| *k % 2 == 1)
-            .fold(0.0, |acc, (_, a)| acc + a * a)
-            .sqrt()
+        map::mirror_asymmetry(&self.map, &self.modes, &self.coefficients)
     }
 
     /// Whether the surface intersects itself: the polygon through the contour samples crosses
