@@ -277,8 +277,8 @@ mod tests {
     /// The mirror asymmetry does not depend on the parameter: an up–down symmetric contour
     /// (even modes only, a_2 = 0.3, a_4 = −0.05) moved into a neck map centred at t = 0.64 has
     /// odd coefficients above 0.01 in the new `τ` (what the asymmetry read before it was
-    /// sampled in `t`) but an asymmetry below 1e-9; an asymmetric
-    /// one (a_1 = 0.1, a_3 = 0.02 added) keeps its √(0.1² + 0.02²) to 1e-9 in both maps.
+    /// sampled in `t`) but an asymmetry below 1e-9; an asymmetric one (a_1 = 0.1, a_3 = 0.02
+    /// added) keeps its √(0.1² + 0.02²) to 1e-9 in both maps.
     #[test]
     fn mirror_asymmetry_is_the_same_in_any_map() {
         let modes: Vec<usize> = (1..=80).collect();
