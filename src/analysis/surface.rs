@@ -161,7 +161,7 @@ impl Mesh {
 
 /// Six tetrahedra of the unit cube around the diagonal 0–7 (corner index x + 2y + 4z), the
 /// split of [`super::levelset`].
-const TETS: [[usize; 4]; 6] = [
+pub(crate) const TETS: [[usize; 4]; 6] = [
     [0, 1, 3, 7],
     [0, 1, 5, 7],
     [0, 2, 3, 7],
