@@ -87,6 +87,9 @@ impl Row for Measured {
                 r.drift.into()
             })
             .unit("deg"),
+            Column::both("volume_change", "dV/V", Format::Sci(2), |r: &Self| {
+                r.volume_change.into()
+            }),
             Column::both("deformation", "D", Format::Fixed(4), |r: &Self| {
                 r.deformation.into()
             }),
@@ -220,17 +223,19 @@ impl Study for ShearStudy {
             let m = measure::run(spec, case)?;
             done += 1;
             eprintln!(
-                "shear [{done}/{total}] v {:.4} R0 {} Ca {} W/R0 {} {}: psi {:.2} deg (linear {:.2}), \
-                 D {:.4}, omega/(rate/2) {:.4}, {} steps, {:.0} s",
+                "shear [{done}/{total}] v {:.4} R0 {} Ca {} W/R0 {} L/R0 {} {}: psi {:.2} deg \
+                 (linear {:.2}), D {:.4}, omega/(rate/2) {:.4}, dV/V {:.1e}, {} steps, {:.0} s",
                 m.reduced_area,
                 case.r0,
                 case.capillary,
                 case.channel,
+                case.length,
                 case.profile.name(),
                 m.inclination,
                 m.linear,
                 m.deformation,
                 m.tank_treading,
+                m.volume_change,
                 m.steps,
                 m.wall
             );
