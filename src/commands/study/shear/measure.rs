@@ -340,8 +340,9 @@ pub fn moments(grid: &Grid, phi: &Array3<f64>) -> (f64, f64) {
 /// ```
 ///
 /// (x, y measured from the box's centre). Exact for the piecewise-linear surface, and blind to
-/// φ away from it: the bulk's small departures from ±1 (which the mobility lets grow over the
-/// whole box: by 5e-4 over 24 strains at R0 = 8ε, Ca = 1) would weigh Σ(1 + φ)/2 by the box's size.
+/// φ away from it: the bulk's small departures from ±1, which the mobility lets grow over the
+/// whole box (by 5e-4 over 24 strains at R0 = 8ε, Ca = 1), would weigh Σ(1 + φ)/2 by the
+/// box's size.
 fn inside_moments(grid: &Grid, phi: &Array3<f64>) -> [f64; 3] {
     let (ax, ay) = plane_axes(grid);
     let full = grid.unfold(phi);
