@@ -18,10 +18,8 @@
 //! `[1, nx, ny]`). A surface that meets the box's edge is open, and the sums then miss its
 //! cut faces.
 
-use super::surface::TETS;
+use super::surface::{cross, dot, sub, P3, TETS};
 use ndarray::Array3;
-
-type P3 = [f64; 3];
 
 /// The zero of φ's linear interpolant on the grid edge `a` → `b`: the point a + t(b − a).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -194,22 +192,6 @@ fn simplex_facets(phi: &Array3<f64>, h: f64, p: &[[usize; 3]]) -> Vec<Facet> {
     (1..polygon.len() - 1)
         .map(|w| facet(vec![polygon[0], polygon[w], polygon[w + 1]]))
         .collect()
-}
-
-fn sub(a: P3, b: P3) -> P3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: P3, b: P3) -> P3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: P3, b: P3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 #[cfg(test)]

@@ -25,13 +25,16 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
-type P3 = [f64; 3];
+/// A point or vector in 3D.
+pub(crate) type P3 = [f64; 3];
 
-fn sub(a: P3, b: P3) -> P3 {
+/// a − b.
+pub(crate) fn sub(a: P3, b: P3) -> P3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn cross(a: P3, b: P3) -> P3 {
+/// a × b.
+pub(crate) fn cross(a: P3, b: P3) -> P3 {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -39,7 +42,8 @@ fn cross(a: P3, b: P3) -> P3 {
     ]
 }
 
-fn dot(a: P3, b: P3) -> f64 {
+/// a · b.
+pub(crate) fn dot(a: P3, b: P3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
