@@ -7,6 +7,7 @@
 pub mod axisym;
 pub mod components;
 pub mod curves;
+pub mod drop_flow;
 pub mod facets;
 pub mod levelset;
 pub mod surface;

@@ -102,6 +102,12 @@ impl Row for Measured {
                 Format::Fixed(4),
                 |r: &Self| r.tank_treading.into(),
             ),
+            Column::both(
+                "sharp_tank_treading",
+                "omega sharp",
+                Format::Fixed(4),
+                |r: &Self| r.sharp_tank_treading.into(),
+            ),
             Column::both("sigma_bar", "sigma_bar", Format::Fixed(2), |r: &Self| {
                 r.sigma_bar.into()
             }),
@@ -224,7 +230,8 @@ impl Study for ShearStudy {
             done += 1;
             eprintln!(
                 "shear [{done}/{total}] v {:.4} R0 {} Ca {} W/R0 {} L/R0 {} {}: psi {:.2} deg \
-                 (linear {:.2}), D {:.4}, omega/(rate/2) {:.4}, dV/V {:.1e}, {} steps, {:.0} s",
+                 (linear {:.2}), D {:.4}, omega/(rate/2) {:.4} (sharp {:.4}), dV/V {:.1e}, {} steps, \
+                 {:.0} s",
                 m.reduced_area,
                 case.r0,
                 case.capillary,
@@ -235,6 +242,7 @@ impl Study for ShearStudy {
                 m.linear,
                 m.deformation,
                 m.tank_treading,
+                m.sharp_tank_treading,
                 m.volume_change,
                 m.steps,
                 m.wall
