@@ -98,8 +98,9 @@ pub struct Measured {
     pub linear_deformation: f64,
     /// The mean rotation rate inside over γ̇/2.
     pub tank_treading: f64,
-    /// The sharp-interface reference's Ω/(γ̇/2) for the final contour, in free space
-    /// ([`sharp_tank_treading`]; NaN in 3D).
+    /// The sharp-interface reference's Ω/(γ̇/2) for the final contour, in free space simple
+    /// shear with equal viscosities ([`sharp_tank_treading`]; NaN in 3D). With η_in ≠ η_out or
+    /// the Kolmogorov profile it is that reference for the same shape, not the case's own rate.
     pub sharp_tank_treading: f64,
     /// σ̄ = σR0²/κ at the end.
     pub sigma_bar: f64,
