@@ -388,7 +388,8 @@ const CONTOUR_SAMPLES: usize = 128;
 /// Ω/(γ̇/2) of the sharp-interface drop-like membrane with the final φ = 0 contour's shape
 /// ([`drop_flow::tank_treading`]: free space, equal viscosities), or NaN in 3D. The contour is
 /// sampled as r(θ) about the inside's centroid at [`CONTOUR_SAMPLES`] angles: the first zero
-/// of φ's bilinear interpolant along each ray, found by steps of h/4 and bisection.
+/// of φ's bilinear interpolant along each ray, found by steps of h/4 and bisection (NaN when
+/// the centroid lies outside, as between two pieces).
 pub fn sharp_tank_treading(grid: &Grid, phi: &Array3<f64>) -> f64 {
     if grid.dim != 2 {
         return f64::NAN;
@@ -437,6 +438,10 @@ pub fn sharp_tank_treading(grid: &Grid, phi: &Array3<f64>) -> f64 {
             0.5 * (lo + hi)
         })
         .collect();
+    // A ray that leaves the inside at once: the centroid is outside.
+    if radius.iter().any(|&r| r < h) {
+        return f64::NAN;
+    }
     drop_flow::tank_treading(&radius).rate
 }
 
@@ -607,6 +612,17 @@ mod tests {
             (expected - 1.0).abs() > 0.02,
             "a rate unlike a circle's: {expected}"
         );
+    }
+
+    /// Two separate circles have their centroid outside both: no contour about it, NaN.
+    #[test]
+    fn the_sharp_rate_needs_the_centroid_inside() {
+        let grid = Grid::new(&[200, 100], 0.02, &[false, false]);
+        let phi = grid.field_from(|[x, y, _]| {
+            let r = ((x.abs() - 1.0).powi(2) + y * y).sqrt();
+            -((r - 0.5) / 0.05).tanh()
+        });
+        assert!(sharp_tank_treading(&grid, &phi).is_nan());
     }
 
     /// The contrast's slowing of the strain response: at λ = 1 nothing changes (2D and 3D); in
