@@ -28,7 +28,7 @@
 #                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 5 + 10, one thread, loaded), measured
 #   heating          study heating heating.json (51 relaxations, 14 references)   220 s (one thread), measured
 #   shear3d          study shear shear3d.json + shear3d_box.json (3D)   35 + 12 min on one thread beside two other runs, measured 2026-12-06
-#   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 606 s on one thread, measured
+#   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 1 879 s on one thread (the second beside two other runs), measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 797 s wall (570 s CPU, one thread), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        49 s (47 s CPU, one thread), measured
 #   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121 67 s (65 s CPU, one thread), measured
