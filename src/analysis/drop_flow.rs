@@ -19,7 +19,9 @@
 //! tangent's t tᵀ). Both converge spectrally for a smooth contour.
 
 use super::axisym::solver::lu_solve;
+use num_complex::Complex64;
 use std::f64::consts::PI;
+use vesicle_fft_plans::Planner;
 
 /// What the reference gives for one contour.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -176,34 +178,22 @@ fn kress_weight(n: usize, t: f64) -> f64 {
 }
 
 /// The derivative of the trigonometric interpolant of `f` (N equal samples over 2π) at the
-/// samples, the Nyquist mode dropped.
+/// samples: f̂_k times i k by a complex FFT, the Nyquist mode dropped.
 fn derivative(f: &[f64]) -> Vec<f64> {
     let n = f.len();
-    let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
-    for k in 0..n {
-        for (j, &v) in f.iter().enumerate() {
-            let a = -2.0 * PI * (k * j) as f64 / n as f64;
-            re[k] += v * a.cos() / n as f64;
-            im[k] += v * a.sin() / n as f64;
-        }
+    let mut planner = Planner::new();
+    let mut spectrum: Vec<Complex64> = f.iter().map(|&v| Complex64::new(v, 0.0)).collect();
+    planner.forward(n).process(&mut spectrum);
+    for (k, c) in spectrum.iter_mut().enumerate() {
+        let wave = match 2 * k {
+            m if m < n => k as f64,
+            m if m == n => 0.0,
+            _ => k as f64 - n as f64,
+        };
+        *c *= Complex64::new(0.0, wave / n as f64);
     }
-    (0..n)
-        .map(|j| {
-            (1..n)
-                .filter(|&k| 2 * k != n)
-                .map(|k| {
-                    let wave = if 2 * k < n {
-                        k as f64
-                    } else {
-                        k as f64 - n as f64
-                    };
-                    let a = 2.0 * PI * (k * j) as f64 / n as f64;
-                    // d/dθ of (re + i im) e^{i k θ} = i wave (re + i im) e^{i k θ}, real part.
-                    -wave * (re[k] * a.sin() + im[k] * a.cos())
-                })
-                .sum()
-        })
-        .collect()
+    planner.inverse(n).process(&mut spectrum);
+    spectrum.iter().map(|c| c.re).collect()
 }
 
 fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {

@@ -189,7 +189,7 @@ fn render_panel(values: &Array2<f64>, scale: usize) -> Canvas {
 }
 
 /// Bilinear interpolation of `values` at fractional indices `(u, v)`, clamped to the grid.
-fn bilinear(values: ArrayView2<f64>, u: f64, v: f64) -> f64 {
+pub(crate) fn bilinear(values: ArrayView2<f64>, u: f64, v: f64) -> f64 {
     let (nu, nv) = (values.shape()[0], values.shape()[1]);
     let (i, fu) = split_index(u, nu);
     let (j, fv) = split_index(v, nv);

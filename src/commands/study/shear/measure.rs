@@ -33,6 +33,7 @@ use crate::commands::measure::{contour_length, inside_area};
 use crate::driver::simulation::{Flow, Now, Probe, Simulation, StopRules};
 use crate::engines::spectral::evaluator::{Evaluator, ExplicitTerm};
 use crate::error::{Error, Result};
+use crate::output::image::bilinear;
 use crate::problem::config::{self, Laplacian, Scene};
 use crate::problem::flow::bending_modulus;
 use crate::problem::grid::Grid;
@@ -82,7 +83,7 @@ pub struct Measured {
     /// ψ at the end minus ψ three quarters through the run, degrees.
     pub drift: f64,
     /// The relative change of the volume (area in 2D) inside the φ = 0 surface from the first
-    /// state to the last ([`enclosed_volume`]). ∫φ is held to round-off, but the mobility
+    /// state to the last ([`Inside`]). ∫φ is held to round-off, but the mobility
     /// lets the bulk's φ drift from −1 and take its share: 0.8% (walls 8R0 apart) and 1.6%
     /// (24R0 long) over 24 strains at R0 = 8ε, Ca = 1.
     pub volume_change: f64,
@@ -248,7 +249,7 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
     let mut start_volume = None;
     let mut probe = Probe(|now: &Now| {
         let phi = now.engine.phi();
-        start_volume.get_or_insert_with(|| enclosed_volume(&grid, phi));
+        start_volume.get_or_insert_with(|| Inside::of(&grid, phi).volume);
         let (psi, d) = moments(&grid, phi);
         samples.push((now.record.t, psi, d));
         steps = now.record.step;
@@ -286,7 +287,7 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
         field_reduced_area,
         inclination: mean(|s| s.1),
         drift: tail[tail.len() - 1].1 - tail[0].1,
-        volume_change: enclosed_volume(&grid, &phi) / start_volume.unwrap_or(f64::NAN) - 1.0,
+        volume_change: Inside::of(&grid, &phi).volume / start_volume.unwrap_or(f64::NAN) - 1.0,
         linear: linear_inclination(v, grid.dim, case.viscosity_ratio),
         linear_first_order: first_order_inclination(v, grid.dim, case.viscosity_ratio),
         deformation: mean(|s| s.2),
@@ -322,9 +323,9 @@ fn plane_axes(grid: &Grid) -> (usize, usize) {
 }
 
 /// (ψ in degrees, D) of the field `phi` on `grid` (module documentation), from the second
-/// moments in the shear plane of the region inside its φ = 0 surface ([`inside_moments`]).
+/// moments in the shear plane of the region inside its φ = 0 surface ([`Inside`]).
 pub fn moments(grid: &Grid, phi: &Array3<f64>) -> (f64, f64) {
-    let [ixx, ixy, iyy] = inside_moments(grid, phi);
+    let [ixx, ixy, iyy] = Inside::of(grid, phi).second;
     let psi = 0.5 * (2.0 * ixy).atan2(ixx - iyy);
     let (half_sum, half_diff) = (
         0.5 * (ixx + iyy),
@@ -334,52 +335,55 @@ pub fn moments(grid: &Grid, phi: &Array3<f64>) -> (f64, f64) {
     (psi.to_degrees(), (long - short) / (long + short))
 }
 
-/// [I_xx, I_xy, I_yy]: the second moments in the shear plane, about the centroid, of the region
-/// inside the φ = 0 surface of `phi` (unfolded to the full box), from its volume (area in 2D)
-/// V, centroid and moments about the box's centre, each by the divergence theorem over the
-/// facets of [`facets`]
-///
-/// ```text
-/// V = ∮ x n_x,  V x̄ = ∮ (x²/2) n_x,  V ȳ = ∮ (y²/2) n_y,
-/// ∫x² = ∮ (x³/3) n_x,  ∫xy = ∮ (x²y/2) n_x,  ∫y² = ∮ (y³/3) n_y
-/// ```
-///
-/// (x, y measured from the box's centre). Exact for the piecewise-linear surface, and blind to
-/// φ away from it: the bulk's small departures from ±1, which the mobility lets grow over the
-/// whole box (by 5e-4 over 24 strains at R0 = 8ε, Ca = 1), would weigh Σ(1 + φ)/2 by the
-/// box's size.
-fn inside_moments(grid: &Grid, phi: &Array3<f64>) -> [f64; 3] {
-    let (ax, ay) = plane_axes(grid);
-    let full = grid.unfold(phi);
-    let centre = |a: usize| 0.5 * (full.shape()[a] - 1) as f64 * grid.h;
-    let (x0, y0) = (centre(ax), centre(ay));
-    let mut m = [0.0; 6];
-    facets::for_each(&full, grid.h, |f| {
-        let (nx, ny) = (f.normal[ax], f.normal[ay]);
-        let terms = [
-            nx * f.mean(|p, _| p[ax] - x0),
-            nx * f.mean(|p, _| (p[ax] - x0).powi(2) / 2.0),
-            ny * f.mean(|p, _| (p[ay] - y0).powi(2) / 2.0),
-            nx * f.mean(|p, _| (p[ax] - x0).powi(3) / 3.0),
-            nx * f.mean(|p, _| (p[ax] - x0).powi(2) * (p[ay] - y0) / 2.0),
-            ny * f.mean(|p, _| (p[ay] - y0).powi(3) / 3.0),
-        ];
-        m.iter_mut().zip(terms).for_each(|(s, t)| *s += t);
-    });
-    let [v, sx, sy, sxx, sxy, syy] = m;
-    let (cx, cy) = (sx / v, sy / v);
-    [sxx - v * cx * cx, sxy - v * cx * cy, syy - v * cy * cy]
+/// The region inside the φ = 0 surface of `phi` (unfolded to the full box), in the shear
+/// plane: its volume (area in 2D), centroid and second moments about the centroid.
+struct Inside {
+    /// V.
+    volume: f64,
+    /// (x̄, ȳ) at grid point (i, j) ↦ (i h, j h) of the unfolded box.
+    centroid: [f64; 2],
+    /// [I_xx, I_xy, I_yy].
+    second: [f64; 3],
 }
 
-/// The volume (area in 2D) inside the φ = 0 surface of `phi`, ∮ x n_x dA over its facets on
-/// the unfolded box.
-fn enclosed_volume(grid: &Grid, phi: &Array3<f64>) -> f64 {
-    let ax = plane_axes(grid).0;
-    let mut volume = 0.0;
-    facets::for_each(&grid.unfold(phi), grid.h, |f| {
-        volume += f.normal[ax] * f.mean(|p, _| p[ax]);
-    });
-    volume
+impl Inside {
+    /// One pass over the facets of [`facets`], by the divergence theorem
+    ///
+    /// ```text
+    /// V = ∮ x n_x,  V x̄ = ∮ (x²/2) n_x,  V ȳ = ∮ (y²/2) n_y,
+    /// ∫x² = ∮ (x³/3) n_x,  ∫xy = ∮ (x²y/2) n_x,  ∫y² = ∮ (y³/3) n_y
+    /// ```
+    ///
+    /// (x, y measured from the box's centre). Exact for the piecewise-linear surface, and blind
+    /// to φ away from it: the bulk's small departures from ±1, which the mobility lets grow
+    /// over the whole box (by 5e-4 over 24 strains at R0 = 8ε, Ca = 1), would weigh
+    /// Σ(1 + φ)/2 by the box's size.
+    fn of(grid: &Grid, phi: &Array3<f64>) -> Self {
+        let (ax, ay) = plane_axes(grid);
+        let full = grid.unfold(phi);
+        let centre = |a: usize| 0.5 * (full.shape()[a] - 1) as f64 * grid.h;
+        let (x0, y0) = (centre(ax), centre(ay));
+        let mut m = [0.0; 6];
+        facets::for_each(&full, grid.h, |f| {
+            let (nx, ny) = (f.normal[ax], f.normal[ay]);
+            let terms = [
+                nx * f.mean(|p, _| p[ax] - x0),
+                nx * f.mean(|p, _| (p[ax] - x0).powi(2) / 2.0),
+                ny * f.mean(|p, _| (p[ay] - y0).powi(2) / 2.0),
+                nx * f.mean(|p, _| (p[ax] - x0).powi(3) / 3.0),
+                nx * f.mean(|p, _| (p[ax] - x0).powi(2) * (p[ay] - y0) / 2.0),
+                ny * f.mean(|p, _| (p[ay] - y0).powi(3) / 3.0),
+            ];
+            m.iter_mut().zip(terms).for_each(|(s, t)| *s += t);
+        });
+        let [v, sx, sy, sxx, sxy, syy] = m;
+        let (cx, cy) = (sx / v, sy / v);
+        Inside {
+            volume: v,
+            centroid: [x0 + cx, y0 + cy],
+            second: [sxx - v * cx * cx, sxy - v * cx * cy, syy - v * cy * cy],
+        }
+    }
 }
 
 /// How many angles the final contour is sampled at for [`sharp_tank_treading`].
@@ -389,41 +393,22 @@ const CONTOUR_SAMPLES: usize = 128;
 /// ([`drop_flow::tank_treading`]: free space, equal viscosities), or NaN in 3D. The contour is
 /// sampled as r(θ) about the inside's centroid at [`CONTOUR_SAMPLES`] angles: the first zero
 /// of φ's bilinear interpolant along each ray, found by steps of h/4 and bisection (NaN when
-/// the centroid lies outside, as between two pieces).
+/// the centroid lies outside, as between two pieces, or the inside reaches the box's edge).
 pub fn sharp_tank_treading(grid: &Grid, phi: &Array3<f64>) -> f64 {
     if grid.dim != 2 {
         return f64::NAN;
     }
-    let (ax, ay) = plane_axes(grid);
-    let (nx, ny) = (phi.shape()[ax], phi.shape()[ay]);
     let h = grid.h;
-    // φ's bilinear interpolant at (x, y) = (i h, j h); −1 outside the grid.
-    let at = |x: f64, y: f64| {
-        let (fi, fj) = (x / h, y / h);
-        if fi < 0.0 || fj < 0.0 || fi >= (nx - 1) as f64 || fj >= (ny - 1) as f64 {
-            return -1.0;
-        }
-        let (i, j) = (fi as usize, fj as usize);
-        let (a, b) = (fi - i as f64, fj - j as f64);
-        let v = |p: usize, q: usize| phi[[0, i + p, j + q]];
-        (1.0 - a) * (1.0 - b) * v(0, 0)
-            + a * (1.0 - b) * v(1, 0)
-            + (1.0 - a) * b * v(0, 1)
-            + a * b * v(1, 1)
-    };
-    let mut first = [0.0; 3];
-    facets::for_each(phi, h, |f| {
-        first[0] += f.normal[ax] * f.mean(|p, _| p[ax]);
-        first[1] += f.normal[ax] * f.mean(|p, _| p[ax] * p[ax] / 2.0);
-        first[2] += f.normal[ay] * f.mean(|p, _| p[ay] * p[ay] / 2.0);
-    });
-    let (cx, cy) = (first[1] / first[0], first[2] / first[0]);
+    let slice = phi.index_axis(Axis(0), 0);
+    let [cx, cy] = Inside::of(grid, phi).centroid;
+    // No ray runs farther than the box's diagonal.
+    let longest = h * (slice.shape()[0] as f64).hypot(slice.shape()[1] as f64);
     let radius: Vec<f64> = (0..CONTOUR_SAMPLES)
         .map(|k| {
             let t = 2.0 * std::f64::consts::PI * k as f64 / CONTOUR_SAMPLES as f64;
-            let along = |r: f64| at(cx + r * t.cos(), cy + r * t.sin());
+            let along = |r: f64| bilinear(slice, (cx + r * t.cos()) / h, (cy + r * t.sin()) / h);
             let mut r = 0.0;
-            while along(r + 0.25 * h) > 0.0 {
+            while along(r + 0.25 * h) > 0.0 && r < longest {
                 r += 0.25 * h;
             }
             let (mut lo, mut hi) = (r, r + 0.25 * h);
@@ -438,26 +423,28 @@ pub fn sharp_tank_treading(grid: &Grid, phi: &Array3<f64>) -> f64 {
             0.5 * (lo + hi)
         })
         .collect();
-    // A ray that leaves the inside at once: the centroid is outside.
-    if radius.iter().any(|&r| r < h) {
+    // A ray that leaves the inside at once (the centroid is outside), or never (the inside
+    // reaches the box's edge).
+    if radius.iter().any(|&r| r < h || r >= longest) {
         return f64::NAN;
     }
     drop_flow::tank_treading(&radius).rate
 }
 
 /// The mean z-vorticity inside the φ = 0 surface, by Stokes' theorem
-/// ∫ ω_z dV = ∮ (n_x u_y − n_y u_x) dA over its facets, divided by the volume
-/// [`enclosed_volume`] (in 2D the circulation around the contour over the area it encloses).
+/// ∫ ω_z dV = ∮ (n_x u_y − n_y u_x) dA over its facets, divided by the volume ∮ x n_x dA from
+/// the same pass (in 2D the circulation around the contour over the area it encloses).
 /// u (u_x and u_y first) is read on the facets by the linear interpolation that places them.
 fn mean_vorticity(grid: &Grid, phi: &Array3<f64>, u: &[Array3<f64>]) -> f64 {
     let (ax, ay) = plane_axes(grid);
     let (full, ux, uy) = (grid.unfold(phi), grid.unfold(&u[0]), grid.unfold(&u[1]));
-    let mut circulation = 0.0;
+    let (mut circulation, mut volume) = (0.0, 0.0);
     facets::for_each(&full, grid.h, |f| {
         let (nx, ny) = (f.normal[ax], f.normal[ay]);
         circulation += f.mean(|_, l| nx * f.read(&uy, l) - ny * f.read(&ux, l));
+        volume += nx * f.mean(|p, _| p[ax]);
     });
-    circulation / enclosed_volume(grid, phi)
+    circulation / volume
 }
 
 #[cfg(test)]
