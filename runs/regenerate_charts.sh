@@ -27,7 +27,9 @@
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
 #                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 5 + 10, one thread, loaded), measured
 #   heating          study heating heating.json (51 relaxations, 14 references)   220 s (one thread), measured
-#   shear3d          study shear shear3d.json + shear3d_box.json (3D)   35 + 12 min on one thread beside two other runs, measured 2026-12-06
+#   rates            study rates rates.json + rates3d.json + rates3d_box.json + rates_fine.json   RATES_TIMES
+#   shear            study shear shear.json + shear_box.json (2D)   3 036 s + 445 s on one thread beside other runs, measured 2026-12-06
+#   shear3d          study shear shear3d.json + shear3d_box.json + shear3d_length.json (3D)   35 + 12 + LENGTH_TIME min on one thread beside other runs, measured 2026-12-06
 #   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 1 879 s on one thread (the second beside two other runs), measured
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 797 s wall (570 s CPU, one thread), measured
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        49 s (47 s CPU, one thread), measured
@@ -52,7 +54,7 @@ cd "$(dirname "$0")/.."
 VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
-ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating shear3d contrast axisym_c0 axisym_bc
+ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating rates shear shear3d contrast axisym_c0 axisym_bc
      axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade diagram_bc budding3d deflation3d
      dumbbell3d pearling3d triaxial3d starfish3d)
 
@@ -138,9 +140,25 @@ group_heating() {
 group_shear3d() {
     study shear shear3d.json
     same_names "$out" shear3d
-    out=$WORK/shear3d_box
-    study shear shear3d_box.json
-    same_names "$out" shear3d_box
+    for f in shear3d_box shear3d_length; do
+        out=$WORK/$f
+        study shear "$f.json"
+        same_names "$out" "$f"
+    done
+}
+group_shear() {
+    for f in shear shear_box; do
+        out=$WORK/$f
+        study shear "$f.json"
+        same_names "$out" "$f"
+    done
+}
+group_rates() {
+    for f in rates rates3d rates3d_box rates_fine; do
+        out=$WORK/$f
+        study rates "$f.json"
+        same_names "$out" "$f"
+    done
 }
 group_contrast() {
     study rates rates_contrast.json

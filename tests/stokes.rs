@@ -326,30 +326,43 @@ fn mode_three_limit(lambda: f64) -> f64 {
     value_at_zero(&points)
 }
 
-/// The rates study's quarter box (`sphere.mirror`: mirrored about x and y, z periodic) measures
-/// the quasi-sphere's mode l = 2 (R = 8ε, σ̄ = 0, L = 4R, h = ε/2) at the full box's rate, and
-/// its moment Q (the centroid on the mirror planes, the quarter's sum times 4) is the full
-/// box's at every state: the same rate to 1e-9 (measured 7e-13), the same fit. A centroid taken from
-/// the quarter alone, or a moment without the factor 4, would not give the same Q.
+/// The rates study's mirrored sphere (`sphere.mirror`) measures the full box's rate: l = 2 on
+/// the eighth box (mirrored about x, y and z) and l = 3 on the quarter box (about x and y, z
+/// periodic: P_3(cos θ) is odd in z), R = 8ε, σ̄ = 0, L = 4R, h = ε/2. Its moment Q (the
+/// centroid on the mirror planes, the reduced box's sum times 8 or 4) is the full box's at every
+/// state: the same rate to 1e-9 (measured 7e-13), the same fit. A centroid taken from the
+/// reduced box alone, or a moment without the factor, would not give the same Q.
 #[test]
-fn the_quarter_box_measures_the_full_boxs_rate() {
+fn the_mirrored_sphere_measures_the_full_boxs_rate() {
     let spec = mirrored_mode_two_spec("sphere");
-    let case = mode_two(Kind::Sphere);
-    let (full, quarter) = same_rate_on_both_boxes(&spec, &case);
-    assert!(full.ratio > 0.7 && full.ratio < 0.8, "ratio {}", full.ratio);
-    assert!((quarter.fit_residual - full.fit_residual).abs() < 1e-6 * full.fit_residual.max(1e-3));
-    // Q itself at the start: the same value on both boxes.
-    let expected = measure::sharp_rate(&case(false), 1.0) * measure::box_factor(&case(false));
-    let q = |mirror: bool| {
-        let s = measure::scene(&spec, &case(mirror), expected, 1.0).expect("scene");
-        let (problem, sim) = simulation(&s);
-        measure::amplitude(&case(mirror), &problem.grid, sim.engine().phi())
-    };
-    let (qf, qq) = (q(false), q(true));
-    assert!(
-        (qq - qf).abs() < 1e-10 * qf.abs(),
-        "Q {qq} (quarter) against {qf} (full)"
-    );
+    for (mode, axes) in [(2, 3), (3, 2)] {
+        let case = move |mirror: bool| Case {
+            mode,
+            ..mode_two(Kind::Sphere)(mirror)
+        };
+        assert_eq!(case(true).symmetry().len(), axes, "l = {mode}");
+        let (full, reduced) = same_rate_on_both_boxes(&spec, &case);
+        assert!(
+            full.ratio > 0.7 && full.ratio < 1.0,
+            "l = {mode}: ratio {}",
+            full.ratio
+        );
+        assert!(
+            (reduced.fit_residual - full.fit_residual).abs() < 1e-6 * full.fit_residual.max(1e-3)
+        );
+        // Q itself at the start: the same value on both boxes.
+        let expected = measure::sharp_rate(&case(false), 1.0) * measure::box_factor(&case(false));
+        let q = |mirror: bool| {
+            let s = measure::scene(&spec, &case(mirror), expected, 1.0).expect("scene");
+            let (problem, sim) = simulation(&s);
+            measure::amplitude(&case(mirror), &problem.grid, sim.engine().phi())
+        };
+        let (qf, qr) = (q(false), q(true));
+        assert!(
+            (qr - qf).abs() < 1e-10 * qf.abs(),
+            "l = {mode}: Q {qr} (mirrored) against {qf} (full)"
+        );
+    }
 }
 
 /// The rates study's circle on its quarter box (`circle.mirror`, an even mode: cos 2θ is even

@@ -13,9 +13,9 @@
 //! Each case runs twice, seeded with +a and −a, and the rate is fitted to Q(+a) − Q(−a)
 //! ([`moments`]).
 //!
-//! On a mirror-reduced box (the sphere's quarter box, [`Case::mirror`]) the centroid's
-//! coordinate along each mirrored axis is the mirror plane, 0 (the quarter alone would put it
-//! inside the quarter), and the sum over the computed points is multiplied by
+//! On a mirror-reduced box (the quarter or eighth box, [`Case::symmetry`]) the centroid's
+//! coordinate along each mirrored axis is the mirror plane, 0 (the reduced box alone would put
+//! it inside itself), and the sum over the computed points is multiplied by
 //! [`Grid::mirror_factor`]: the integrand about a centroid on the mirror planes is even across
 //! them, so Q is the full box's Q, not only proportional to it.
 
@@ -68,10 +68,23 @@ pub struct Case {
     pub size: f64,
     /// L/R (closed vesicles) or the box's height over λ (flat).
     pub box_ratio: f64,
-    /// Run on the quarter box mirrored about x and y (the sphere only: `"symmetry": ["x", "y"]`).
+    /// Run on a mirror-reduced box ([`Case::symmetry`]).
     pub mirror: bool,
     /// λ = η_in/η_out.
     pub viscosity_ratio: f64,
+}
+
+impl Case {
+    /// The scene's mirrored axes: none on the full box; with [`Case::mirror`] x and y (the
+    /// circle's quarter box, or the sphere's with z periodic), and z as well for the sphere's
+    /// even modes (the eighth box: P_l(cos θ) is even in z for even l, odd for odd l).
+    pub fn symmetry(&self) -> &'static [&'static str] {
+        match (self.mirror, self.kind) {
+            (false, _) => &[],
+            (true, Kind::Sphere) if self.mode % 2 == 0 => &["x", "y", "z"],
+            (true, _) => &["x", "y"],
+        }
+    }
 }
 
 /// What one case measured; a row of `cases.csv`.
@@ -199,7 +212,7 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
         "initial": initial,
     });
     if case.mirror {
-        value["symmetry"] = json!(["x", "y"]);
+        value["symmetry"] = json!(case.symmetry());
     }
     let scene = config::from_value(value)?;
     crate::problem::memory::check(&scene)?;

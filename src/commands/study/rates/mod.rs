@@ -45,9 +45,7 @@ impl Row for Measured {
                 r.case.box_ratio.into()
             }),
             Column::csv("points", |r| r.points.iter().product::<usize>().into()),
-            Column::csv("mirrored_axes", |r| {
-                (if r.case.mirror { 2usize } else { 0 }).into()
-            }),
+            Column::csv("mirrored_axes", |r| r.case.symmetry().len().into()),
             Column::both("dt", "dt", Format::Sci(2), |r| r.dt.into()),
             Column::both("steps", "steps", Format::Plain, |r| r.steps.into()),
             Column::both("rate", "rate", Format::Sci(4), |r| r.rate.into()),

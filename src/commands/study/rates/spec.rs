@@ -51,11 +51,12 @@ pub struct Family {
     /// L/R, the periodic box's side over the radius.
     #[serde(rename = "box")]
     pub box_over_r: f64,
-    /// Run each case on the box mirrored about x and y (`"symmetry": ["x", "y"]`): the sphere's
-    /// quarter box (the quasi-sphere's P_l(cos θ) about z is even in both, z left periodic) or
-    /// the circle's quarter box (cos nθ is even about both axes for even n only, so a mirrored
-    /// circle takes even modes), a quarter of the points, the same rate (the reduced box
-    /// reproduces the full one to round-off).
+    /// Run each case on a mirror-reduced box: the sphere's quarter box about x and y (the
+    /// quasi-sphere's P_l(cos θ) about z is even in both, z left periodic) for odd l and its
+    /// eighth box (z mirrored too) for even l; the circle's quarter box (cos nθ is even about
+    /// both axes for even n only, so a mirrored circle takes even modes). The same rate (the
+    /// reduced box reproduces the full one to round-off) on a quarter or an eighth of the
+    /// points.
     #[serde(default)]
     pub mirror: bool,
     /// The groups.

@@ -62,6 +62,19 @@ pub struct Case {
     pub viscosity_ratio: f64,
 }
 
+impl Case {
+    /// The sharp reference's Ω/(γ̇/2) for the contour of `phi` ([`sharp_tank_treading`]) where
+    /// it describes this case's flow, simple shear at equal viscosities (walls, λ = 1); NaN
+    /// under the Kolmogorov profile or a contrast.
+    pub fn sharp_tank_treading(&self, grid: &Grid, phi: &Array3<f64>) -> f64 {
+        if self.viscosity_ratio == 1.0 && self.profile == Profile::Walls {
+            sharp_tank_treading(grid, phi)
+        } else {
+            f64::NAN
+        }
+    }
+}
+
 /// What one case measured; a row of `cases.csv`.
 #[derive(Clone, Debug)]
 pub struct Measured {
@@ -100,8 +113,8 @@ pub struct Measured {
     /// The mean rotation rate inside over γ̇/2.
     pub tank_treading: f64,
     /// The sharp-interface reference's Ω/(γ̇/2) for the final contour, in free space simple
-    /// shear with equal viscosities ([`sharp_tank_treading`]; NaN in 3D). With η_in ≠ η_out or
-    /// the Kolmogorov profile it is that reference for the same shape, not the case's own rate.
+    /// shear with equal viscosities ([`sharp_tank_treading`]). NaN where that is not the
+    /// case's own flow: in 3D, with η_in ≠ η_out, and under the Kolmogorov profile.
     pub sharp_tank_treading: f64,
     /// σ̄ = σR0²/κ at the end.
     pub sigma_bar: f64,
@@ -293,7 +306,7 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
         deformation: mean(|s| s.2),
         linear_deformation: amplitude(v, grid.dim),
         tank_treading: turning.iter().sum::<f64>() / turning.len() as f64,
-        sharp_tank_treading: sharp_tank_treading(&grid, &phi),
+        sharp_tank_treading: case.sharp_tank_treading(&grid, &phi),
         sigma_bar: sigma * case.r0 * case.r0 / bending_modulus(1.0),
         steps,
         wall: started.elapsed().as_secs_f64(),
@@ -599,6 +612,26 @@ mod tests {
             (expected - 1.0).abs() > 0.02,
             "a rate unlike a circle's: {expected}"
         );
+        // A case reads it between walls at λ = 1 only.
+        let case = |profile, viscosity_ratio| Case {
+            reduced_area: 0.9,
+            r0: 10.0,
+            capillary: 1.0,
+            channel: 8.0,
+            length: 16.0,
+            profile,
+            viscosity_ratio,
+        };
+        assert_eq!(
+            case(Profile::Walls, 1.0).sharp_tank_treading(&grid, &phi),
+            read
+        );
+        assert!(case(Profile::Walls, 2.0)
+            .sharp_tank_treading(&grid, &phi)
+            .is_nan());
+        assert!(case(Profile::Kolmogorov, 1.0)
+            .sharp_tank_treading(&grid, &phi)
+            .is_nan());
     }
 
     /// Two separate circles have their centroid outside both: no contour about it, NaN.
