@@ -87,6 +87,18 @@ study() {
     vesicle study "$1" "runs/studies/$2" --out "$out" --force
 }
 
+# studies KIND NAME...: `study KIND` on each runs/studies/NAME.json into $WORK/NAME, its
+# committed pictures (runs/results/NAME) replaced.
+studies() {
+    local kind=$1 name
+    shift
+    for name in "$@"; do
+        out=$WORK/$name
+        study "$kind" "$name.json"
+        same_names "$out" "$name"
+    done
+}
+
 # scene NAME: run runs/NAME.json into $WORK/NAME (the folder name is the frames' title).
 scene() {
     vesicle run "runs/$1.json" --out "$out" --force --quiet
@@ -97,11 +109,11 @@ frame() {
     keep "$out/frames/frame_$(printf %08d "$1").png" "scenes/$2"
 }
 
-group_convergence() { study convergence convergence.json; same_names "$out" convergence; }
-group_stability() { study stability stability.json; same_names "$out" stability; }
-group_stability_ade() { study ade stability_ade.json; same_names "$out" stability_ade; }
-group_pinning() { study pinning pinning.json; same_names "$out" pinning; }
-group_resolution() { study resolution resolution.json; same_names "$out" resolution; }
+group_convergence() { studies convergence convergence; }
+group_stability() { studies stability stability; }
+group_stability_ade() { studies ade stability_ade; }
+group_pinning() { studies pinning pinning; }
+group_resolution() { studies resolution resolution; }
 group_precision() {
     study precision precision.json
     keep "$out/precision_transient.png" precision/precision_transient.png
@@ -122,50 +134,15 @@ group_budding() {
     for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
 }
 group_onset() {
-    study onset onset.json
-    same_names "$out" onset
-    out=$WORK/onset_seeds
-    study onset onset_seeds.json
-    same_names "$out" onset_seeds
-    for f in onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40; do
-        out=$WORK/$f
-        study onset "$f.json"
-        same_names "$out" "$f"
-    done
+    studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40
 }
-group_heating() {
-    study heating heating.json
-    same_names "$out" heating
-}
-group_shear3d() {
-    study shear shear3d.json
-    same_names "$out" shear3d
-    for f in shear3d_box shear3d_length; do
-        out=$WORK/$f
-        study shear "$f.json"
-        same_names "$out" "$f"
-    done
-}
-group_shear() {
-    for f in shear shear_box; do
-        out=$WORK/$f
-        study shear "$f.json"
-        same_names "$out" "$f"
-    done
-}
-group_rates() {
-    for f in rates rates3d rates3d_box rates_fine; do
-        out=$WORK/$f
-        study rates "$f.json"
-        same_names "$out" "$f"
-    done
-}
+group_heating() { studies heating heating; }
+group_rates() { studies rates rates rates3d rates3d_box rates_fine; }
+group_shear() { studies shear shear shear_box; }
+group_shear3d() { studies shear shear3d shear3d_box shear3d_length; }
 group_contrast() {
-    study rates rates_contrast.json
-    same_names "$out" rates_contrast
-    out=$WORK/shear_contrast
-    study shear shear_contrast.json
-    same_names "$out" shear_contrast
+    studies rates rates_contrast
+    studies shear shear_contrast
 }
 # seq_list FROM STEP COUNT: the comma-separated list FROM, FROM + STEP, … (COUNT values).
 seq_list() {
