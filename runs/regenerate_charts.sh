@@ -29,8 +29,8 @@
 #   heating          study heating heating.json (51 relaxations, 14 references)   220 s (one thread), measured
 #   rates            study rates rates.json + rates3d.json + rates3d_box.json + rates_fine.json   RATES_TIMES
 #   shear            study shear shear.json + shear_box.json (2D)   3 036 s + 445 s on one thread beside other runs, measured 2026-12-06
-#   shear3d          study shear shear3d.json + shear3d_box.json + shear3d_length.json (3D)   35 + 12 + LENGTH_TIME min on one thread beside other runs, measured 2026-12-06
-#   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 1 879 s on one thread (the second beside two other runs), measured
+#   shear3d          study shear shear3d.json + shear3d_box.json + shear3d_length.json (3D)   35 + 12 + 74 min on one thread beside two or three other runs, measured 2026-12-06
+#   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 4 036 s on one thread (the second beside three other runs), measured 2026-12-06
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 667 s wall (720 s CPU, one thread, beside three other runs), measured 2026-12-06
 #   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 121        49 s (47 s CPU, one thread), measured
 #   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 121 67 s (65 s CPU, one thread), measured
