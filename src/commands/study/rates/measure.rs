@@ -81,7 +81,7 @@ impl Case {
     pub fn symmetry(&self) -> &'static [&'static str] {
         match (self.mirror, self.kind) {
             (false, _) => &[],
-            (true, Kind::Sphere) if self.mode % 2 == 0 => &["x", "y", "z"],
+            (true, Kind::Sphere) if self.mode.is_multiple_of(2) => &["x", "y", "z"],
             (true, _) => &["x", "y"],
         }
     }
