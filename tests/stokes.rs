@@ -341,7 +341,7 @@ fn the_mirrored_sphere_measures_the_full_boxs_rate() {
             ..mode_two(Kind::Sphere)(mirror)
         };
         assert_eq!(case(true).symmetry().len(), axes, "l = {mode}");
-        let (full, reduced) = same_rate_on_both_boxes(&spec, &case);
+        let (full, reduced) = same_rate_on_both_boxes(&spec, case);
         assert!(
             full.ratio > 0.7 && full.ratio < 1.0,
             "l = {mode}: ratio {}",
