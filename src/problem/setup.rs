@@ -180,13 +180,15 @@ fn mirror_axes(scene: &Scene, grid: &Grid, phi: &Array3<f64>, c0: &C0) -> Result
             let walls = scene.wall_flags();
             // An imposed shear along x varying along y is even about neither plane.
             let sheared = scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some());
-            // Unequal viscosities run on the periodic box.
-            let contrast = scene.stokes_flow().is_some_and(|f| f.contrast().is_some());
+            // Unequal viscosities and the inextensible membrane run on the periodic box.
+            let periodic = scene
+                .stokes_flow()
+                .is_some_and(|f| f.contrast().is_some() || f.inextensible);
             for (s, m) in mirror.iter_mut().enumerate() {
                 let a = internal(s);
                 let kept_by_flow = !(sheared && s < 2);
                 *m = !walls[s]
-                    && !contrast
+                    && !periodic
                     && kept_by_flow
                     && grid.shape[a].is_multiple_of(2)
                     && asymmetry(phi, a) <= SYMMETRY_TOL

@@ -56,6 +56,7 @@
 //! forces forward, both velocities back, both advections forward); 3d + 2 at a fixed tension.
 
 use super::evaluator::Symbols;
+use super::inextensible::Inextensibility;
 use super::transform::Transform;
 use super::viscous::Viscosities;
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
@@ -77,7 +78,7 @@ pub struct FlowStats {
     /// unequal viscosities ∫2η|D(u)|², [`super::viscous`]).
     pub dissipation: f64,
     /// The most conjugate-gradient iterations one Stokes solve took (0 at equal viscosities,
-    /// whose solve is direct).
+    /// whose solve is direct), or the inextensible membrane's tension solve.
     pub solve_iterations: usize,
 }
 
@@ -115,13 +116,16 @@ pub struct Flow {
     speed_sq: Array3<f64>,
     /// The imposed shear flow u_x(y) along the y axis's points (`None`: no imposed flow).
     shear: Option<Vec<f64>>,
-    /// Its strain rate u_x'(y) along the y axis's points, with unequal viscosities (periodic
-    /// Kolmogorov flow only).
+    /// Its strain rate u_x'(y) along the y axis's points, with unequal viscosities or the
+    /// inextensible membrane (periodic Kolmogorov flow only).
     shear_gradient: Option<Vec<f64>>,
     /// σ_f of a fixed tension: one flow at μ_b + σ_fμ_σ, no part per unit σ (`None`: split).
     fixed_tension: Option<f64>,
     /// The variable-viscosity solve when η_in ≠ η_out ([`super::viscous`]; periodic boxes).
     viscosities: Option<Viscosities>,
+    /// The tension field of the locally inextensible membrane ([`super::inextensible`];
+    /// periodic boxes, equal viscosities).
+    inextensibility: Option<Inextensibility>,
 }
 
 impl Flow {
@@ -173,10 +177,11 @@ impl Flow {
         });
         // With unequal viscosities the imposed flow is not the Stokes flow of the body force
         // that drives it: its strain rate u_x'(y) = γ̇cos(k₀y) is kept for the force it then
-        // exerts ([`Viscosities::add_imposed_strain_force`]).
+        // exerts ([`Viscosities::add_imposed_strain_force`]); the inextensible membrane's
+        // constraint reads it too.
         let shear_gradient = spec
             .shear_rate
-            .filter(|_| spec.contrast().is_some())
+            .filter(|_| spec.contrast().is_some() || spec.inextensible)
             .map(|rate| {
                 let n = real[axes[1]];
                 let k0 = 2.0 * std::f64::consts::PI / (n as f64 * h);
@@ -203,6 +208,9 @@ impl Flow {
             viscosities: spec
                 .contrast()
                 .map(|inside| Viscosities::new(spec.viscosity, inside, axes.len(), transform)),
+            inextensibility: spec
+                .inextensible
+                .then(|| Inextensibility::new(spec.viscosity, transform, h)),
             axes,
             fixed_tension: None,
         }
@@ -335,6 +343,21 @@ impl Flow {
             self.project::<T>(sym, part);
         }
         let mut solve_iterations = 0;
+        if let Some(constraint) = self.inextensibility.as_mut() {
+            // Periodic axes only: the picture is the storage.
+            constraint.set_state(&self.gradient, eps);
+            for part in 0..parts {
+                let imposed = self.shear_gradient.as_deref().filter(|_| part == 0);
+                let iterations = constraint.constrain(
+                    transform,
+                    sym,
+                    (&self.kappa, &self.axes),
+                    (part, imposed),
+                    &mut self.components[part],
+                );
+                solve_iterations = solve_iterations.max(iterations);
+            }
+        }
         let dissipation = match self.viscosities.as_mut() {
             Some(viscous) => {
                 for part in 0..parts {
@@ -735,6 +758,7 @@ mod tests {
                 mobility: 0.01,
                 shear_rate: Some(rate),
                 viscosity_inside: None,
+                inextensible: false,
             });
             let u = ev
                 .velocity_at(&Array3::from_elem(grid.shape, -1.0), 0.0)
@@ -775,6 +799,7 @@ mod tests {
                     mobility: 0.01,
                     shear_rate: Some(rate),
                     viscosity_inside: Some(inside),
+                    inextensible: false,
                 });
                 let u = ev
                     .velocity_at(&Array3::from_elem(grid.shape, phi), 0.0)
@@ -812,6 +837,7 @@ mod tests {
                 mobility: 0.05,
                 shear_rate: None,
                 viscosity_inside: None,
+                inextensible: false,
             },
         );
         let boxes: [(&[usize], &[bool], &[bool]); 9] = [
@@ -925,10 +951,12 @@ mod tests {
                         mobility: 0.05,
                         shear_rate: None,
                         viscosity_inside: Some(inside),
+                        inextensible: false,
                     };
                     let d = assert_energy_law(&grid, spec, sigma, fixed);
                     let equal = FlowSpec {
                         viscosity_inside: None,
+                        inextensible: false,
                         ..spec
                     };
                     let d_equal = assert_energy_law(&grid, equal, sigma, fixed);
@@ -1020,6 +1048,7 @@ mod tests {
                 mobility: 0.01,
                 shear_rate: Some(1e-3),
                 viscosity_inside: Some(inside),
+                inextensible: false,
             };
             let mut ev = plain_evaluator(&grid)
                 .with_flow(spec)

@@ -5,6 +5,7 @@ pub mod curvature;
 pub mod engine;
 pub mod evaluator;
 pub mod flow;
+pub mod inextensible;
 pub(crate) mod kernels;
 pub(crate) mod pieces;
 pub(crate) mod saved;

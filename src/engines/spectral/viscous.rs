@@ -308,7 +308,7 @@ fn precondition(r: &mut Array3<Complex64>, modes: [usize; 3], sym: &Symbols, eta
 
 /// The Oseen projection P = I − κ̂κ̂ in place on the components `v` (κ = 0: unchanged), with
 /// κ·v̂/|κ|² written into `dots`.
-fn project(
+pub(super) fn project(
     v: &mut [Array3<Complex64>],
     dots: &mut Array3<Complex64>,
     sym: &Symbols,

@@ -254,6 +254,11 @@ pub struct FlowSpec {
     /// the outside's `viscosity`: η(x) = η_out + (η_in − η_out)χ (periodic boxes only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub viscosity_inside: Option<f64>,
+    /// A locally inextensible membrane: a tension field, a Lagrange multiplier, holds the
+    /// velocity surface incompressible across the interface (∇_s·u = 0) in place of one
+    /// global tension (periodic boxes, equal viscosities; docs/src/theory/flow.md).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub inextensible: bool,
 }
 
 impl FlowSpec {

@@ -241,26 +241,38 @@ impl Scene {
         }
     }
 
-    /// Unequal viscosities (`flow.viscosity_inside` ≠ `flow.viscosity`) run on the periodic
-    /// box: no declared mirror plane and no walls (an imposed shear is then the periodic
-    /// Kolmogorov flow).
-    fn validate_contrast(&self, flow: FlowSpec) -> Result<()> {
-        if flow.contrast().is_none() {
-            return Ok(());
-        }
+    /// Unequal viscosities (`flow.viscosity_inside` ≠ `flow.viscosity`) and the locally
+    /// inextensible membrane (`flow.inextensible`) run on the periodic box: no declared mirror
+    /// plane and no walls (an imposed shear is then the periodic Kolmogorov flow); the two do
+    /// not run together.
+    fn validate_periodic_flow(&self, flow: FlowSpec) -> Result<()> {
+        let what = match (flow.contrast().is_some(), flow.inextensible) {
+            (false, false) => return Ok(()),
+            (true, true) => {
+                return Err(Error::config(
+                    "flow.inextensible",
+                    "the inextensible membrane runs at equal viscosities: drop \
+                     flow.viscosity_inside or set it to flow.viscosity",
+                ))
+            }
+            (true, false) => "unequal viscosities (flow.viscosity_inside)",
+            (false, true) => "the inextensible membrane (flow.inextensible)",
+        };
         if let Symmetry::Axes(axes) = &self.symmetry {
             if !axes.is_empty() {
                 return Err(Error::config(
                     "symmetry",
-                    "unequal viscosities (flow.viscosity_inside) run on the periodic box: drop the \
-                     mirror planes (\"symmetry\": [] or \"auto\", which then takes none)",
+                    format!(
+                        "{what} runs on the periodic box: drop the mirror planes \
+                         (\"symmetry\": [] or \"auto\", which then takes none)"
+                    ),
                 ));
             }
         }
         if !self.walls.is_empty() {
             return Err(Error::config(
                 "walls",
-                "unequal viscosities (flow.viscosity_inside) run on the periodic box: drop the walls",
+                format!("{what} runs on the periodic box: drop the walls"),
             ));
         }
         Ok(())
@@ -293,8 +305,8 @@ impl Scene {
         }
         if let Some(inside) = flow.viscosity_inside {
             positive("flow.viscosity_inside", inside)?;
-            self.validate_contrast(flow)?;
         }
+        self.validate_periodic_flow(flow)?;
         if self.method == Method::Fd {
             return Err(Error::config(
                 "dynamics",

@@ -1,0 +1,428 @@
+//! The locally inextensible membrane (docs/src/theory/flow.md, "The inextensible membrane"): a
+//! tension field σ(x), a Lagrange multiplier, holds the fluid's velocity surface incompressible
+//! across the diffuse interface. With g = ε∇φ (|g|² ≈ (1 − φ²)²/2 across the tanh profile) and
+//! the weight T = g gᵀ,
+//!
+//! ```text
+//! B u = T:∇u = Σ_ab g_a g_b ∂_a u_b           (= −|g|² P_s:∇u, P_s = I − n̂n̂, where ∇·u = 0),
+//! (Bᵀσ)_b = −Σ_a ∂_a(σ T_ab)                  (= ∇·(σ|g|² P_s) less the gradient ∇(σ|g|²)),
+//! ```
+//!
+//! the constraint's operator and its adjoint (Σ_x σ Bu = Σ_x u·Bᵀσ, the same transforms read
+//! both ways). The force Bᵀσ is a surface tension σ|g|² across the layer (the gradient it
+//! leaves out is the pressure's), which integrates to a membrane tension (2√2/3)εσ in the sharp
+//! limit. The flow u = S(f + Bᵀσ), S = (I − κ̂κ̂)/(η|k|²) the Oseen solve, meets B u = 0 when
+//!
+//! ```text
+//! B S Bᵀ σ = −B S f = −B u₀,
+//! ```
+//!
+//! symmetric and positive semi-definite (S is), with −B u₀ in its range: conjugate gradients
+//! from σ = 0, each iteration one B S Bᵀ (d(d + 1)/2 transforms forward and as many back: 6 in
+//! 2D, 12 in 3D). The flow is updated with each search direction's S Bᵀp, so σ itself is never
+//! formed. The tension does no work on the flow it constrains (Σ_x u·Bᵀσ = Σ_x σBu = 0), so the
+//! power the fluid dissipates is still Σ_x u·f = η Σ_k w|k|²|û|², to the solve's tolerance.
+//!
+//! The stop rule: ‖B u‖ below [`TOLERANCE`] times ‖|g|²|D(u₀)|‖ (|D| the Frobenius norm of the
+//! strain rate), the most B u₀ could be (|T:D| ≤ |T||D|, |T| = |g|²): the surface divergence is
+//! held to that fraction of the strain rate in the layer.
+//!
+//! Only periodic axes (the off-diagonal weights are odd across two mirror planes at once, which
+//! the twisted storage of [`super::flow`] does not carry) and equal viscosities.
+
+use super::evaluator::Symbols;
+use super::flow::{indexed, mode_symbols, modes_mut};
+use super::transform::Transform;
+use super::viscous::project;
+use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
+use ndarray::{Array3, Zip};
+use num_complex::Complex64;
+use rayon::prelude::*;
+
+/// The relative tolerance of the solve: the flow's error in the dissipation norm over the
+/// flow's own norm (module documentation).
+pub const TOLERANCE: f64 = 1e-4;
+
+/// γ of the regularization γR in units of ε²/η: large enough that the flow is within 3e-5 of
+/// its γ → ∞ limit (γ = 10 and 100 gave dissipations 8.7186e-9 and 8.7189e-9 on a quasi-circle
+/// of R = 16ε; γ = 1, 8.7154e-9), small enough for the solve (80–130 iterations at γ = 10,
+/// 190–330 at γ = 100 with ℓ = 4ε).
+const REGULARIZATION: f64 = 10.0;
+
+/// ℓ of the preconditioner exp(−ℓ²|k|²) is the box's shortest side over this (8: ℓ = R/2 for a
+/// vesicle of radius R in a box 4R wide; the same quasi-circle took 30–120 iterations a step at
+/// ℓ = R/2 to R, against 200–1400 at ℓ = ε/8 to R/8).
+const SMOOTHING_PER_SIDE: f64 = 8.0;
+
+/// The iterations whose energy drops estimate the remaining error (Hestenes & Stiefel's
+/// estimate with this delay).
+const DELAY: usize = 5;
+
+/// The most iterations a solve takes.
+pub const MAX_ITERATIONS: usize = 2000;
+
+/// The constraint's weights and the solve's scratch.
+pub struct Inextensibility {
+    viscosity: f64,
+    /// ℓ of the preconditioner H² = exp(−ℓ²|k|²).
+    smoothing: f64,
+    /// The pairs (a, b), a ≤ b, of velocity components (indices into the box's axes).
+    pairs: Vec<(usize, usize)>,
+    /// T_ab = g_a g_b per pair.
+    weights: Vec<Array3<f64>>,
+    /// The residual r, its smoothed z = H²r, the search direction p and B S Bᵀp on the grid.
+    residual: Array3<f64>,
+    smoothed: Array3<f64>,
+    direction: Array3<f64>,
+    product: Array3<f64>,
+    /// σ of the last solve per part (the warm start), and whether there is one.
+    tension: [Array3<f64>; 2],
+    warm: [bool; 2],
+    /// The cell volume h^d: grid sums times it are integrals.
+    cell: f64,
+    /// γ of the regularization γR, R = −∇·(T∇·).
+    regularization: f64,
+    /// ∂_a p per component, and the spectrum of p, then of ∇·(T∇p).
+    slope: Vec<Array3<f64>>,
+    divergence: Array3<Complex64>,
+    /// A grid field and a spectrum of scratch.
+    grid: Array3<f64>,
+    spectrum: Array3<Complex64>,
+    /// S Bᵀp per velocity component.
+    flow: Vec<Array3<Complex64>>,
+}
+
+impl Inextensibility {
+    /// The constraint for viscosity `viscosity` on `transform`'s box of spacing `h`, with a
+    /// velocity component along each axis longer than 1.
+    pub fn new(viscosity: f64, transform: &Transform, h: f64) -> Self {
+        let sides: Vec<usize> = transform.shape().into_iter().filter(|&n| n > 1).collect();
+        let components = sides.len();
+        let shortest = sides.iter().min().copied().unwrap_or(1) as f64 * h;
+        let pairs: Vec<(usize, usize)> = (0..components)
+            .flat_map(|a| (a..components).map(move |b| (a, b)))
+            .collect();
+        let zeros = || Array3::zeros(transform.shape());
+        Inextensibility {
+            viscosity,
+            smoothing: shortest / SMOOTHING_PER_SIDE,
+            weights: pairs.iter().map(|_| zeros()).collect(),
+            pairs,
+            residual: zeros(),
+            smoothed: zeros(),
+            direction: zeros(),
+            product: zeros(),
+            tension: [zeros(), zeros()],
+            warm: [false; 2],
+            cell: h.powi(components as i32),
+            regularization: 0.0,
+            slope: (0..components).map(|_| zeros()).collect(),
+            divergence: Array3::zeros(transform.spectral_shape()),
+            grid: zeros(),
+            spectrum: Array3::zeros(transform.spectral_shape()),
+            flow: (0..components)
+                .map(|_| Array3::zeros(transform.spectral_shape()))
+                .collect(),
+        }
+    }
+
+    /// T_ab = ε²∂_aφ∂_bφ from the state's gradient ∂_aφ (`gradient`, per component) and `eps`.
+    pub fn set_state(&mut self, gradient: &[Array3<f64>], eps: f64) {
+        let e2 = eps * eps;
+        self.regularization = REGULARIZATION * e2 / self.viscosity;
+        for (t, &(a, b)) in self.weights.iter_mut().zip(&self.pairs) {
+            Zip::from(t)
+                .and(&gradient[a])
+                .and(&gradient[b])
+                .par_for_each(|t, &ga, &gb| *t = e2 * ga * gb);
+        }
+    }
+
+    /// z = H²r: r's spectrum times exp(−ℓ²|k|²), back to the grid.
+    fn smooth(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        r: &Array3<f64>,
+        z: &mut Array3<f64>,
+    ) {
+        let l2 = self.smoothing * self.smoothing;
+        self.grid.assign(r);
+        transform.forward(&mut self.grid, &mut self.spectrum);
+        let modes = transform.spectral_shape();
+        modes_mut(
+            &mut self.spectrum,
+            modes,
+            sym,
+            |_, _, (k2, _), s: &mut Complex64| *s *= (-l2 * k2).exp(),
+        );
+        transform.inverse(&mut self.spectrum, z);
+    }
+
+    /// Constrain the flow `velocity` of `part` (0: σ_g = 0, 1: per unit global tension; û per
+    /// component, the Oseen solve of the force) in place: add S Bᵀσ with σ from
+    /// B S Bᵀσ = −B(u + u_imp), where u_imp is the imposed shear u(y)x̂ of strain rate
+    /// `imposed` = u'(y) along the y axis's points (`None`: no imposed flow), so that the whole
+    /// flow is surface incompressible. `kappa` holds κ per axis and `axes` the box's axes longer
+    /// than 1. Preconditioned conjugate gradients from the last solve's σ of the same part
+    /// (module documentation). Returns the iterations taken ([`MAX_ITERATIONS`] where the
+    /// error estimate stayed above the tolerance).
+    pub fn constrain(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+        (part, imposed): (usize, Option<&[f64]>),
+        velocity: &mut [Array3<Complex64>],
+    ) -> usize {
+        let mut flow = std::mem::take(&mut self.flow);
+        let mut tension = std::mem::take(&mut self.tension[part]);
+        if self.warm[part] {
+            self.apply_force_flow(transform, sym, (kappa, axes), &tension, &mut flow);
+            add_scaled(velocity, &flow, 1.0);
+        }
+        self.warm[part] = true;
+        let mut residual = std::mem::take(&mut self.residual);
+        self.apply_constraint(transform, sym, (kappa, axes), velocity, &mut residual);
+        if let Some(rate) = imposed {
+            // B u_imp = T_xy u'(y): the pair (0, 1) is the second.
+            let y = axes[1];
+            Zip::indexed(&mut residual)
+                .and(&self.weights[1])
+                .par_for_each(|idx, r, &t| *r += t * rate[[idx.0, idx.1, idx.2][y]]);
+        }
+        self.add_regularization(transform, sym, (kappa, axes), &tension, &mut residual);
+        residual.mapv_inplace(|r| -r);
+        let mut smoothed = std::mem::take(&mut self.smoothed);
+        self.smooth(transform, sym, &residual, &mut smoothed);
+        let mut rz = grid_dot(&residual, &smoothed);
+        let mut direction = std::mem::take(&mut self.direction);
+        direction.assign(&smoothed);
+        let mut product = std::mem::take(&mut self.product);
+        let mut recent = [f64::INFINITY; DELAY];
+        let mut iterations = 0;
+        while recent.iter().sum::<f64>() > TOLERANCE * TOLERANCE * self.energy(sym, velocity)
+            && iterations < MAX_ITERATIONS
+        {
+            self.apply_force_flow(transform, sym, (kappa, axes), &direction, &mut flow);
+            self.apply_constraint(transform, sym, (kappa, axes), &flow, &mut product);
+            self.add_regularization(transform, sym, (kappa, axes), &direction, &mut product);
+            let curvature = grid_dot(&direction, &product);
+            if curvature <= 0.0 {
+                break;
+            }
+            let alpha = rz / curvature;
+            add_scaled(velocity, &flow, alpha);
+            Zip::from(&mut tension)
+                .and(&direction)
+                .par_for_each(|s, &p| *s += alpha * p);
+            Zip::from(&mut residual)
+                .and(&product)
+                .par_for_each(|r, &ap| *r -= alpha * ap);
+            let drop = self.cell * alpha * rz;
+            recent[iterations % DELAY] = drop;
+            self.smooth(transform, sym, &residual, &mut smoothed);
+            let next = grid_dot(&residual, &smoothed);
+            let beta = next / rz;
+            rz = next;
+            Zip::from(&mut direction)
+                .and(&smoothed)
+                .par_for_each(|p, &z| *p = z + beta * *p);
+            iterations += 1;
+        }
+        (
+            self.residual,
+            self.smoothed,
+            self.direction,
+            self.product,
+            self.flow,
+        ) = (residual, smoothed, direction, product, flow);
+        self.tension[part] = tension;
+        iterations
+    }
+
+    /// η Σ_k w|k|²|û|² over the components: the power the flow dissipates.
+    fn energy(&self, sym: &Symbols, velocity: &[Array3<Complex64>]) -> f64 {
+        let modes = [
+            velocity[0].dim().0,
+            velocity[0].dim().1,
+            velocity[0].dim().2,
+        ];
+        let len = modes.iter().product::<usize>();
+        let partials = (0..len.div_ceil(PAR_CHUNK)).into_par_iter().map(|t| {
+            indexed(t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len), modes)
+                .map(|(i, idx)| {
+                    let (k2, w) = mode_symbols(sym, idx);
+                    let u2: f64 = velocity
+                        .iter()
+                        .map(|u| u.as_slice().expect("standard layout")[i].norm_sqr())
+                        .sum();
+                    w * k2 * u2
+                })
+                .sum::<f64>()
+        });
+        self.viscosity * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
+    }
+
+    /// `out` = B v = Σ_ab T_ab ∂_a v_b of the divergence-free field v̂ = `v`: for each pair
+    /// a ≤ b the strain 2D̂_ab = iκ_a v̂_b + iκ_b v̂_a back to the grid, times T_ab (T_aa/2 on the
+    /// diagonal).
+    fn apply_constraint(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+        v: &[Array3<Complex64>],
+        out: &mut Array3<f64>,
+    ) {
+        let modes = transform.spectral_shape();
+        out.fill(0.0);
+        for (&(ca, cb), t) in self.pairs.iter().zip(&self.weights) {
+            let (a, b) = (axes[ca], axes[cb]);
+            let (va, vb) = (
+                v[ca].as_slice().expect("standard layout"),
+                v[cb].as_slice().expect("standard layout"),
+            );
+            modes_mut(
+                &mut self.spectrum,
+                modes,
+                sym,
+                |i, idx, _, s: &mut Complex64| {
+                    let i_kappa = |x: usize| Complex64::new(0.0, kappa[x][idx[x]]);
+                    *s = i_kappa(a) * vb[i] + i_kappa(b) * va[i];
+                },
+            );
+            transform.inverse(&mut self.spectrum, &mut self.grid);
+            let share = if ca == cb { 0.5 } else { 1.0 };
+            Zip::from(&mut *out)
+                .and(&self.grid)
+                .and(t)
+                .par_for_each(|o, &s, &t| *o += share * t * s);
+        }
+    }
+
+    /// `out` += γR p = −γ∇·(T∇p): ∇p spectrally, T∇p on the grid, its divergence spectrally.
+    fn add_regularization(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+        p: &Array3<f64>,
+        out: &mut Array3<f64>,
+    ) {
+        if self.regularization == 0.0 {
+            return;
+        }
+        let modes = transform.spectral_shape();
+        self.grid.assign(p);
+        let mut hat = std::mem::take(&mut self.divergence);
+        transform.forward(&mut self.grid, &mut hat);
+        for (c, &a) in axes.iter().enumerate() {
+            let source = hat.as_slice().expect("standard layout");
+            modes_mut(
+                &mut self.spectrum,
+                modes,
+                sym,
+                |i, idx, _, s: &mut Complex64| {
+                    *s = Complex64::new(0.0, kappa[a][idx[a]]) * source[i];
+                },
+            );
+            transform.inverse(&mut self.spectrum, &mut self.slope[c]);
+        }
+        hat.fill(Complex64::default());
+        for c in 0..axes.len() {
+            // The flux (T∇p)_c = Σ_b T_cb ∂_b p.
+            self.grid.fill(0.0);
+            for (&(a, b), t) in self.pairs.iter().zip(&self.weights) {
+                let other = match (a == c, b == c) {
+                    (true, _) => b,
+                    (_, true) => a,
+                    _ => continue,
+                };
+                Zip::from(&mut self.grid)
+                    .and(t)
+                    .and(&self.slope[other])
+                    .par_for_each(|f, &t, &d| *f += t * d);
+            }
+            transform.forward(&mut self.grid, &mut self.spectrum);
+            let flux = self.spectrum.as_slice().expect("standard layout");
+            let along = axes[c];
+            modes_mut(&mut hat, modes, sym, |i, idx, _, h: &mut Complex64| {
+                *h -= Complex64::new(0.0, kappa[along][idx[along]]) * flux[i];
+            });
+        }
+        transform.hermitian_symmetrize(&mut hat);
+        transform.inverse(&mut hat, &mut self.grid);
+        let gamma = self.regularization;
+        Zip::from(out)
+            .and(&self.grid)
+            .par_for_each(|o, &r| *o += gamma * r);
+        self.divergence = hat;
+    }
+
+    /// `out` = S Bᵀp: for each pair a ≤ b, τ̂ = FT[p T_ab], f̂_b −= iκ_a τ̂ (and f̂_a −= iκ_b τ̂ for
+    /// a ≠ b); then the Oseen solve (I − κ̂κ̂)f̂/(η|k|²) (0 at k = 0).
+    fn apply_force_flow(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+        p: &Array3<f64>,
+        out: &mut [Array3<Complex64>],
+    ) {
+        let modes = transform.spectral_shape();
+        for o in out.iter_mut() {
+            o.fill(Complex64::default());
+        }
+        for (&(ca, cb), t) in self.pairs.iter().zip(&self.weights) {
+            let (a, b) = (axes[ca], axes[cb]);
+            Zip::from(&mut self.grid)
+                .and(p)
+                .and(t)
+                .par_for_each(|g, &p, &t| *g = p * t);
+            transform.forward(&mut self.grid, &mut self.spectrum);
+            let tau = self.spectrum.as_slice().expect("standard layout");
+            let mut subtract = |c: usize, x: usize| {
+                modes_mut(&mut out[c], modes, sym, |i, idx, _, o: &mut Complex64| {
+                    *o -= Complex64::new(0.0, kappa[x][idx[x]]) * tau[i];
+                });
+            };
+            subtract(cb, a);
+            if ca != cb {
+                subtract(ca, b);
+            }
+        }
+        project(out, &mut self.spectrum, sym, (kappa, axes));
+        let eta = self.viscosity;
+        for o in out.iter_mut() {
+            modes_mut(o, modes, sym, |_, _, (k2, _), o: &mut Complex64| {
+                *o = if k2 > 0.0 {
+                    *o / (eta * k2)
+                } else {
+                    Complex64::default()
+                };
+            });
+            transform.hermitian_symmetrize(o);
+        }
+    }
+}
+
+/// u_c += a·q_c for every component.
+fn add_scaled(u: &mut [Array3<Complex64>], q: &[Array3<Complex64>], a: f64) {
+    for (u, q) in u.iter_mut().zip(q) {
+        Zip::from(u).and(q).par_for_each(|u, &q| *u += q * a);
+    }
+}
+
+/// Σ_x a b, summed in a fixed tree (the same on any thread count).
+fn grid_dot(a: &Array3<f64>, b: &Array3<f64>) -> f64 {
+    let (a, b) = (
+        a.as_slice().expect("standard layout"),
+        b.as_slice().expect("standard layout"),
+    );
+    let partials = a
+        .par_chunks(PAR_CHUNK)
+        .zip(b.par_chunks(PAR_CHUNK))
+        .map(|(x, y)| x.iter().zip(y).map(|(x, y)| x * y).sum::<f64>());
+    sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
+}
