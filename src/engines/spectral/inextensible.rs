@@ -1,7 +1,7 @@
 //! The locally inextensible membrane (docs/src/theory/flow.md, "The inextensible membrane"): a
 //! tension field σ(x), a Lagrange multiplier, holds the fluid's velocity surface incompressible
-//! across the diffuse interface. With g = ε∇φ (|g|² ≈ (1 − φ²)²/2 across the tanh profile) and
-//! the weight T = g gᵀ,
+//! across the diffuse interface, on top of the global tension the area method sets. With
+//! g = ε∇φ (|g|² ≈ (1 − φ²)²/2 across the tanh profile) and the weight T = g gᵀ,
 //!
 //! ```text
 //! B u = T:∇u = Σ_ab g_a g_b ∂_a u_b           (= −|g|² P_s:∇u, P_s = I − n̂n̂, where ∇·u = 0),
@@ -11,21 +11,32 @@
 //! the constraint's operator and its adjoint (Σ_x σ Bu = Σ_x u·Bᵀσ, the same transforms read
 //! both ways). The force Bᵀσ is a surface tension σ|g|² across the layer (the gradient it
 //! leaves out is the pressure's), which integrates to a membrane tension (2√2/3)εσ in the sharp
-//! limit. The flow u = S(f + Bᵀσ), S = (I − κ̂κ̂)/(η|k|²) the Oseen solve, meets B u = 0 when
+//! limit. The flow is u = S(f + Bᵀσ), S = (I − κ̂κ̂)/(η|k|²) the Oseen solve, with σ from
 //!
 //! ```text
-//! B S Bᵀ σ = −B S f = −B u₀,
+//! (B S Bᵀ + γR) σ = −B S f = −B u₀ + c w,   R = −∇·(T∇·),   Σ_x σ w = 0,   w = |g|².
 //! ```
 //!
-//! symmetric and positive semi-definite (S is), with −B u₀ in its range: conjugate gradients
-//! from σ = 0, each iteration one B S Bᵀ (d(d + 1)/2 transforms forward and as many back: 6 in
-//! 2D, 12 in 3D). The flow is updated with each search direction's S Bᵀp, so σ itself is never
-//! formed. The tension does no work on the flow it constrains (Σ_x u·Bᵀσ = Σ_x σBu = 0), so the
-//! power the fluid dissipates is still Σ_x u·f = η Σ_k w|k|²|û|², to the solve's tolerance.
-//!
-//! The stop rule: ‖B u‖ below [`TOLERANCE`] times ‖|g|²|D(u₀)|‖ (|D| the Frobenius norm of the
-//! strain rate), the most B u₀ could be (|T:D| ≤ |T||D|, |T| = |g|²): the surface divergence is
-//! held to that fraction of the strain rate in the layer.
+//! - **Across the layer.** B u = 0 at every point of the layer asks the flow not to shear the
+//!   layer's level sets apart, which a tension varying across the layer can enforce only
+//!   with large, nearly powerless stresses: conjugate gradients stalled. R, a Laplacian along
+//!   the normal only, costs such variation and nothing else: it annihilates every σ constant
+//!   along the normals, so against those test fields Bu = −γRσ + cw still vanishes exactly.
+//!   The membrane is held inextensible across the layer as a whole, not at each of its points.
+//! - **The uniform part.** The tension's part uniform along the membrane (w, the interface's
+//!   weight) is the global tension's, which the area method sets (a fixed σ, or the one the
+//!   projection solves for): σ is kept orthogonal to w and the surface divergence may be the
+//!   uniform c w. Without this a single mode cannot relax (its excess area is frozen).
+//! - **The solve.** Conjugate gradients on σ ⊥ w, preconditioned by the smoothing
+//!   exp(−ℓ²|k|²) (the tension that matters varies on the vesicle's scale), warm-started from
+//!   the last solve's σ of the same part. Each iteration applies B S Bᵀ (d(d + 1)/2 transforms
+//!   forward and as many back), R (2d + 2) and the smoothing (2): 14 transforms in 2D, 22 in
+//!   3D. The flow is updated with each search direction's S Bᵀp.
+//! - **The stop rule.** The flow's error in the dissipation norm, estimated by the last
+//!   [`DELAY`] steps' decrements α rᵀz (Hestenes & Stiefel), below [`TOLERANCE`] of the flow.
+//! - **The energy law.** The tension does the work Σ_x u·Bᵀσ = Σ_x σBu = −γ∫σRσ on the flow
+//!   (σ ⊥ w), so Σ_x u·f = η∫|∇u|² + γ∫∇σ·T∇σ: the regularization is a second, non-negative
+//!   channel of dissipation, reported with the fluid's ([`Inextensibility::relaxation`]).
 //!
 //! Only periodic axes (the off-diagonal weights are odd across two mirror planes at once, which
 //! the twisted storage of [`super::flow`] does not carry) and equal viscosities.
@@ -43,16 +54,15 @@ use rayon::prelude::*;
 /// flow's own norm (module documentation).
 pub const TOLERANCE: f64 = 1e-4;
 
-/// γ of the regularization γR in units of ε²/η: large enough that the flow is within 3e-5 of
-/// its γ → ∞ limit (γ = 10 and 100 gave dissipations 8.7186e-9 and 8.7189e-9 on a quasi-circle
-/// of R = 16ε; γ = 1, 8.7154e-9), small enough for the solve (80–130 iterations at γ = 10,
-/// 190–330 at γ = 100 with ℓ = 4ε).
+/// γ of the regularization γR in units of ε²/η. On a quasi-circle of R = 16ε (L = 4R, h = ε/2)
+/// six steps' dissipation read 4.0932e-7 at γ = 1 and 4.0938e-7 at γ = 10 (ℓ = 4ε); γ = 100
+/// needs up to 180 iterations a step and more where ℓ is large.
 const REGULARIZATION: f64 = 10.0;
 
-/// ℓ of the preconditioner exp(−ℓ²|k|²) is the box's shortest side over this (8: ℓ = R/2 for a
-/// vesicle of radius R in a box 4R wide; the same quasi-circle took 30–120 iterations a step at
-/// ℓ = R/2 to R, against 200–1400 at ℓ = ε/8 to R/8).
-const SMOOTHING_PER_SIDE: f64 = 8.0;
+/// ℓ of the preconditioner exp(−ℓ²|k|²) is the box's shortest side over this (16: ℓ = R/4 for
+/// a vesicle of radius R in a box 4R wide). The same quasi-circle took 12–29 iterations a step
+/// at ℓ = R/4, 19–47 at R/2 and 23–81 at R.
+const SMOOTHING_PER_SIDE: f64 = 16.0;
 
 /// The iterations whose energy drops estimate the remaining error (Hestenes & Stiefel's
 /// estimate with this delay).
@@ -70,6 +80,9 @@ pub struct Inextensibility {
     pairs: Vec<(usize, usize)>,
     /// T_ab = g_a g_b per pair.
     weights: Vec<Array3<f64>>,
+    /// w = |g|² = Σ_a T_aa, the interface's weight, and Σ_x w².
+    interface: Array3<f64>,
+    interface_norm: f64,
     /// The residual r, its smoothed z = H²r, the search direction p and B S Bᵀp on the grid.
     residual: Array3<f64>,
     smoothed: Array3<f64>,
@@ -107,6 +120,8 @@ impl Inextensibility {
             viscosity,
             smoothing: shortest / SMOOTHING_PER_SIDE,
             weights: pairs.iter().map(|_| zeros()).collect(),
+            interface: zeros(),
+            interface_norm: 0.0,
             pairs,
             residual: zeros(),
             smoothed: zeros(),
@@ -126,7 +141,8 @@ impl Inextensibility {
         }
     }
 
-    /// T_ab = ε²∂_aφ∂_bφ from the state's gradient ∂_aφ (`gradient`, per component) and `eps`.
+    /// T_ab = ε²∂_aφ∂_bφ and w = Σ_a T_aa from the state's gradient ∂_aφ (`gradient`, per
+    /// component) and `eps`, and γ = 10ε²/η.
     pub fn set_state(&mut self, gradient: &[Array3<f64>], eps: f64) {
         let e2 = eps * eps;
         self.regularization = REGULARIZATION * e2 / self.viscosity;
@@ -136,6 +152,16 @@ impl Inextensibility {
                 .and(&gradient[b])
                 .par_for_each(|t, &ga, &gb| *t = e2 * ga * gb);
         }
+        self.interface.fill(0.0);
+        for (t, _) in self
+            .weights
+            .iter()
+            .zip(&self.pairs)
+            .filter(|(_, (a, b))| a == b)
+        {
+            self.interface += t;
+        }
+        self.interface_norm = grid_dot(&self.interface, &self.interface);
     }
 
     /// z = H²r: r's spectrum times exp(−ℓ²|k|²), back to the grid.
@@ -157,13 +183,25 @@ impl Inextensibility {
             |_, _, (k2, _), s: &mut Complex64| *s *= (-l2 * k2).exp(),
         );
         transform.inverse(&mut self.spectrum, z);
+        self.remove_uniform(z);
+    }
+
+    /// x ← x − (Σ_x xw / Σ_x w²) w with w = |g|²: the part of a tension (or of a surface
+    /// divergence) uniform along the membrane taken out (module documentation).
+    fn remove_uniform(&self, x: &mut Array3<f64>) {
+        if self.interface_norm > 0.0 {
+            let c = grid_dot(x, &self.interface) / self.interface_norm;
+            Zip::from(x)
+                .and(&self.interface)
+                .par_for_each(|x, &w| *x -= c * w);
+        }
     }
 
     /// Constrain the flow `velocity` of `part` (0: σ_g = 0, 1: per unit global tension; û per
-    /// component, the Oseen solve of the force) in place: add S Bᵀσ with σ from
-    /// B S Bᵀσ = −B(u + u_imp), where u_imp is the imposed shear u(y)x̂ of strain rate
-    /// `imposed` = u'(y) along the y axis's points (`None`: no imposed flow), so that the whole
-    /// flow is surface incompressible. `kappa` holds κ per axis and `axes` the box's axes longer
+    /// component, the Oseen solve of the force) in place: add S Bᵀσ with σ ⊥ w from
+    /// (B S Bᵀ + γR)σ = −B(u + u_imp) + c w, where u_imp is the imposed shear u(y)x̂ of strain
+    /// rate `imposed` = u'(y) along the y axis's points (`None`: no imposed flow), so that the
+    /// whole flow is surface incompressible up to a uniform dilation. `kappa` holds κ per axis and `axes` the box's axes longer
     /// than 1. Preconditioned conjugate gradients from the last solve's σ of the same part
     /// (module documentation). Returns the iterations taken ([`MAX_ITERATIONS`] where the
     /// error estimate stayed above the tolerance).
@@ -193,6 +231,7 @@ impl Inextensibility {
         }
         self.add_regularization(transform, sym, (kappa, axes), &tension, &mut residual);
         residual.mapv_inplace(|r| -r);
+        self.remove_uniform(&mut residual);
         let mut smoothed = std::mem::take(&mut self.smoothed);
         self.smooth(transform, sym, &residual, &mut smoothed);
         let mut rz = grid_dot(&residual, &smoothed);
@@ -207,6 +246,7 @@ impl Inextensibility {
             self.apply_force_flow(transform, sym, (kappa, axes), &direction, &mut flow);
             self.apply_constraint(transform, sym, (kappa, axes), &flow, &mut product);
             self.add_regularization(transform, sym, (kappa, axes), &direction, &mut product);
+            self.remove_uniform(&mut product);
             let curvature = grid_dot(&direction, &product);
             if curvature <= 0.0 {
                 break;
@@ -239,6 +279,31 @@ impl Inextensibility {
         ) = (residual, smoothed, direction, product, flow);
         self.tension[part] = tension;
         iterations
+    }
+
+    /// The power the regularization dissipates, γ∫σRσ = γ∫∇σ·T∇σ, of σ = σ_0 + sσ_1 (the
+    /// last solves' tensions; σ_0 alone for `parts` 1): the energy law's second channel
+    /// (module documentation).
+    pub fn relaxation(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+        (parts, s): (usize, f64),
+    ) -> f64 {
+        let mut tension = std::mem::take(&mut self.residual);
+        tension.assign(&self.tension[0]);
+        if parts == 2 {
+            Zip::from(&mut tension)
+                .and(&self.tension[1])
+                .par_for_each(|t, &t1| *t += s * t1);
+        }
+        let mut product = std::mem::take(&mut self.product);
+        product.fill(0.0);
+        self.add_regularization(transform, sym, (kappa, axes), &tension, &mut product);
+        let power = self.cell * grid_dot(&tension, &product);
+        (self.residual, self.product) = (tension, product);
+        power
     }
 
     /// η Σ_k w|k|²|û|² over the components: the power the flow dissipates.

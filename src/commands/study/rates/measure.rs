@@ -72,9 +72,20 @@ pub struct Case {
     pub mirror: bool,
     /// λ = η_in/η_out.
     pub viscosity_ratio: f64,
+    /// A locally inextensible membrane (full periodic box, λ = 1).
+    pub inextensible: bool,
 }
 
 impl Case {
+    /// "drop" (one global tension) or "inextensible" (a tension field).
+    pub fn membrane_model(&self) -> &'static str {
+        if self.inextensible {
+            "inextensible"
+        } else {
+            "drop"
+        }
+    }
+
     /// The scene's mirrored axes: none on the full box; with [`Case::mirror`] x and y (the
     /// circle's quarter box, or the sphere's with z periodic), and z as well for the sphere's
     /// even modes (the eighth box: P_l(cos θ) is even in z for even l, odd for odd l).
@@ -124,17 +135,27 @@ fn kappa() -> f64 {
 }
 
 /// The sharp rate of `case` in free space, in units of 1/time, at the outside viscosity `eta`
-/// (η_in = λη): the equal-viscosity rate times the contrast's factor.
+/// (η_in = λη): the equal-viscosity rate times the contrast's factor, or for the inextensible
+/// membrane times [`theory::inextensible_factor`] (Milner & Safran's rate in 3D).
 pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
     let (r, lambda) = (case.size, case.viscosity_ratio);
+    let constrained = |dim: usize| {
+        if case.inextensible {
+            theory::inextensible_factor(dim, case.mode)
+        } else {
+            1.0
+        }
+    };
     match case.kind {
         Kind::Circle => {
             theory::circle_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3))
                 * theory::planar_contrast_factor(lambda)
+                * constrained(2)
         }
         Kind::Sphere => {
             theory::sphere_rate(case.mode, case.sigma_bar) * kappa() / (eta * r.powi(3))
                 * theory::sphere_contrast_factor(case.mode, lambda)
+                * constrained(3)
         }
         Kind::Flat => {
             let k = 2.0 * PI / r;
@@ -146,7 +167,14 @@ pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
 
 /// The box factor of `case`.
 pub fn box_factor(case: &Case) -> f64 {
+    let r_over_l = 1.0 / case.box_ratio;
     match case.kind {
+        Kind::Circle if case.inextensible => {
+            theory::inextensible_box_factor(2, case.mode, r_over_l)
+        }
+        Kind::Sphere if case.inextensible => {
+            theory::inextensible_box_factor(3, case.mode, r_over_l)
+        }
         Kind::Circle => theory::circle_box_factor_with_contrast(
             case.mode,
             1.0 / case.box_ratio,
@@ -200,14 +228,16 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
         ),
     };
     let mut value = json!({
-        "description": format!("rates study: {} mode {} sigma_bar {} size {} viscosity ratio {}",
-            case.kind.name(), case.mode, case.sigma_bar, r, case.viscosity_ratio),
+        "description": format!("rates study: {} mode {} sigma_bar {} size {} viscosity ratio {} {}",
+            case.kind.name(), case.mode, case.sigma_bar, r, case.viscosity_ratio,
+            case.membrane_model()),
         "dim": dim, "n": n, "h": h, "eps": 1.0,
         "scheme": "sbdf2", "dt": dt, "t_end": t_end,
         "prepare_steps": spec.prepare_steps,
         "dynamics": "stokes",
         "flow": {"viscosity": spec.viscosity, "mobility": spec.mobility,
-                 "viscosity_inside": case.viscosity_ratio * spec.viscosity},
+                 "viscosity_inside": case.viscosity_ratio * spec.viscosity,
+                 "inextensible": case.inextensible},
         "area": {"method": "fixed", "sigma": sigma},
         "initial": initial,
     });

@@ -30,6 +30,9 @@ impl Row for Measured {
             Column::both("membrane", "membrane", Format::Plain, |r| {
                 r.case.kind.name().into()
             }),
+            Column::both("model", "model", Format::Plain, |r| {
+                r.case.membrane_model().into()
+            }),
             Column::both("mode", "mode", Format::Plain, |r| r.case.mode.into()),
             Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| {
                 r.case.sigma_bar.into()
@@ -78,6 +81,8 @@ impl Row for Measured {
 pub struct Rate {
     /// `circle`, `sphere` or `flat`.
     pub membrane: &'static str,
+    /// `drop` or `inextensible`.
+    pub model: &'static str,
     /// n or l (0 flat).
     pub mode: usize,
     /// σ̄.
@@ -100,6 +105,7 @@ impl Row for Rate {
     fn columns() -> Vec<Column<Self>> {
         vec![
             Column::both("membrane", "membrane", Format::Plain, |r| r.membrane.into()),
+            Column::both("model", "model", Format::Plain, |r| r.model.into()),
             Column::both("mode", "mode", Format::Plain, |r| r.mode.into()),
             Column::both("sigma_bar", "sigma_bar", Format::Plain, |r| {
                 r.sigma_bar.into()
@@ -189,20 +195,23 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
             for &mode in &g.modes {
                 for &sigma_bar in &g.sigma_bar {
                     for &viscosity_ratio in &g.viscosity_ratio {
-                        out.push(
-                            sizes
-                                .iter()
-                                .map(|&size| Case {
-                                    kind,
-                                    mode,
-                                    sigma_bar,
-                                    size,
-                                    box_ratio: f.box_over_r,
-                                    mirror: f.mirror,
-                                    viscosity_ratio,
-                                })
-                                .collect(),
-                        );
+                        for &model in &g.models {
+                            out.push(
+                                sizes
+                                    .iter()
+                                    .map(|&size| Case {
+                                        kind,
+                                        mode,
+                                        sigma_bar,
+                                        size,
+                                        box_ratio: f.box_over_r,
+                                        mirror: f.mirror,
+                                        viscosity_ratio,
+                                        inextensible: model == spec::Model::Inextensible,
+                                    })
+                                    .collect(),
+                            );
+                        }
                     }
                 }
             }
@@ -224,6 +233,7 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
                             box_ratio: f.height,
                             mirror: false,
                             viscosity_ratio,
+                            inextensible: false,
                         })
                         .collect(),
                 );
@@ -259,6 +269,7 @@ fn extrapolate(group: &[Measured]) -> Rate {
     let extrapolated = value_at_zero(tail);
     Rate {
         membrane: first.kind.name(),
+        model: first.membrane_model(),
         mode: first.mode,
         sigma_bar: first.sigma_bar,
         viscosity_ratio: first.viscosity_ratio,
@@ -296,24 +307,30 @@ fn chart(cases: &[Measured]) -> Figure {
     ];
     let key = |m: &Measured| {
         let c = &m.case;
-        (c.kind, c.mode, c.sigma_bar, c.viscosity_ratio)
+        (
+            c.kind,
+            c.mode,
+            c.sigma_bar,
+            c.viscosity_ratio,
+            c.inextensible,
+        )
     };
-    let mut keys: Vec<(Kind, usize, f64, f64)> = Vec::new();
+    let mut keys: Vec<(Kind, usize, f64, f64, bool)> = Vec::new();
     for m in cases {
         if !keys.contains(&key(m)) {
             keys.push(key(m));
         }
     }
-    for (i, &(kind, mode, sigma_bar, lambda)) in keys.iter().enumerate() {
+    for (i, &(kind, mode, sigma_bar, lambda, inextensible)) in keys.iter().enumerate() {
         let pts = cases
             .iter()
-            .filter(|m| key(m) == (kind, mode, sigma_bar, lambda))
+            .filter(|m| key(m) == (kind, mode, sigma_bar, lambda, inextensible))
             .map(|m| (1.0 / m.case.size, m.ratio))
             .collect();
-        let contrast = if lambda == 1.0 {
-            String::new()
-        } else {
-            format!(", eta_in/eta_out {lambda}")
+        let contrast = match (lambda == 1.0, inextensible) {
+            (_, true) => ", inextensible".to_string(),
+            (true, false) => String::new(),
+            (false, false) => format!(", eta_in/eta_out {lambda}"),
         };
         let label = match kind {
             Kind::Flat => format!("flat, sigma_bar {sigma_bar}{contrast}"),

@@ -78,6 +78,27 @@ pub struct Group {
     /// λ = 1 only).
     #[serde(default = "equal_viscosities")]
     pub viscosity_ratio: Vec<f64>,
+    /// The membrane models each case runs: `drop` (one global tension, the default) and/or
+    /// `inextensible` (`flow.inextensible`, a tension field: the sharp rates are then Milner &
+    /// Safran's in 3D, the circle's unchanged, with the box factor of the constrained
+    /// mobility; on the full periodic box, at equal viscosities).
+    #[serde(default = "drop_only")]
+    pub models: Vec<Model>,
+}
+
+/// A membrane model of the rates study.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Model {
+    /// One global tension: a drop with bending rigidity.
+    Drop,
+    /// A tension field holding the surface incompressible.
+    Inextensible,
+}
+
+/// The drop alone.
+fn drop_only() -> Vec<Model> {
+    vec![Model::Drop]
 }
 
 /// λ = 1.
@@ -206,6 +227,16 @@ impl Family {
                 "unequal viscosities run on the full periodic box: drop mirror",
             ));
         }
+        let inextensible = self
+            .groups
+            .iter()
+            .any(|g| g.models.contains(&Model::Inextensible));
+        if self.mirror && inextensible {
+            return Err(Error::config(
+                "mirror",
+                "the inextensible membrane runs on the full periodic box: drop mirror",
+            ));
+        }
         if !at_least(self.box_over_r, 2.5) {
             return Err(Error::config(
                 "box",
@@ -232,6 +263,18 @@ impl Group {
             return Err(Error::config("sigma_bar", "need values ≥ 0, at least one"));
         }
         ratios(&self.viscosity_ratio)?;
+        if self.models.is_empty() {
+            return Err(Error::config("models", "need at least one model"));
+        }
+        if self.models.contains(&Model::Inextensible)
+            && self.viscosity_ratio.iter().any(|&l| l != 1.0)
+        {
+            return Err(Error::config(
+                "models",
+                "the inextensible membrane runs at equal viscosities: drop viscosity_ratio \
+                 or run it in a group of its own",
+            ));
+        }
         if self.r0.len() < 2 || self.r0.iter().any(|r| !at_least(*r, 6.0)) {
             return Err(Error::config(
                 "r0",
