@@ -395,7 +395,7 @@ impl Inextensibility {
             transform.inverse(&mut self.spectrum, &mut self.slope[c]);
         }
         hat.fill(Complex64::default());
-        for c in 0..axes.len() {
+        for (c, &along) in axes.iter().enumerate() {
             // The flux (T∇p)_c = Σ_b T_cb ∂_b p.
             self.grid.fill(0.0);
             for (&(a, b), t) in self.pairs.iter().zip(&self.weights) {
@@ -411,7 +411,6 @@ impl Inextensibility {
             }
             transform.forward(&mut self.grid, &mut self.spectrum);
             let flux = self.spectrum.as_slice().expect("standard layout");
-            let along = axes[c];
             modes_mut(&mut hat, modes, sym, |i, idx, _, h: &mut Complex64| {
                 *h -= Complex64::new(0.0, kappa[along][idx[along]]) * flux[i];
             });
