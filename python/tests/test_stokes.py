@@ -75,3 +75,19 @@ def test_unequal_viscosities_solve_iteratively_and_refuse_mirror_planes():
     with pytest.raises(vesicle.InvalidInput) as err:
         vesicle.Scene(stokes(symmetry=["x"], flow=contrast))
     assert err.value.field == "symmetry"
+
+
+def test_the_inextensible_membrane_passes_through_scene():
+    """`flow.inextensible` passes through `Scene`: the tension field's solve iterates (the
+    records' `stokes_iterations` > 0), and walls or a viscosity contrast beside it are refused
+    naming the key."""
+    flow = {"viscosity": 1.0, "mobility": 0.01, "inextensible": True}
+    sim = vesicle.Simulation(stokes(max_steps=3, flow=flow))
+    sim.run()
+    assert sim.record["stokes_iterations"] > 0
+    with pytest.raises(vesicle.InvalidInput) as err:
+        vesicle.Scene(stokes(walls=["y"], flow=flow))
+    assert err.value.field == "walls"
+    with pytest.raises(vesicle.InvalidInput) as err:
+        vesicle.Scene(stokes(flow={**flow, "viscosity_inside": 2.0}))
+    assert err.value.field == "flow.inextensible"
