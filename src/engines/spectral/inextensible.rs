@@ -42,9 +42,9 @@
 //! the twisted storage of [`super::flow`] does not carry) and equal viscosities.
 
 use super::evaluator::Symbols;
-use super::flow::{indexed, mode_symbols, modes_mut};
+use super::flow::modes_mut;
 use super::transform::Transform;
-use super::viscous::project;
+use super::viscous::{project, strain_to_grid, subtract_divergence, weighted_sum};
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
 use ndarray::{Array3, Zip};
 use num_complex::Complex64;
@@ -308,25 +308,7 @@ impl Inextensibility {
 
     /// η Σ_k w|k|²|û|² over the components: the power the flow dissipates.
     fn energy(&self, sym: &Symbols, velocity: &[Array3<Complex64>]) -> f64 {
-        let modes = [
-            velocity[0].dim().0,
-            velocity[0].dim().1,
-            velocity[0].dim().2,
-        ];
-        let len = modes.iter().product::<usize>();
-        let partials = (0..len.div_ceil(PAR_CHUNK)).into_par_iter().map(|t| {
-            indexed(t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len), modes)
-                .map(|(i, idx)| {
-                    let (k2, w) = mode_symbols(sym, idx);
-                    let u2: f64 = velocity
-                        .iter()
-                        .map(|u| u.as_slice().expect("standard layout")[i].norm_sqr())
-                        .sum();
-                    w * k2 * u2
-                })
-                .sum::<f64>()
-        });
-        self.viscosity * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
+        self.viscosity * weighted_sum(sym, velocity, velocity, |k2| k2)
     }
 
     /// `out` = B v = Σ_ab T_ab ∂_a v_b of the divergence-free field v̂ = `v`: for each pair
@@ -340,24 +322,15 @@ impl Inextensibility {
         v: &[Array3<Complex64>],
         out: &mut Array3<f64>,
     ) {
-        let modes = transform.spectral_shape();
         out.fill(0.0);
         for (&(ca, cb), t) in self.pairs.iter().zip(&self.weights) {
-            let (a, b) = (axes[ca], axes[cb]);
-            let (va, vb) = (
-                v[ca].as_slice().expect("standard layout"),
-                v[cb].as_slice().expect("standard layout"),
-            );
-            modes_mut(
-                &mut self.spectrum,
-                modes,
+            strain_to_grid(
+                transform,
                 sym,
-                |i, idx, _, s: &mut Complex64| {
-                    let i_kappa = |x: usize| Complex64::new(0.0, kappa[x][idx[x]]);
-                    *s = i_kappa(a) * vb[i] + i_kappa(b) * va[i];
-                },
+                (kappa, axes),
+                (v, (ca, cb)),
+                (&mut self.spectrum, &mut self.grid),
             );
-            transform.inverse(&mut self.spectrum, &mut self.grid);
             let share = if ca == cb { 0.5 } else { 1.0 };
             Zip::from(&mut *out)
                 .and(&self.grid)
@@ -438,23 +411,13 @@ impl Inextensibility {
         for o in out.iter_mut() {
             o.fill(Complex64::default());
         }
-        for (&(ca, cb), t) in self.pairs.iter().zip(&self.weights) {
-            let (a, b) = (axes[ca], axes[cb]);
+        for (&pair, t) in self.pairs.iter().zip(&self.weights) {
             Zip::from(&mut self.grid)
                 .and(p)
                 .and(t)
                 .par_for_each(|g, &p, &t| *g = p * t);
             transform.forward(&mut self.grid, &mut self.spectrum);
-            let tau = self.spectrum.as_slice().expect("standard layout");
-            let mut subtract = |c: usize, x: usize| {
-                modes_mut(&mut out[c], modes, sym, |i, idx, _, o: &mut Complex64| {
-                    *o -= Complex64::new(0.0, kappa[x][idx[x]]) * tau[i];
-                });
-            };
-            subtract(cb, a);
-            if ca != cb {
-                subtract(ca, b);
-            }
+            subtract_divergence(sym, (kappa, axes), &self.spectrum, pair, out);
         }
         project(out, &mut self.spectrum, sym, (kappa, axes));
         let eta = self.viscosity;

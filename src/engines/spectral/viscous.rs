@@ -236,40 +236,23 @@ impl Viscosities {
         v: &[Array3<Complex64>],
         out: &mut [Array3<Complex64>],
     ) {
-        let modes = transform.spectral_shape();
         for o in out.iter_mut() {
             o.fill(Complex64::default());
         }
-        for (ca, &a) in axes.iter().enumerate() {
-            for (cb, &b) in axes.iter().enumerate().skip(ca) {
-                let (va, vb) = (
-                    v[ca].as_slice().expect("standard layout"),
-                    v[cb].as_slice().expect("standard layout"),
-                );
-                modes_mut(
-                    &mut self.spectrum,
-                    modes,
+        for ca in 0..axes.len() {
+            for cb in ca..axes.len() {
+                strain_to_grid(
+                    transform,
                     sym,
-                    |i, idx, _, s: &mut Complex64| {
-                        let i_kappa = |x: usize| Complex64::new(0.0, kappa[x][idx[x]]);
-                        *s = i_kappa(a) * vb[i] + i_kappa(b) * va[i];
-                    },
+                    (kappa, axes),
+                    (v, (ca, cb)),
+                    (&mut self.spectrum, &mut self.grid),
                 );
-                transform.inverse(&mut self.spectrum, &mut self.grid);
                 Zip::from(&mut self.grid)
                     .and(&self.excess)
                     .par_for_each(|g, &e| *g *= e);
                 transform.forward(&mut self.grid, &mut self.spectrum);
-                let tau = self.spectrum.as_slice().expect("standard layout");
-                let mut subtract = |c: usize, x: usize| {
-                    modes_mut(&mut out[c], modes, sym, |i, idx, _, o: &mut Complex64| {
-                        *o -= Complex64::new(0.0, kappa[x][idx[x]]) * tau[i];
-                    });
-                };
-                subtract(ca, b);
-                if ca != cb {
-                    subtract(cb, a);
-                }
+                subtract_divergence(sym, (kappa, axes), &self.spectrum, (ca, cb), out);
             }
         }
         project(out, &mut self.spectrum, sym, (kappa, axes));
@@ -292,6 +275,52 @@ impl Viscosities {
             y,
             |k2| if k2 > 0.0 { 1.0 / (eta * k2) } else { 0.0 },
         )
+    }
+}
+
+/// The strain 2D̂_ab = iκ_a v̂_b + iκ_b v̂_a of the components (`ca`, `cb`) of v̂ = `v` (along the
+/// axes a = `axes[ca]`, b = `axes[cb]`) back to the grid field `grid`, through the spectrum
+/// `scratch`.
+pub(super) fn strain_to_grid(
+    transform: &mut Transform,
+    sym: &Symbols,
+    (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+    (v, (ca, cb)): (&[Array3<Complex64>], (usize, usize)),
+    (scratch, grid): (&mut Array3<Complex64>, &mut Array3<f64>),
+) {
+    let (a, b) = (axes[ca], axes[cb]);
+    let (va, vb) = (
+        v[ca].as_slice().expect("standard layout"),
+        v[cb].as_slice().expect("standard layout"),
+    );
+    let modes = transform.spectral_shape();
+    modes_mut(scratch, modes, sym, |i, idx, _, s: &mut Complex64| {
+        let i_kappa = |x: usize| Complex64::new(0.0, kappa[x][idx[x]]);
+        *s = i_kappa(a) * vb[i] + i_kappa(b) * va[i];
+    });
+    transform.inverse(scratch, grid);
+}
+
+/// The divergence of the symmetric tensor's component τ̂_ab = `tau` (the pair (`ca`, `cb`) of
+/// velocity components) taken from the force spectra `out`: out_ca −= iκ_b τ̂ and, for
+/// ca ≠ cb, out_cb −= iκ_a τ̂.
+pub(super) fn subtract_divergence(
+    sym: &Symbols,
+    (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+    tau: &Array3<Complex64>,
+    (ca, cb): (usize, usize),
+    out: &mut [Array3<Complex64>],
+) {
+    let modes = [tau.dim().0, tau.dim().1, tau.dim().2];
+    let tau = tau.as_slice().expect("standard layout");
+    let mut subtract = |c: usize, x: usize| {
+        modes_mut(&mut out[c], modes, sym, |i, idx, _, o: &mut Complex64| {
+            *o -= Complex64::new(0.0, kappa[x][idx[x]]) * tau[i];
+        });
+    };
+    subtract(ca, axes[cb]);
+    if ca != cb {
+        subtract(cb, axes[ca]);
     }
 }
 
@@ -348,7 +377,7 @@ fn dot(sym: &Symbols, x: &[Array3<Complex64>], y: &[Array3<Complex64>]) -> f64 {
 }
 
 /// Σ_c Σ_k w g(|k|²) Re(x̂_c* ŷ_c), summed in a fixed tree (the same on any thread count).
-fn weighted_sum(
+pub(super) fn weighted_sum(
     sym: &Symbols,
     x: &[Array3<Complex64>],
     y: &[Array3<Complex64>],
