@@ -348,9 +348,6 @@ impl Inextensibility {
         p: &Array3<f64>,
         out: &mut Array3<f64>,
     ) {
-        if self.regularization == 0.0 {
-            return;
-        }
         let modes = transform.spectral_shape();
         self.grid.assign(p);
         let mut hat = std::mem::take(&mut self.divergence);
