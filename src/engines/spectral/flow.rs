@@ -54,6 +54,8 @@
 //!
 //! Cost: 5d + 4 transforms per evaluation (μ_b, μ_σ and the d components of ∇φ back, both
 //! forces forward, both velocities back, both advections forward); 3d + 2 at a fixed tension.
+//! The inextensible membrane's tension solve ([`super::inextensible`]) adds its iterations
+//! for each part.
 
 use super::evaluator::Symbols;
 use super::inextensible::Inextensibility;
