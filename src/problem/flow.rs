@@ -88,8 +88,8 @@ pub fn box_factor(dim: usize, mode: usize, r_over_l: f64) -> f64 {
 /// incompressible, ∇_s·u = 0, in place of one global tension) multiplies the free-space rate
 /// of the quasi-sphere's mode l (`dim` 3) or the quasi-circle's mode n (`dim` 2): the
 /// constrained normal mobility over the unconstrained one ([`constrained_mobility`]). In 3D it
-/// turns [`sphere_rate`] into [`milner_safran_rate`] ((4l² + 4l − 3)/(4l² + 4l − 2), 21/22 at
-/// l = 2); in 2D it is 1: the flow of a normal force on a circle is already surface
+/// turns [`sphere_rate`] into Milner & Safran's rate ((4l² + 4l − 3)/(4l² + 4l − 2), 21/22
+/// at l = 2); in 2D it is 1: the flow of a normal force on a circle is already surface
 /// incompressible at linear order.
 pub fn inextensible_factor(dim: usize, mode: usize) -> f64 {
     let free = mobilities(dim, mode, None);
@@ -101,15 +101,6 @@ pub fn inextensible_factor(dim: usize, mode: usize) -> f64 {
 pub fn inextensible_box_factor(dim: usize, mode: usize, r_over_l: f64) -> f64 {
     constrained_mobility(dim, mobilities(dim, mode, Some(r_over_l)))
         / constrained_mobility(dim, mobilities(dim, mode, None))
-}
-
-/// Γ ηR³/κ of the locally inextensible quasi-sphere's mode l at σ̄ (Milner & Safran, equal
-/// viscosities): l(l+1)(l+2)(l−1)[l(l+1) + σ̄] / [(2l+1)(2l² + 2l − 1)] (2.6182 at l = 2,
-/// σ̄ = 0).
-pub fn milner_safran_rate(l: usize, sigma_bar: f64) -> f64 {
-    let l = l as f64;
-    l * (l + 1.0) * (l + 2.0) * (l - 1.0) * (l * (l + 1.0) + sigma_bar)
-        / ((2.0 * l + 1.0) * (2.0 * l * l + 2.0 * l - 1.0))
 }
 
 /// The normal mobility of a mode under local inextensibility: with the mobility matrix P of
@@ -142,7 +133,7 @@ fn constrained_mobility(dim: usize, [nn, nt, tt]: [f64; 3]) -> f64 {
 /// ∫J_nJ_n'x⁻² = 1/(4n(n² − 1)), ∫J_n'²x⁻¹ = n/(4(n² − 1)); in 3D
 /// (1/2π²)·l(l+1)/(2l+1)·∫A_aA_b dx with I = ∫j_l²x⁻² = π/((2l−1)(2l+1)(2l+3)),
 /// ∫j_lj_l'x⁻¹ = I/2, ∫j_l'² = π[l²/(2l−1) + (l+1)²/(2l+3)]/(2(2l+1)²).
-pub fn mobilities(dim: usize, mode: usize, r_over_l: Option<f64>) -> [f64; 3] {
+fn mobilities(dim: usize, mode: usize, r_over_l: Option<f64>) -> [f64; 3] {
     let Some(r_over_l) = r_over_l else {
         return free_mobilities(dim, mode);
     };
@@ -353,6 +344,15 @@ mod tests {
         for x in [0.5, 2.0, 3.0, 7.5, 40.0] {
             assert!((spherical_j(2, x) - j2(x)).abs() < 1e-12, "{x}");
         }
+    }
+
+    /// Γ ηR³/κ of the locally inextensible quasi-sphere's mode l at σ̄ (Milner & Safran, equal
+    /// viscosities): l(l+1)(l+2)(l−1)[l(l+1) + σ̄] / [(2l+1)(2l² + 2l − 1)] (2.6182 at l = 2,
+    /// σ̄ = 0).
+    fn milner_safran_rate(l: usize, sigma_bar: f64) -> f64 {
+        let l = l as f64;
+        l * (l + 1.0) * (l + 2.0) * (l - 1.0) * (l * (l + 1.0) + sigma_bar)
+            / ((2.0 * l + 1.0) * (2.0 * l * l + 2.0 * l - 1.0))
     }
 
     /// Local inextensibility: in 3D the constrained mobility turns the drop's rate into Milner

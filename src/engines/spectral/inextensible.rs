@@ -164,7 +164,8 @@ impl Inextensibility {
         self.interface_norm = grid_dot(&self.interface, &self.interface);
     }
 
-    /// z = H²r: r's spectrum times exp(−ℓ²|k|²), back to the grid.
+    /// z = H²r: r's spectrum times exp(−ℓ²|k|²), back to the grid, its uniform part taken out
+    /// ([`Inextensibility::remove_uniform`]) so that the search stays orthogonal to w.
     fn smooth(
         &mut self,
         transform: &mut Transform,
@@ -201,10 +202,10 @@ impl Inextensibility {
     /// component, the Oseen solve of the force) in place: add S Bᵀσ with σ ⊥ w from
     /// (B S Bᵀ + γR)σ = −B(u + u_imp) + c w, where u_imp is the imposed shear u(y)x̂ of strain
     /// rate `imposed` = u'(y) along the y axis's points (`None`: no imposed flow), so that the
-    /// whole flow is surface incompressible up to a uniform dilation. `kappa` holds κ per axis and `axes` the box's axes longer
-    /// than 1. Preconditioned conjugate gradients from the last solve's σ of the same part
-    /// (module documentation). Returns the iterations taken ([`MAX_ITERATIONS`] where the
-    /// error estimate stayed above the tolerance).
+    /// whole flow is surface incompressible up to a uniform dilation. `kappa` holds κ per axis
+    /// and `axes` the box's axes longer than 1. Preconditioned conjugate gradients from the
+    /// last solve's σ of the same part (module documentation). Returns the iterations taken
+    /// ([`MAX_ITERATIONS`] where the error estimate stayed above the tolerance).
     pub fn constrain(
         &mut self,
         transform: &mut Transform,
