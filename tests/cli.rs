@@ -1055,6 +1055,16 @@ fn a_sphere_with_unequal_viscosities_in_the_rates_study_is_exit_2() {
     );
 }
 
+/// A list of boxes is taken to L → ∞ through its (R/L)³, smallest box first: a list out of order
+/// (or with a box twice) is refused with exit 2 naming `sphere.box`, before anything is written.
+#[test]
+fn boxes_out_of_order_in_the_rates_study_are_exit_2() {
+    rates_study_is_refused(
+        |v| v["sphere"]["box"] = serde_json::json!([10, 8]),
+        "sphere.box",
+    );
+}
+
 /// `runs/studies/rates.json` changed by `edit` is refused with exit 2, a message holding `key`,
 /// and no output folder.
 fn rates_study_is_refused(edit: impl FnOnce(&mut Value), key: &str) {

@@ -4,7 +4,7 @@
 
 use crate::commands::study::checks::{at_least, h_over_eps, positive, within};
 use crate::error::{Error, Result};
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
 
 /// The study file's keys.
 #[derive(Deserialize, Debug, Clone)]
@@ -48,9 +48,11 @@ pub struct Spec {
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct Family {
-    /// L/R, the periodic box's side over the radius.
-    #[serde(rename = "box")]
-    pub box_over_r: f64,
+    /// L/R, the periodic box's side over the radius: one number, or a list of boxes each size
+    /// runs in, whose ratios are extrapolated to L → ∞ (in (R/L)^d, the order of the lowest
+    /// mode's images) before the extrapolation in ε/R.
+    #[serde(rename = "box", deserialize_with = "one_or_many")]
+    pub boxes: Vec<f64>,
     /// Run each case on a mirror-reduced box: the sphere's quarter box about x and y (the
     /// quasi-sphere's P_l(cos θ) about z is even in both, z left periodic) for odd l and its
     /// eighth box (z mirrored too) for even l; the circle's quarter box (cos nθ is even about
@@ -94,6 +96,20 @@ pub enum Model {
     Drop,
     /// A tension field holding the surface incompressible.
     Inextensible,
+}
+
+/// A number or a list of numbers, read as a list.
+fn one_or_many<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Vec<f64>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany {
+        One(f64),
+        Many(Vec<f64>),
+    }
+    Ok(match OneOrMany::deserialize(d)? {
+        OneOrMany::One(x) => vec![x],
+        OneOrMany::Many(v) => v,
+    })
 }
 
 /// The drop alone.
@@ -237,10 +253,16 @@ impl Family {
                 "the inextensible membrane runs on the full periodic box: drop mirror",
             ));
         }
-        if !at_least(self.box_over_r, 2.5) {
+        if self.boxes.is_empty() || self.boxes.iter().any(|&b| !at_least(b, 2.5)) {
             return Err(Error::config(
                 "box",
-                "need L/R ≥ 2.5 (the vesicle and its images apart)",
+                "need L/R ≥ 2.5 (the vesicle and its images apart), at least one",
+            ));
+        }
+        if self.boxes.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(Error::config(
+                "box",
+                "list the boxes once each, smallest first",
             ));
         }
         if self.groups.is_empty() {
