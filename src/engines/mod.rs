@@ -210,6 +210,11 @@ impl<'a> Saved<'a> {
             .ok_or_else(|| format!("the saved state lacks `{name}`"))
     }
 
+    /// Whether it holds an array `name`.
+    pub fn has(&self, name: &str) -> bool {
+        self.position(name).is_ok()
+    }
+
     /// The real array `name`, which must have `shape`.
     ///
     /// # Errors

@@ -291,8 +291,8 @@ impl Passes for GpuPasses {
             .map(CowArray::from)
     }
 
-    fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String> {
-        let SavedSpectra { hat, history } = saved;
+    fn restore(&mut self, saved: SavedSpectra<'_, '_>, t: f64, sigma: f64) -> Result<(), String> {
+        let SavedSpectra { hat, history, .. } = saved;
         let upload = |a: &CowArray<'_, Complex64, Ix3>| {
             self.dev.upload_spectrum(&a.to_owned()).map_err(|f| f.0)
         };

@@ -6,12 +6,14 @@
 use super::curvature::{add_couple, couple_sums, CoupleInputs, CoupleSums};
 use super::evaluator::{axis_symbol, write_inverse_value, Evaluator, ExplicitTerm, State};
 use super::flow::FlowStats;
+use super::inextensible::Inextensibility;
 use super::kernels::{sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::saved::spectrum;
 use super::stepper::{
     DeviceFailure, DeviceState, Evaluation, Passes, SavedSpectra, States, Stepper,
 };
+use super::tensions::Replay;
 use super::update::{Update, MAX_LEVELS};
 use crate::engines::numerics::sum_in_fixed_tree;
 use crate::engines::{Diverged, Saved, SavedArray};
@@ -359,6 +361,9 @@ impl Passes for CpuPasses {
 
     fn accept(&mut self, keep_history: bool) -> Result<(), DeviceFailure> {
         self.states.accept(keep_history, |s| Ok(s.clone()))?;
+        if let Some(constraint) = self.ev.inextensibility() {
+            constraint.accept();
+        }
         if keep_history && self.ev.has_second_term() {
             let old = &mut self.states.next.curvature_hat;
             match &mut self.prev_curvature {
@@ -381,6 +386,12 @@ impl Passes for CpuPasses {
         (complex(&self.states.cur.hat), history)
     }
 
+    fn flow_arrays(&self) -> Vec<(String, SavedArray<'_>)> {
+        self.ev
+            .inextensibility_ref()
+            .map_or_else(Vec::new, Inextensibility::saved)
+    }
+
     fn read_spectrum<'s>(
         &self,
         saved: &'s Saved<'_>,
@@ -389,24 +400,39 @@ impl Passes for CpuPasses {
         spectrum(saved, name, &self.ev.transform)
     }
 
-    fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String> {
-        let SavedSpectra { hat, history } = saved;
+    fn restore(&mut self, saved: SavedSpectra<'_, '_>, t: f64, sigma: f64) -> Result<(), String> {
+        let SavedSpectra {
+            hat,
+            history,
+            checkpoint,
+        } = saved;
         self.states.cur.hat.assign(&hat);
         self.states.prev = history.map(|[h, n]| [h.into_owned(), n.into_owned()]);
-        self.ev
-            .evaluate(&mut self.states.cur, t, None, Some(sigma))
-            .map_err(|d| d.0)?;
-        // m̂ⁿ⁻¹ (or T̂ⁿ⁻¹) is not saved: it is evaluated again from φ̂ⁿ⁻¹.
+        if let Some(constraint) = self.ev.inextensibility() {
+            constraint.restore(checkpoint)?;
+        }
+        let replay = |ev: &mut Evaluator, which| {
+            if let Some(constraint) = ev.inextensibility() {
+                constraint.set_replay(which);
+            }
+        };
+        // m̂ⁿ⁻¹ (or T̂ⁿ⁻¹) is not saved: it is evaluated again from φ̂ⁿ⁻¹, before the current
+        // state, each with its own tension where the membrane is inextensible.
         self.prev_curvature = None;
         let second = self.ev.has_second_term();
         if let (true, Some([h, _])) = (second, &self.states.prev) {
             let mut before = self.ev.blank();
             before.hat.assign(h);
+            replay(&mut self.ev, Some(Replay::Before));
             self.ev
                 .evaluate(&mut before, t, None, None)
                 .map_err(|d| d.0)?;
             self.prev_curvature = Some(before.curvature_hat);
         }
+        replay(&mut self.ev, Some(Replay::Current));
+        let evaluated = self.ev.evaluate(&mut self.states.cur, t, None, Some(sigma));
+        replay(&mut self.ev, None);
+        evaluated.map_err(|d| d.0)?;
         Ok(())
     }
 

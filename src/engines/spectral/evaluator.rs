@@ -15,6 +15,7 @@
 
 use super::curvature::CurvatureScratch;
 use super::flow::{Flow, FlowStats};
+use super::inextensible::Inextensibility;
 use super::kernels::{pointwise_sums, sum, wide_fn};
 use super::pieces::{for_each_piece, mode, per_width, re_dot, reals, reals_mut, Piece, PIECE};
 use super::transform::Transform;
@@ -234,6 +235,16 @@ impl Evaluator {
     pub fn with_flow(mut self, spec: FlowSpec) -> Self {
         self.flow = Some(Flow::new(spec, &self.transform, &self.grid));
         self
+    }
+
+    /// The inextensible membrane's tension solve, if the evaluator's flow has one.
+    pub fn inextensibility(&mut self) -> Option<&mut Inextensibility> {
+        self.flow.as_mut().and_then(Flow::inextensibility)
+    }
+
+    /// The same, read only.
+    pub fn inextensibility_ref(&self) -> Option<&Inextensibility> {
+        self.flow.as_ref().and_then(Flow::inextensibility_ref)
     }
 
     /// Whether the explicit term carries the Stokes flow's advection.

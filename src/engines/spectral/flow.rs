@@ -131,6 +131,16 @@ pub struct Flow {
 }
 
 impl Flow {
+    /// The inextensible membrane's tension solve, if the flow has one.
+    pub fn inextensibility(&mut self) -> Option<&mut Inextensibility> {
+        self.inextensibility.as_mut()
+    }
+
+    /// The same, read only.
+    pub fn inextensibility_ref(&self) -> Option<&Inextensibility> {
+        self.inextensibility.as_ref()
+    }
+
     /// The flow `spec` on `grid`, transformed by `transform`.
     pub fn new(spec: FlowSpec, transform: &Transform, grid: &Grid) -> Self {
         let h = grid.h;

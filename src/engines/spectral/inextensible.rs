@@ -29,9 +29,11 @@
 //!   uniform c w. Without this a single mode cannot relax (its excess area is frozen).
 //! - **The solve.** Conjugate gradients on σ ⊥ w, preconditioned by the smoothing
 //!   exp(−ℓ²|k|²) (the tension that matters varies on the vesicle's scale), warm-started from
-//!   the last solve's σ of the same part. Each iteration applies B S Bᵀ (d(d + 1)/2 transforms
-//!   forward and as many back), R (2d + 2) and the smoothing (2): 14 transforms in 2D, 22 in
-//!   3D. The flow is updated with each search direction's S Bᵀp.
+//!   the accepted state's σ of the same part ([`super::tensions`]). Each iteration applies
+//!   B S Bᵀ (d(d + 1)/2 transforms forward and as many back), R (2d + 2) and the smoothing (2):
+//!   14 transforms in 2D, 22 in 3D. The flow is updated with each search direction's S Bᵀp for
+//!   the stop rule, and at the end computed once more from the final σ, u = u₀ + S Bᵀσ, the
+//!   way a resumed run's replay computes it.
 //! - **The stop rule.** The flow's error in the dissipation norm, estimated by the last
 //!   [`DELAY`] steps' decrements α rᵀz (Hestenes & Stiefel), below [`TOLERANCE`] of the flow.
 //! - **The energy law.** The tension does the work Σ_x u·Bᵀσ = Σ_x σBu = −γ∫σRσ on the flow
@@ -43,9 +45,11 @@
 
 use super::evaluator::Symbols;
 use super::flow::modes_mut;
+use super::tensions::{Replay, Tensions};
 use super::transform::Transform;
 use super::viscous::{project, strain_to_grid, subtract_divergence, weighted_sum};
 use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
+use crate::engines::{Saved, SavedArray};
 use ndarray::{Array3, Zip};
 use num_complex::Complex64;
 use rayon::prelude::*;
@@ -88,9 +92,12 @@ pub struct Inextensibility {
     smoothed: Array3<f64>,
     direction: Array3<f64>,
     product: Array3<f64>,
-    /// σ of the last solve per part (the warm start), and whether there is one.
+    /// σ of the last solve per part.
     tension: [Array3<f64>; 2],
-    warm: [bool; 2],
+    /// σ of the accepted states (the solves' start) and their replay on a resume.
+    accepted: Tensions,
+    /// The unconstrained flow û₀ per component, which the final σ's S Bᵀσ is added to.
+    unconstrained: Vec<Array3<Complex64>>,
     /// The cell volume h^d: grid sums times it are integrals.
     cell: f64,
     /// γ of the regularization γR, R = −∇·(T∇·).
@@ -128,7 +135,10 @@ impl Inextensibility {
             direction: zeros(),
             product: zeros(),
             tension: [zeros(), zeros()],
-            warm: [false; 2],
+            accepted: Tensions::new(transform.shape()),
+            unconstrained: (0..components)
+                .map(|_| Array3::zeros(transform.spectral_shape()))
+                .collect(),
             cell: h.powi(components as i32),
             regularization: 0.0,
             slope: (0..components).map(|_| zeros()).collect(),
@@ -204,7 +214,8 @@ impl Inextensibility {
     /// rate `imposed` = u'(y) along the y axis's points (`None`: no imposed flow), so that the
     /// whole flow is surface incompressible up to a uniform dilation. `kappa` holds κ per axis
     /// and `axes` the box's axes longer than 1. Preconditioned conjugate gradients from the
-    /// last solve's σ of the same part (module documentation). Returns the iterations taken
+    /// accepted state's σ of the same part (module documentation), or in a replay
+    /// ([`Inextensibility::set_replay`]) the held σ with no solve. Returns the iterations taken
     /// ([`MAX_ITERATIONS`] where the error estimate stayed above the tolerance).
     pub fn constrain(
         &mut self,
@@ -214,13 +225,63 @@ impl Inextensibility {
         (part, imposed): (usize, Option<&[f64]>),
         velocity: &mut [Array3<Complex64>],
     ) -> usize {
-        let mut flow = std::mem::take(&mut self.flow);
-        let mut tension = std::mem::take(&mut self.tension[part]);
-        if self.warm[part] {
-            self.apply_force_flow(transform, sym, (kappa, axes), &tension, &mut flow);
-            add_scaled(velocity, &flow, 1.0);
+        for (u0, u) in self.unconstrained.iter_mut().zip(&*velocity) {
+            u0.assign(u);
         }
-        self.warm[part] = true;
+        let mut tension = std::mem::take(&mut self.tension[part]);
+        let iterations = match self.accepted.replayed(part) {
+            Some(held) => {
+                tension.assign(held);
+                0
+            }
+            None => {
+                let iterations = self.solve(
+                    transform,
+                    sym,
+                    (kappa, axes),
+                    (part, imposed),
+                    velocity,
+                    &mut tension,
+                );
+                self.accepted.solved(part, &tension);
+                iterations
+            }
+        };
+        // u = u₀ + S Bᵀσ of the final σ: in a replay, bit for bit the solve's.
+        let mut flow = std::mem::take(&mut self.flow);
+        self.apply_force_flow(transform, sym, (kappa, axes), &tension, &mut flow);
+        for ((u, u0), f) in velocity.iter_mut().zip(&self.unconstrained).zip(&flow) {
+            Zip::from(u)
+                .and(u0)
+                .and(f)
+                .par_for_each(|u, &u0, &f| *u = u0 + f);
+        }
+        self.flow = flow;
+        self.tension[part] = tension;
+        iterations
+    }
+
+    /// [`Inextensibility::constrain`]'s conjugate gradients: `tension` from the accepted
+    /// state's σ of `part` (or zero) to the solve's σ, `velocity` updated along (for the stop
+    /// rule's norm). Returns the iterations taken.
+    fn solve(
+        &mut self,
+        transform: &mut Transform,
+        sym: &Symbols,
+        (kappa, axes): (&[Vec<f64>; 3], &[usize]),
+        (part, imposed): (usize, Option<&[f64]>),
+        velocity: &mut [Array3<Complex64>],
+        tension: &mut Array3<f64>,
+    ) -> usize {
+        let mut flow = std::mem::take(&mut self.flow);
+        match self.accepted.start(part) {
+            Some(start) => {
+                tension.assign(start);
+                self.apply_force_flow(transform, sym, (kappa, axes), tension, &mut flow);
+                add_scaled(velocity, &flow, 1.0);
+            }
+            None => tension.fill(0.0),
+        }
         let mut residual = std::mem::take(&mut self.residual);
         self.apply_constraint(transform, sym, (kappa, axes), velocity, &mut residual);
         if let Some(rate) = imposed {
@@ -230,7 +291,7 @@ impl Inextensibility {
                 .and(&self.weights[1])
                 .par_for_each(|idx, r, &t| *r += t * rate[[idx.0, idx.1, idx.2][y]]);
         }
-        self.add_regularization(transform, sym, (kappa, axes), &tension, &mut residual);
+        self.add_regularization(transform, sym, (kappa, axes), tension, &mut residual);
         residual.mapv_inplace(|r| -r);
         self.remove_uniform(&mut residual);
         let mut smoothed = std::mem::take(&mut self.smoothed);
@@ -254,7 +315,7 @@ impl Inextensibility {
             }
             let alpha = rz / curvature;
             add_scaled(velocity, &flow, alpha);
-            Zip::from(&mut tension)
+            Zip::from(&mut *tension)
                 .and(&direction)
                 .par_for_each(|s, &p| *s += alpha * p);
             Zip::from(&mut residual)
@@ -278,8 +339,30 @@ impl Inextensibility {
             self.product,
             self.flow,
         ) = (residual, smoothed, direction, product, flow);
-        self.tension[part] = tension;
         iterations
+    }
+
+    /// A step was accepted: its state's σ (the last solves') becomes the accepted one.
+    pub fn accept(&mut self) {
+        self.accepted.accept(&self.tension);
+    }
+
+    /// The accepted states' σ for a checkpoint ([`Tensions::saved`]).
+    pub fn saved(&self) -> Vec<(String, SavedArray<'_>)> {
+        self.accepted.saved()
+    }
+
+    /// Hold the accepted states' σ of a checkpoint ([`Tensions::restore`]).
+    ///
+    /// # Errors
+    /// If a field has another shape than the box's.
+    pub fn restore(&mut self, saved: &Saved<'_>) -> Result<(), String> {
+        self.accepted.restore(saved)
+    }
+
+    /// Evaluate with the held σ `which` in place of solves, or (`None`) solve again.
+    pub fn set_replay(&mut self, which: Option<Replay>) {
+        self.accepted.set_replay(which);
     }
 
     /// The power the regularization dissipates, γ∫σRσ = γ∫∇σ·T∇σ, of σ = σ_0 + sσ_1 (the

@@ -10,6 +10,7 @@ pub(crate) mod kernels;
 pub(crate) mod pieces;
 pub(crate) mod saved;
 pub mod stepper;
+pub mod tensions;
 pub mod update;
 pub mod viscous;
 

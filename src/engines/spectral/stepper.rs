@@ -98,11 +98,14 @@ impl<S: DeviceState> States<S> {
 }
 
 /// The spectra a checkpoint holds, read in a device's layout ([`Passes::read_spectrum`]).
-pub struct SavedSpectra<'s> {
+pub struct SavedSpectra<'s, 'c> {
     /// φ̂ of the current state.
     pub hat: CowArray<'s, Complex64, Ix3>,
     /// φ̂ⁿ⁻¹ and N̂ⁿ⁻¹, when the scheme reads them and the checkpoint holds them.
     pub history: Option<[CowArray<'s, Complex64, Ix3>; 2]>,
+    /// The whole checkpoint, for what a device's flow keeps beside the spectra
+    /// ([`Passes::flow_arrays`]).
+    pub checkpoint: &'s Saved<'c>,
 }
 
 /// The passes of the spectral step on one device. The device holds its [`States`]; each pass
@@ -136,6 +139,11 @@ pub trait Passes {
     /// The current φ̂ and, when kept, the history (φ̂ⁿ⁻¹, N̂ⁿ⁻¹), as they are held (a device
     /// copies them to the host).
     fn spectra(&self) -> (SavedArray<'_>, Option<[SavedArray<'_>; 2]>);
+    /// What the current state's flow keeps beside the spectra for a checkpoint: the
+    /// inextensible membrane's tensions ([`super::tensions`]); none by default.
+    fn flow_arrays(&self) -> Vec<(String, SavedArray<'_>)> {
+        Vec::new()
+    }
     /// The saved spectrum `name` in this device's layout.
     ///
     /// # Errors
@@ -150,7 +158,7 @@ pub trait Passes {
     ///
     /// # Errors
     /// A sentence if the device fails or the state is not finite.
-    fn restore(&mut self, saved: SavedSpectra<'_>, t: f64, sigma: f64) -> Result<(), String>;
+    fn restore(&mut self, saved: SavedSpectra<'_, '_>, t: f64, sigma: f64) -> Result<(), String>;
     /// Short name for logs and tables.
     fn name(&self) -> &'static str;
     /// What the current state's Stokes flow measured, if the step has one.
@@ -619,6 +627,9 @@ where
                 .array("prev_phi_hat", hat)
                 .array("prev_nonlinear", nonlinear);
         }
+        for (name, array) in self.passes.flow_arrays() {
+            saved = saved.array(&name, array);
+        }
         saved
     }
 
@@ -635,8 +646,15 @@ where
             }
             _ => None,
         };
-        self.passes
-            .restore(SavedSpectra { hat, history }, t, self.sigma)?;
+        self.passes.restore(
+            SavedSpectra {
+                hat,
+                history,
+                checkpoint: saved,
+            },
+            t,
+            self.sigma,
+        )?;
         if self.couple.is_some() {
             self.lambda = saved.get("lambda")?;
             self.passes
