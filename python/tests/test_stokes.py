@@ -1,10 +1,11 @@
 """The Stokes dynamics from Python: the keys pass through `Scene` (and are refused where the
 command line refuses them), and the records carry the flow's columns, as timeseries.csv does."""
 
+import numpy as np
 import pytest
 import vesicle
 
-from conftest import ellipse
+from conftest import ROOT, ellipse
 
 
 def stokes(**extra):
@@ -91,3 +92,19 @@ def test_the_inextensible_membrane_passes_through_scene():
     with pytest.raises(vesicle.InvalidInput) as err:
         vesicle.Scene(stokes(flow={**flow, "viscosity_inside": 2.0}))
     assert err.value.field == "flow.inextensible"
+
+
+def test_the_rates_study_takes_a_list_of_boxes_to_free_space(tmp_path):
+    """`runs/studies/rates_free.json --quick` runs the circle's n = 2 at R = 8 and 12ε, each in
+    the boxes 8R and 10R: cases.csv has a row per (size, box), and rates.csv one row whose
+    ratio at each size is taken to L → ∞ linearly in (R/L)², from the two boxes' ratios."""
+    tables = vesicle.study("rates", ROOT / "runs" / "studies" / "rates_free.json", tmp_path / "out",
+                           quick=True)
+    cases, rates = tables["cases"], tables["rates"]
+    assert list(cases["size"]) == [8, 8, 12, 12] and list(cases["box"]) == [8, 10, 8, 10]
+    assert list(rates["boxes"]) == ["8 10 -> inf"]
+    x = 1.0 / cases["box"] ** 2
+    r = cases["ratio"]
+    free = [(r[i + 1] * x[i] - r[i] * x[i + 1]) / (x[i] - x[i + 1]) for i in (0, 2)]
+    printed = [float(s) for s in rates["ratios"][0].split()]
+    assert np.allclose(printed, free, atol=5e-5), (printed, free)
