@@ -1055,6 +1055,38 @@ fn a_sphere_with_unequal_viscosities_in_the_rates_study_is_exit_2() {
     );
 }
 
+/// The rates study shows its progress: a line on stderr as each case ends, with its ratio and
+/// an ETA (`runs/studies/rates_free.json --quick`: the circle's n = 2 at two sizes in two boxes,
+/// four cases).
+#[test]
+fn the_rates_study_reports_each_case_with_an_eta() {
+    let tmp = TempDir::new().unwrap();
+    let out = tmp.path().join("o");
+    let file = runs_dir().join("studies").join("rates_free.json");
+    let o = vesicle([
+        OsStr::new("study"),
+        OsStr::new("rates"),
+        file.as_os_str(),
+        OsStr::new("--quick"),
+        OsStr::new("--out"),
+        out.as_os_str(),
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let lines: Vec<String> = stderr(&o)
+        .lines()
+        .filter(|l| l.starts_with("rates ["))
+        .map(String::from)
+        .collect();
+    assert_eq!(lines.len(), 4, "{lines:?}");
+    assert!(
+        lines[3].starts_with("rates [4/4] circle 2 drop"),
+        "{lines:?}"
+    );
+    assert!(lines
+        .iter()
+        .all(|l| l.contains("ratio") && l.contains("ETA")));
+}
+
 /// A list of boxes is taken to L → ∞ through its (R/L)³, smallest box first: a list out of order
 /// (or with a box twice) is refused with exit 2 naming `sphere.box`, before anything is written.
 #[test]

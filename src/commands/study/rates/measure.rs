@@ -249,6 +249,23 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
     Ok(scene)
 }
 
+/// The work of `case` in point-steps, for the study's ETA: the points the grid computes times
+/// the steps of its two runs (the prepared steps and t_end/Δt each).
+///
+/// # Errors
+/// As [`scene`].
+pub fn work(spec: &Spec, case: &Case) -> Result<f64> {
+    let scene = scene(
+        spec,
+        case,
+        sharp_rate(case, spec.viscosity) * box_factor(case),
+        1.0,
+    )?;
+    let computed = scene.n.iter().product::<usize>() >> case.symmetry().len();
+    let steps = spec.prepare_steps as f64 + scene.t_end.unwrap_or(0.0) / scene.dt;
+    Ok(2.0 * computed as f64 * steps)
+}
+
 /// Run `case` and fit its rate.
 ///
 /// # Errors

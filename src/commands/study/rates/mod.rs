@@ -25,6 +25,7 @@ use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
 use measure::{Case, Kind, Measured};
 pub use spec::Spec;
 use std::path::Path;
+use std::time::Instant;
 
 impl Row for Measured {
     fn columns() -> Vec<Column<Self>> {
@@ -163,12 +164,18 @@ impl Study for RatesStudy {
 
     fn measure(spec: &Spec, _dir: &Path) -> Result<(Output, Report)> {
         spec.validate()?;
+        let groups = groups(spec);
+        let mut progress = Progress::of(spec, &groups)?;
         let mut cases = Vec::new();
         let mut rates = Vec::new();
-        for group in groups(spec) {
+        for group in groups {
             let measured = group
                 .iter()
-                .map(|c| measure::run(spec, c))
+                .map(|c| {
+                    let m = measure::run(spec, c)?;
+                    progress.done(spec, &m)?;
+                    Ok(m)
+                })
                 .collect::<Result<Vec<_>>>()?;
             rates.push(extrapolate(&measured));
             cases.extend(measured);
@@ -187,6 +194,58 @@ impl Study for RatesStudy {
         report.table("rates.csv", &rates)?;
         report.chart("rates", chart(&rates));
         Ok((Output { cases, rates }, report))
+    }
+}
+
+/// A line on stderr as each case ends: its rate and ratio, and an ETA from the work done so
+/// far ([`measure::work`]: the cases' costs differ by orders of magnitude, as R^6 in 3D).
+struct Progress {
+    started: Instant,
+    total: usize,
+    finished: usize,
+    work_total: f64,
+    work_done: f64,
+}
+
+impl Progress {
+    fn of(spec: &Spec, groups: &[Vec<Case>]) -> Result<Self> {
+        let mut work_total = 0.0;
+        for case in groups.iter().flatten() {
+            work_total += measure::work(spec, case)?;
+        }
+        Ok(Progress {
+            started: Instant::now(),
+            total: groups.iter().map(Vec::len).sum(),
+            finished: 0,
+            work_total,
+            work_done: 0.0,
+        })
+    }
+
+    fn done(&mut self, spec: &Spec, m: &Measured) -> Result<()> {
+        let c = &m.case;
+        self.finished += 1;
+        self.work_done += measure::work(spec, c)?;
+        let elapsed = self.started.elapsed().as_secs_f64();
+        let eta = elapsed * (self.work_total / self.work_done - 1.0);
+        eprintln!(
+            "rates [{}/{}] {} {} {} sigma_bar {} R {} L/R {}: rate {:.4e}, ratio {:.4}, fit \
+             residual {:.1e}, {} steps, {:.0} s | {elapsed:.0} s, ETA {eta:.0} s",
+            self.finished,
+            self.total,
+            c.kind.name(),
+            c.mode,
+            c.membrane_model(),
+            c.sigma_bar,
+            c.size,
+            c.box_ratio,
+            m.rate,
+            m.ratio,
+            m.fit_residual,
+            m.steps,
+            m.wall
+        );
+        Ok(())
     }
 }
 
