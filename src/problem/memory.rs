@@ -67,8 +67,25 @@ pub fn engine_f64_per_point(scene: &Scene, mirror: &[bool]) -> f64 {
         (Method::Spectral, Dynamics::Conserved, Scheme::Sbdf2) => pick(9.9, 20.0, 12.7),
         // The flow's scratch on the periodic box: 3 + d real fields and 1 + d half spectra
         // (10 f64 per point in 3D), beside the conserved step's arrays.
-        (Method::Spectral, Dynamics::Stokes, Scheme::Sbdf1) => 7.9 + 10.0,
-        (Method::Spectral, Dynamics::Stokes, Scheme::Sbdf2) => 9.9 + 10.0,
+        (Method::Spectral, Dynamics::Stokes, Scheme::Sbdf1) => 7.9 + 10.0 + flow_solves(scene),
+        (Method::Spectral, Dynamics::Stokes, Scheme::Sbdf2) => 9.9 + 10.0 + flow_solves(scene),
+    }
+}
+
+/// The iterative solves' scratch, counted (3D, periodic box). Unequal viscosities: 2 real fields
+/// and 1 + 5d half spectra (the right-hand sides of both parts and three of conjugate gradients
+/// per component), 18 f64 a point. The inextensible membrane's tension solve: 21 real fields (the
+/// six weights T_ab and |g|², the four of conjugate gradients, ∇p, a scratch field, σ of the
+/// last solves and of the two accepted states) and 8 half spectra (two of scratch, S Bᵀp and
+/// the unconstrained flow per component): 29 f64 a point (23 in 2D). Measured in 2D at 1024²
+/// at a fixed tension (3 steps, peak resident): 20.0 f64 a point above the same run at one
+/// global tension, the count less the three fields of the part per unit σ, which a fixed
+/// tension never writes.
+fn flow_solves(scene: &Scene) -> f64 {
+    match &scene.flow {
+        Some(flow) if flow.inextensible => 29.0,
+        Some(flow) if flow.contrast().is_some() => 18.0,
+        _ => 0.0,
     }
 }
 
@@ -247,6 +264,17 @@ mod tests {
         let e = estimate(&scene(json!({"symmetry": ["y", "z"]})));
         assert_eq!(e.points, n / 4.0);
         assert!((e.f64_per_point - (16.1 + 4.0)).abs() < 1e-12);
+        let stokes = |inextensible: bool| {
+            let flow = json!({"viscosity": 1.0, "mobility": 0.01, "inextensible": inextensible});
+            estimate(&scene(
+                json!({"dynamics": "stokes", "flow": flow, "scheme": "sbdf2"}),
+            ))
+        };
+        assert!((stokes(false).f64_per_point - 19.9).abs() < 1e-12);
+        assert!((stokes(true).f64_per_point - 48.9).abs() < 1e-12);
+        let flow = json!({"viscosity": 1.0, "mobility": 0.01, "viscosity_inside": 5.0});
+        let e = estimate(&scene(json!({"dynamics": "stokes", "flow": flow})));
+        assert!((e.f64_per_point - (7.9 + 10.0 + 18.0)).abs() < 1e-12);
         let e = estimate(&scene(
             json!({"dynamics": "relaxational", "lbfgs_memory": 10}),
         ));
