@@ -27,7 +27,7 @@
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
 #                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 5 + 10, one thread, loaded), measured
 #   heating          study heating heating.json (51 relaxations, 14 references)   220 s (one thread), measured
-#   rates            study rates rates.json + rates3d.json + rates3d_box{,8,10}.json + rates_fine.json + rates_l6.json + rates3d_tension.json + rates{,3d}_inextensible.json   747 s (two cores) + 2 519 s (recorded) + 1 848 s + 248 s + 428 s + 2 935 s + 753 s + 937 s + 959 s + (see rates3d_inextensible's rates.txt) (one thread beside other runs, measured 2026-12-06)
+#   rates            study rates rates.json + rates3d.json + rates3d_box{,8,10}.json + rates3d_free.json + rates_free.json + rates_fine.json + rates_l6.json + rates3d_tension{,_fine}.json + rates3d_sigma10.json + rates{,3d}_inextensible.json   747 s (two cores) + 2 519 s (recorded) + 1 848 s + 248 s + 428 s + 3 389 s + 182 s + 2 935 s + 753 s + 2 300 s + 4 072 s + (see rates3d_sigma10's rates.txt) + 959 s + (see rates3d_inextensible's rates.txt) (one thread beside other runs, measured 2026-12-06)
 #   shear            study shear shear.json + shear_box.json (2D)   3 036 s + 445 s on one thread beside other runs, measured 2026-12-06
 #   shear3d          study shear shear3d.json + shear3d_box.json + shear3d_length.json (3D)   35 + 12 + 74 min on one thread beside two or three other runs, measured 2026-12-06
 #   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 4 036 s on one thread (the second beside three other runs), measured 2026-12-06
@@ -137,7 +137,7 @@ group_onset() {
     studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40
 }
 group_heating() { studies heating heating; }
-group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates_free rates_fine rates_l6 rates3d_tension rates_inextensible rates3d_inextensible; }
+group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_sigma10 rates_inextensible rates3d_inextensible; }
 group_shear() { studies shear shear shear_box; }
 group_shear3d() { studies shear shear3d shear3d_box shear3d_length; }
 group_contrast() {
