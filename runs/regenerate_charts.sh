@@ -137,7 +137,7 @@ group_onset() {
     studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40
 }
 group_heating() { studies heating heating; }
-group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_sigma10 rates_inextensible rates3d_inextensible; }
+group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_tension_l4 rates3d_sigma10 rates3d_sigma10_l5 rates_inextensible rates3d_inextensible; }
 group_shear() { studies shear shear shear_box; }
 group_shear3d() { studies shear shear3d shear3d_box shear3d_length; }
 group_contrast() {
