@@ -1006,6 +1006,18 @@ mod tests {
         }
     }
 
+    /// η = 1 inside and out at mobility `mobility`, no imposed shear; the membrane
+    /// inextensible or a drop.
+    fn unit_fluid(mobility: f64, inextensible: bool) -> FlowSpec {
+        FlowSpec {
+            viscosity: 1.0,
+            mobility,
+            shear_rate: None,
+            viscosity_inside: None,
+            inextensible,
+        }
+    }
+
     /// The inextensible membrane on a periodic 2D box (a capsule of radius 4.8ε around a
     /// segment 7.7ε long, axes 1.8 : 1, with the tanh profile of its distance), split and at
     /// a fixed tension. The energy law holds with the regularization's channel,
@@ -1037,13 +1049,7 @@ mod tests {
             let rates: Vec<f64> = [false, true]
                 .into_iter()
                 .map(|inextensible| {
-                    let spec = FlowSpec {
-                        viscosity: 1.0,
-                        mobility: 0.05,
-                        shear_rate: None,
-                        viscosity_inside: None,
-                        inextensible,
-                    };
+                    let spec = unit_fluid(0.05, inextensible);
                     if inextensible {
                         assert_energy_law_at(&grid, &phi, spec, sigma, fixed);
                     }
@@ -1084,13 +1090,7 @@ mod tests {
         let misses: Vec<f64> = [false, true]
             .into_iter()
             .map(|inextensible| {
-                let spec = FlowSpec {
-                    viscosity: 1.0,
-                    mobility: 0.01,
-                    shear_rate: None,
-                    viscosity_inside: None,
-                    inextensible,
-                };
+                let spec = unit_fluid(0.01, inextensible);
                 let mut ev = plain_evaluator(&grid)
                     .with_flow(spec)
                     .with_fixed_tension(0.0);

@@ -175,12 +175,10 @@ pub fn box_factor(case: &Case) -> f64 {
         Kind::Sphere if case.inextensible => {
             theory::inextensible_box_factor(3, case.mode, r_over_l)
         }
-        Kind::Circle => theory::circle_box_factor_with_contrast(
-            case.mode,
-            1.0 / case.box_ratio,
-            case.viscosity_ratio,
-        ),
-        Kind::Sphere => theory::box_factor(3, case.mode, 1.0 / case.box_ratio),
+        Kind::Circle => {
+            theory::circle_box_factor_with_contrast(case.mode, r_over_l, case.viscosity_ratio)
+        }
+        Kind::Sphere => theory::box_factor(3, case.mode, r_over_l),
         Kind::Flat => 1.0,
     }
 }

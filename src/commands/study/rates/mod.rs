@@ -173,7 +173,7 @@ impl Study for RatesStudy {
                 .iter()
                 .map(|c| {
                     let m = measure::run(spec, c)?;
-                    progress.done(spec, &m)?;
+                    progress.done(&m);
                     Ok(m)
                 })
                 .collect::<Result<Vec<_>>>()?;
@@ -201,38 +201,35 @@ impl Study for RatesStudy {
 /// far ([`measure::work`]: the cases' costs differ by orders of magnitude, as R^6 in 3D).
 struct Progress {
     started: Instant,
-    total: usize,
+    /// Each case's work, in the order the cases run.
+    work: Vec<f64>,
     finished: usize,
-    work_total: f64,
-    work_done: f64,
 }
 
 impl Progress {
     fn of(spec: &Spec, groups: &[Vec<Case>]) -> Result<Self> {
-        let mut work_total = 0.0;
-        for case in groups.iter().flatten() {
-            work_total += measure::work(spec, case)?;
-        }
         Ok(Progress {
             started: Instant::now(),
-            total: groups.iter().map(Vec::len).sum(),
+            work: groups
+                .iter()
+                .flatten()
+                .map(|case| measure::work(spec, case))
+                .collect::<Result<_>>()?,
             finished: 0,
-            work_total,
-            work_done: 0.0,
         })
     }
 
-    fn done(&mut self, spec: &Spec, m: &Measured) -> Result<()> {
+    fn done(&mut self, m: &Measured) {
         let c = &m.case;
         self.finished += 1;
-        self.work_done += measure::work(spec, c)?;
+        let done: f64 = self.work[..self.finished].iter().sum();
         let elapsed = self.started.elapsed().as_secs_f64();
-        let eta = elapsed * (self.work_total / self.work_done - 1.0);
+        let eta = elapsed * (self.work.iter().sum::<f64>() / done - 1.0);
         eprintln!(
             "rates [{}/{}] {} {} {} sigma_bar {} R {} L/R {}: rate {:.4e}, ratio {:.4}, fit \
              residual {:.1e}, {} steps, {:.0} s | {elapsed:.0} s, ETA {eta:.0} s",
             self.finished,
-            self.total,
+            self.work.len(),
             c.kind.name(),
             c.mode,
             c.membrane_model(),
@@ -245,7 +242,6 @@ impl Progress {
             m.steps,
             m.wall
         );
-        Ok(())
     }
 }
 
