@@ -69,9 +69,47 @@ pub fn measure(phi: &Array3<f64>, dim: usize, h: f64) -> LevelSet {
 /// On the tanh profile of a sphere (ε = h) the reduced volume is off by 4e-4, 1e-4 and 2e-5 at
 /// R = 12h, 18h and 24h, against 3e-3 with [`measure`] (`tests/pictures.rs`).
 pub fn measure_refined(phi: &Array3<f64>, dim: usize, h: f64) -> LevelSet {
+    refined(phi, &crate::analysis::upsample::double(phi), dim, h)
+}
+
+/// [`measure_refined`] from `phi` at h and its band-limited interpolant `fine` at h/2.
+fn refined(phi: &Array3<f64>, fine: &Array3<f64>, dim: usize, h: f64) -> LevelSet {
     let coarse = measure(phi, dim, h);
-    let fine = measure(&crate::analysis::upsample::double(phi), dim, h / 2.0);
+    let fine = measure(fine, dim, h / 2.0);
     LevelSet::new(fine.area, (4.0 * fine.volume - coarse.volume) / 3.0, dim)
+}
+
+/// The φ = 0 surface of a 3D field: its [`measure_refined`] area, volume and v, and its area
+/// difference.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Surface {
+    /// A₀, V₀ and v ([`measure_refined`]).
+    pub level: LevelSet,
+    /// Δa = ∮2H dA / (8πR0), R0 = √(A/4π), of the surface (NaN when its mesh is empty or
+    /// open).
+    pub area_difference: f64,
+}
+
+/// [`measure_refined`] of a 3D full-box field, with Δa of the same surface. Both ∮2H dA (the
+/// discrete Steiner sum of [`super::surface::Mesh::integrated_mean_curvature`]) and A are
+/// taken from the mesh of the band-limited interpolant at h/2. On tanh spheroids of radii
+/// 24–70h at ε = 2h, ∮2H dA is then within 3e-5 of the exact integral, against 1.2e-4 on the
+/// mesh at h, and Richardson's combination of the two is no better (the mesh's error is not a
+/// clean power of h).
+pub fn measure_surface(phi: &Array3<f64>, h: f64) -> Surface {
+    use std::f64::consts::PI;
+    let fine = crate::analysis::upsample::double(phi);
+    let mesh = super::surface::extract(&fine, h / 2.0);
+    let area_difference = if mesh.triangles.is_empty() || !mesh.is_closed() {
+        f64::NAN
+    } else {
+        let r0 = (mesh.area() / (4.0 * PI)).sqrt();
+        mesh.integrated_mean_curvature() / (8.0 * PI * r0)
+    };
+    Surface {
+        level: refined(phi, &fine, 3, h),
+        area_difference,
+    }
 }
 
 type P3 = [f64; 3];
@@ -149,4 +187,48 @@ fn triangle_part(p: [P3; 3], v: [f64; 3]) -> (f64, f64) {
             full - corner
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    /// ∮2H dA and A of the prolate spheroid with semi-axes (a, a, c), by the midpoint rule on
+    /// its meridian (r, z) = (a sin t, c cos t): 2H = κ_m + κ_φ with κ_m = ac/q³ and
+    /// κ_φ = c/(aq), dA = 2πr q dt, q = √(a² cos² t + c² sin² t).
+    fn spheroid(a: f64, c: f64) -> (f64, f64) {
+        let n = 20_000;
+        let dt = PI / n as f64;
+        (0..n).fold((0.0, 0.0), |(m, area), i| {
+            let t = (i as f64 + 0.5) * dt;
+            let q = (a * a * t.cos().powi(2) + c * c * t.sin().powi(2)).sqrt();
+            let da = 2.0 * PI * a * t.sin() * q * dt;
+            (m + (a * c / q.powi(3) + c / (a * q)) * da, area + da)
+        })
+    }
+
+    /// The φ = 0 surface of a tanh spheroid (a, c) = (12, 24)h at ε = h, off the grid's points:
+    /// Δa within 3e-4 of the exact 1.05569 (measured 1.0e-4; the mesh at h alone is 1.07e-3
+    /// off, so the test fails without the refinement, and by far more with a wrong factor or
+    /// R0), and v as [`measure_refined`] gives it.
+    #[test]
+    fn the_surfaces_area_difference_is_that_of_the_spheroid() {
+        let (a, c, (nx, nz)) = (12.0, 24.0, (36, 64));
+        let (cx, cz) = (nx as f64 / 2.0 + 0.31, nz as f64 / 2.0 - 0.17);
+        let phi = Array3::from_shape_fn((nx, nx, nz), |(i, j, k)| {
+            let (x, y, z) = (i as f64 - cx, j as f64 - cx + 0.13, k as f64 - cz);
+            let rho = (x * x / (a * a) + y * y / (a * a) + z * z / (c * c)).sqrt();
+            ((1.0 - rho) * (a * a * c).cbrt() / std::f64::consts::SQRT_2).tanh()
+        });
+        let (m, area) = spheroid(a, c);
+        let exact = m / (8.0 * PI * (area / (4.0 * PI)).sqrt());
+        let s = measure_surface(&phi, 1.0);
+        assert!(
+            (s.area_difference / exact - 1.0).abs() < 3e-4,
+            "Δa {} against {exact}",
+            s.area_difference
+        );
+        assert_eq!(s.level, measure_refined(&phi, 3, 1.0));
+    }
 }

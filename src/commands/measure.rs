@@ -26,7 +26,6 @@
 
 use crate::analysis::components;
 use crate::analysis::levelset::{self, LevelSet};
-use crate::analysis::surface;
 use crate::commands::run_folder::{self, RunInfo};
 use crate::error::{Error, Result};
 use crate::output::chart;
@@ -62,8 +61,8 @@ pub struct ShapeMeasure {
     /// Connected pieces of {φ > 0} ([`components::count`]): 1 for a connected chain or a bud on
     /// its neck, more once pieces have separated at the grid's resolution.
     pub pieces: usize,
-    /// Δa = ∮2H dA / (8πR0) of the φ = 0 mesh ([`surface::Mesh::integrated_mean_curvature`], R0 from the
-    /// mesh's area): the area difference of ADE; NaN for a 2D field or an open surface.
+    /// Δa = ∮2H dA / (8πR0) of the φ = 0 surface ([`levelset::measure_surface`]): the area
+    /// difference of ADE; NaN for an open surface.
     pub surface_da: f64,
 }
 
@@ -272,6 +271,7 @@ pub fn measure_field(phi: &Array3<f64>, axis: usize, h: f64, step: usize, t: f64
     let r = radius_profile(phi, axis, h);
     let body = &r[body(&r)];
     let r_tube = (body.iter().map(|x| x * x).sum::<f64>() / body.len().max(1) as f64).sqrt();
+    let surface = levelset::measure_surface(phi, h);
     ShapeMeasure {
         step,
         t,
@@ -280,21 +280,10 @@ pub fn measure_field(phi: &Array3<f64>, axis: usize, h: f64, step: usize, t: f64
         mode: dominant_mode(body, h),
         r_tube,
         skewness: skewness(&r, h),
-        surface: levelset::measure_refined(phi, 3, h),
+        surface: surface.level,
         pieces: components::count(phi),
-        surface_da: surface_area_difference(phi, h),
+        surface_da: surface.area_difference,
     }
-}
-
-/// Δa = ∮2H dA / (8πR0), R0 = √(A/4π), of the φ = 0 mesh of `phi` (NaN when the mesh is empty
-/// or open).
-pub fn surface_area_difference(phi: &Array3<f64>, h: f64) -> f64 {
-    let mesh = surface::extract(phi, h);
-    if mesh.triangles.is_empty() || !mesh.is_closed() {
-        return f64::NAN;
-    }
-    let r0 = (mesh.area() / (4.0 * PI)).sqrt();
-    mesh.integrated_mean_curvature() / (8.0 * PI * r0)
 }
 
 /// The largest relative departure of the φ = 0 area and volume from the first state's over

@@ -48,6 +48,10 @@ pub struct CaseResult {
     pub points: usize,
     /// Reduced volume of the φ = 0 surface ([`crate::analysis::levelset::measure_refined`]).
     pub v: f64,
+    /// Δa of the φ = 0 surface ([`crate::analysis::levelset::measure_surface`]); absent from
+    /// results written before it was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub da_surface: Option<f64>,
     /// Diffuse reduced volume from ∫(1 + φ)/2 and the diffuse area.
     pub v_diffuse: f64,
     /// Reduced bending energy e = ∮(2H − c0)² dA / 16π of the phase field (the record's);
@@ -211,7 +215,7 @@ pub fn run_case(
     let stopped = sim.run(&StopRules::of(&scene), &mut [])?;
     let last = sim.record();
     let full = problem.grid.unfold(sim.engine().phi());
-    let level = crate::analysis::levelset::measure_refined(&full, 3, scene.h);
+    let surface = crate::analysis::levelset::measure_surface(&full, scene.h);
     if spec.thumbnails.iter().any(|v| (v - case.v).abs() < 1e-9) && case.r0 == spec.finest() {
         write_thumbnail(&full, scene.h, case, &dir.join("thumbnail.png"))?;
     }
@@ -237,7 +241,8 @@ pub fn run_case(
         r0: case.r0,
         n,
         points: problem.grid.len(),
-        v: level.reduced_volume,
+        v: surface.level.reduced_volume,
+        da_surface: Some(surface.area_difference),
         v_diffuse: last.reduced_volume,
         e: last.reduced_energy,
         sigma: last.sigma,

@@ -42,8 +42,11 @@ pub struct Point {
     pub v: f64,
     /// Extrapolated reduced energy `e∞` (w with ADE).
     pub e: f64,
-    /// Extrapolated Δa∞ at order [`DA_ORDER`] (ADE; NaN otherwise).
+    /// Extrapolated Δa∞ of the phase field's functional at order [`DA_ORDER`] (ADE and the
+    /// bilayer couple; NaN otherwise).
     pub da: f64,
+    /// Extrapolated Δa∞ of the φ = 0 surface at the shared order (NaN where a case lacks it).
+    pub da_surface: f64,
 }
 
 /// The order in ε/R0 Δa is extrapolated at: the profile's curvature correction, (ε/R)² (the
@@ -72,6 +75,8 @@ pub struct Orders {
     pub v: f64,
     /// Order of the reduced energy in ε/R0.
     pub e: f64,
+    /// Order of the φ = 0 surface's Δa in ε/R0 (NaN where a case lacks it).
+    pub da_surface: f64,
 }
 
 /// Split `cases` (increasing R0) into the pre-asymptotic coarsest ones and the rest.
@@ -109,6 +114,7 @@ fn group(results: &[CaseResult]) -> Vec<Point> {
                 v: f64::NAN,
                 e: f64::NAN,
                 da: f64::NAN,
+                da_surface: f64::NAN,
             }
         })
         .collect()
@@ -122,9 +128,15 @@ pub fn orders(results: &[CaseResult]) -> Option<Orders> {
         let series: Vec<_> = points.iter().map(|p| p.series(get)).collect();
         common_order(&series)
     };
+    let measured = results.iter().all(|c| c.da_surface.is_some());
     Some(Orders {
         v: fitted(|c| c.v)?,
         e: fitted(|c| c.e)?,
+        da_surface: if measured {
+            fitted(|c| c.da_surface.unwrap_or(f64::NAN)).unwrap_or(f64::NAN)
+        } else {
+            f64::NAN
+        },
     })
 }
 
@@ -146,7 +158,9 @@ pub fn extrapolate(results: &[CaseResult], orders: Orders) -> Vec<Point> {
         } else {
             f64::NAN
         };
-        (p.v, p.e, p.da) = (at(|c| c.v, orders.v), at(|c| c.e, orders.e), da);
+        let da_surface = at(|c| c.da_surface.unwrap_or(f64::NAN), orders.da_surface);
+        (p.v, p.e, p.da, p.da_surface) =
+            (at(|c| c.v, orders.v), at(|c| c.e, orders.e), da, da_surface);
     }
     points
 }

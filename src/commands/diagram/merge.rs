@@ -159,7 +159,22 @@ pub fn merge_slice(
     chart::write_montage(&dir.join("thumbnails.png"), thumbnails, 4)?;
     let mut table = report::table(&points, results, orders, &reference);
     if at.couple.is_some() {
-        table.push_str(&report::da_table(&points, &reference));
+        table.push_str(&report::da_table(
+            "Δa of the phase field's functional (M/M₁)",
+            &points,
+            &reference,
+            |c| c.da.unwrap_or(f64::NAN),
+            |p| p.da,
+        ));
+    }
+    if results.iter().all(|r| r.da_surface.is_some()) {
+        table.push_str(&report::da_table(
+            "Δa of the φ = 0 surface",
+            &points,
+            &reference,
+            |c| c.da_surface.unwrap_or(f64::NAN),
+            |p| p.da_surface,
+        ));
     }
     crate::commands::study::write_text(dir, "table.txt", &table)?;
     Ok(Slice {

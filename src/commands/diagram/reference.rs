@@ -27,7 +27,7 @@ const DV_BC: f64 = 0.005;
 pub struct Reference {
     /// Per branch of [`Branch::ALL`].
     pub curves: Vec<Vec<(f64, f64)>>,
-    /// With ADE, `(v, Δa)` per branch (empty otherwise).
+    /// `(v, Δa)` per branch.
     pub da_curves: Vec<Vec<(f64, f64)>>,
 }
 
@@ -82,27 +82,16 @@ impl Reference {
                     .collect()
             })
             .collect();
-        Reference {
-            curves: solved
-                .iter()
-                .map(|c| c.iter().map(|p| (p.0, p.1)).collect())
-                .collect(),
-            da_curves: solved
-                .iter()
-                .map(|c| c.iter().map(|p| (p.0, p.2)).collect())
-                .collect(),
-        }
+        Self::of_solved(&solved)
     }
 
-    /// Δa of `branch` at `v` (ADE references; NaN otherwise or outside the branch).
+    /// Δa of `branch` at `v` (NaN outside the branch).
     pub fn da(&self, branch: Branch, v: f64) -> f64 {
         let i = Branch::ALL
             .iter()
             .position(|b| *b == branch)
             .expect("listed");
-        let Some(c) = self.da_curves.get(i) else {
-            return f64::NAN;
-        };
+        let c = &self.da_curves[i];
         match (c.first(), c.last()) {
             (Some(lo), Some(hi)) if v >= lo.0 && v <= hi.0 && c.len() > 1 => cubic_at(c, v),
             _ => f64::NAN,
@@ -118,20 +107,31 @@ impl Reference {
         let hi = ((v_hi / DV).ceil() as usize).min((0.995 / DV).round() as usize);
         let vs: Vec<f64> = (lo..=hi).map(|i| i as f64 * DV).collect();
         let opts = Options::default().with_c0(c0);
-        let curves = Branch::ALL
+        let solved: Vec<Vec<(f64, f64, f64)>> = Branch::ALL
             .par_iter()
             .map(|&b| {
                 axisym::follow(b, &vs, &opts)
                     .shapes
                     .iter()
                     .filter(|s| b.up_down_symmetric() || s.asymmetry() > ASYMMETRIC)
-                    .map(|s| (s.v, s.e))
+                    .map(|s| (s.v, s.e, s.da()))
                     .collect()
             })
             .collect();
+        Self::of_solved(&solved)
+    }
+
+    /// The reference of `(v, e, Δa)` per branch of [`Branch::ALL`].
+    fn of_solved(solved: &[Vec<(f64, f64, f64)>]) -> Self {
         Reference {
-            curves,
-            da_curves: Vec::new(),
+            curves: solved
+                .iter()
+                .map(|c| c.iter().map(|p| (p.0, p.1)).collect())
+                .collect(),
+            da_curves: solved
+                .iter()
+                .map(|c| c.iter().map(|p| (p.0, p.2)).collect())
+                .collect(),
         }
     }
 

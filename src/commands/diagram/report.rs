@@ -105,7 +105,8 @@ pub fn write_csv(
 ) -> Result<()> {
     let mut s = String::from(
         "branch,v,e,v_target,e_reference,error,r0_finest,v_finest,e_finest,e_reference_finest,\
-         error_finest,v_diffuse_finest,sigma_finest,resolutions_used\n",
+         error_finest,v_diffuse_finest,sigma_finest,resolutions_used,da,da_surface,da_reference,\
+         da_surface_finest,da_reference_finest\n",
     );
     for p in points {
         let f = p.finest();
@@ -113,7 +114,7 @@ pub fn write_csv(
         let used: Vec<String> = p.cases.iter().map(|c| c.r0.to_string()).collect();
         let _ = writeln!(
             s,
-            "{},{:.6},{:.6},{},{:.6},{:.3e},{},{:.6},{:.6},{:.6},{:.3e},{:.6},{:.6e},{}",
+            "{},{:.6},{:.6},{},{:.6},{:.3e},{},{:.6},{:.6},{:.6},{:.3e},{:.6},{:.6e},{},{:.6},{:.6},{:.6},{:.6},{:.6}",
             p.branch,
             p.v,
             p.e,
@@ -127,20 +128,25 @@ pub fn write_csv(
             error(reference, &p.branch, f.v, f.e),
             f.v_diffuse,
             f.sigma,
-            used.join(" ")
+            used.join(" "),
+            p.da,
+            p.da_surface,
+            reference.da(b, p.v),
+            f.da_surface.unwrap_or(f64::NAN),
+            reference.da(b, f.v),
         );
     }
     write(out, "diagram.csv", &s)?;
 
     let mut s = String::from(
         "index,branch,v_target,r0,n,points,v,v_diffuse,e,e_reference,error,sigma,residual,\
-         iterations,stopped,wall_seconds\n",
+         iterations,stopped,da,da_surface,da_reference,wall_seconds\n",
     );
     for r in results {
         let b = branch_named(&r.branch).expect("listed");
         let _ = writeln!(
             s,
-            "{},{},{},{},{}x{}x{},{},{:.8},{:.8},{:.8},{:.8},{:.3e},{:.8e},{:.3e},{},{},{:.2}",
+            "{},{},{},{},{}x{}x{},{},{:.8},{:.8},{:.8},{:.8},{:.3e},{:.8e},{:.3e},{},{},{:.8},{:.8},{:.8},{:.2}",
             r.index,
             r.branch,
             r.v_target,
@@ -158,7 +164,10 @@ pub fn write_csv(
             r.residual,
             r.iterations,
             r.stopped,
-            r.wall_seconds
+            r.da.unwrap_or(f64::NAN),
+            r.da_surface.unwrap_or(f64::NAN),
+            reference.da(b, r.v),
+            r.wall_seconds,
         );
     }
     write(out, "cases.csv", &s)?;
@@ -225,8 +234,8 @@ pub fn table(
     }
     let _ = writeln!(
         s,
-        "orders in ε/R0 (least squares over all points): v {:.2}, e {:.2}",
-        orders.v, orders.e
+        "orders in ε/R0 (least squares over all points): v {:.2}, e {:.2}, Δa of φ = 0 {:.2}",
+        orders.v, orders.e, orders.da_surface
     );
     for p in points.iter().filter(|p| !p.dropped.is_empty()) {
         let r0: Vec<String> = p.dropped.iter().map(|c| c.r0.to_string()).collect();
@@ -285,19 +294,27 @@ pub fn table(
     s
 }
 
-/// The Δa rows of an ADE slice: per point the finest resolution's Δa and the extrapolated Δa∞
-/// against the reference's Δa at the same v (the finest's v, and v∞).
-pub fn da_table(points: &[Point], reference: &Reference) -> String {
+/// Δa rows, under `heading`: per point the finest resolution's Δa (`finest`) and the
+/// extrapolated Δa∞ (`extrapolated`) against the reference's Δa at the same v (the finest's v,
+/// and v∞).
+pub fn da_table(
+    heading: &str,
+    points: &[Point],
+    reference: &Reference,
+    finest: fn(&CaseResult) -> f64,
+    extrapolated: fn(&Point) -> f64,
+) -> String {
     let mut s = format!(
-        "{:<12} {:>6} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}\n",
+        "{heading}\n{:<12} {:>6} | {:>8} {:>8} {:>9} | {:>8} {:>8} {:>9}\n",
         "branch", "v0", "Δa", "Δa_ref", "error", "Δa∞", "Δa_ref", "error"
     );
     for p in points {
         let b = branch_named(&p.branch).expect("listed");
         let f = p.finest();
-        let (fd, rf, rd) = (
-            f.da.unwrap_or(f64::NAN),
+        let (fd, rf, pd, rd) = (
+            finest(f),
             reference.da(b, f.v),
+            extrapolated(p),
             reference.da(b, p.v),
         );
         let _ = writeln!(
@@ -308,9 +325,9 @@ pub fn da_table(points: &[Point], reference: &Reference) -> String {
             fd,
             rf,
             100.0 * (fd / rf - 1.0),
-            p.da,
+            pd,
             rd,
-            100.0 * (p.da / rd - 1.0)
+            100.0 * (pd / rd - 1.0)
         );
     }
     s
