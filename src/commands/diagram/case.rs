@@ -52,6 +52,12 @@ pub struct CaseResult {
     /// results written before it was measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub da_surface: Option<f64>,
+    /// Volume skewness of {φ > 0} along the axis ([`crate::commands::measure::skewness`]): 0 for
+    /// an up–down symmetric shape, so it tells a pear or a stomatocyte that kept its asymmetry
+    /// from one that relaxed to a symmetric shape; absent from results written before it was
+    /// measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skewness: Option<f64>,
     /// Diffuse reduced volume from ∫(1 + φ)/2 and the diffuse area.
     pub v_diffuse: f64,
     /// Reduced bending energy e = ∮(2H − c0)² dA / 16π of the phase field (the record's);
@@ -243,6 +249,7 @@ pub fn run_case(
         points: problem.grid.len(),
         v: surface.level.reduced_volume,
         da_surface: Some(surface.area_difference),
+        skewness: Some(skewness_along_axis(&full, scene.h)),
         v_diffuse: last.reduced_volume,
         e: last.reduced_energy,
         sigma: last.sigma,
@@ -257,6 +264,13 @@ pub fn run_case(
     std::fs::write(&tmp, json).map_err(io(&tmp))?;
     std::fs::rename(&tmp, &path).map_err(io(&path))?;
     Ok(result)
+}
+
+/// [`crate::commands::measure::skewness`] of the full-box field `full` along the shape's axis z.
+fn skewness_along_axis(full: &ndarray::Array3<f64>, h: f64) -> f64 {
+    use crate::commands::measure;
+    let axis = crate::commands::render::axis_index("z").expect("z is an axis");
+    measure::skewness(&measure::radius_profile(full, axis, h), h)
 }
 
 /// A small shaded picture of the φ = 0 surface, seen from the side (the stomatocyte cut open

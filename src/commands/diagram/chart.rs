@@ -4,8 +4,7 @@
 //! dotted and lighter) and `thumbnails.png` (the cases' shape pictures side by side).
 
 use super::reference::Reference;
-use super::spec::SliceAt;
-use crate::analysis::axisym::Branch;
+use super::spec::{SliceAt, BRANCHES};
 use crate::error::Result;
 use crate::output::{ensure_font, write_rgb_png, OutputError, RgbImage, FONT_FAMILY};
 use plotters::prelude::*;
@@ -14,11 +13,12 @@ use std::path::{Path, PathBuf};
 /// Chart size in pixels.
 const SIZE: (u32, u32) = (1000, 680);
 
-/// Colour of each branch of [`Branch::ALL`].
-const COLOURS: [RGBColor; 3] = [
+/// Colour of each branch of [`BRANCHES`].
+const COLOURS: [RGBColor; 4] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
 ];
 
 /// A transition between two branches, as drawn.
@@ -36,7 +36,7 @@ pub struct Transition {
 }
 
 /// Write the diagram chart of the slice `at`: `extrapolated` and `finest` are per branch of
-/// [`Branch::ALL`], `(v, e)` points (w with ADE); `transitions` the reference transitions and the phase-field crossings.
+/// [`BRANCHES`], `(v, e)` points (w with ADE); `transitions` the reference transitions and the phase-field crossings.
 ///
 /// # Errors
 /// `Error::Output` if drawing or writing fails.
@@ -134,7 +134,7 @@ fn draw(
         .axis_desc_style((FONT_FAMILY, 18))
         .label_style((FONT_FAMILY, 14))
         .draw()?;
-    for (i, b) in Branch::ALL.iter().enumerate() {
+    for (i, b) in BRANCHES.iter().enumerate() {
         // A branch that does not exist at this c0 and has no points is left out of the legend.
         if reference.curve(*b).is_empty() && extrapolated[i].is_empty() {
             continue;

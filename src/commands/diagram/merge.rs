@@ -9,7 +9,7 @@ use super::chart;
 use super::extrapolate::{self, Orders, Point};
 use super::reference::{self, Reference};
 use super::report::{self, Kind};
-use super::spec::{Case, DiagramSpec, SliceAt};
+use super::spec::{Case, DiagramSpec, SliceAt, BRANCHES};
 use super::summary;
 use crate::analysis::axisym::Branch;
 use crate::error::{Error, Result};
@@ -118,7 +118,7 @@ pub fn merge_slice(
     let (v_lo, v_hi) = results.iter().fold((1.0f64, 0.0f64), |(a, b), r| {
         (a.min(r.v).min(r.v_target), b.max(r.v).max(r.v_target))
     });
-    let listed: Vec<Branch> = Branch::ALL
+    let listed: Vec<Branch> = BRANCHES
         .into_iter()
         .filter(|b| results.iter().any(|r| r.branch == b.name()))
         .collect();
@@ -136,7 +136,7 @@ pub fn merge_slice(
         .iter()
         .zip(reference::TRANSITIONS)
         .map(|((name, t, kind), (a, _))| {
-            let branch = &extrapolated[Branch::ALL.iter().position(|b| *b == a).expect("listed")];
+            let branch = &extrapolated[BRANCHES.iter().position(|b| *b == a).expect("listed")];
             let crossing = (t[1].is_finite() && !branch.is_empty())
                 .then(|| (t[1], crate::analysis::curves::cubic_at(branch, t[1])));
             chart::Transition {

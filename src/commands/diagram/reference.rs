@@ -2,7 +2,7 @@
 //! branches of [`crate::analysis::axisym`] on a fine grid of reduced volumes, interpolated, and
 //! their transition volumes.
 
-use super::spec::{Couple, SliceAt};
+use super::spec::{Couple, SliceAt, BRANCHES};
 use crate::analysis::axisym::{self, Branch, Options};
 use crate::analysis::curves::{crossings, cubic_at};
 use rayon::prelude::*;
@@ -25,17 +25,18 @@ const DV_BC: f64 = 0.005;
 /// The reference branches, each `(v, e)` in increasing v (with ADE, e is w).
 #[derive(Clone, Debug)]
 pub struct Reference {
-    /// Per branch of [`Branch::ALL`].
+    /// Per branch of [`BRANCHES`].
     pub curves: Vec<Vec<(f64, f64)>>,
     /// `(v, Δa)` per branch.
     pub da_curves: Vec<Vec<(f64, f64)>>,
 }
 
 /// A transition: where two branches' energies cross.
-pub const TRANSITIONS: [(Branch, Branch); 3] = [
+pub const TRANSITIONS: [(Branch, Branch); 4] = [
     (Branch::Prolate, Branch::Oblate),
     (Branch::Oblate, Branch::Stomatocyte),
     (Branch::Prolate, Branch::Stomatocyte),
+    (Branch::Prolate, Branch::Pear),
 ];
 
 impl Reference {
@@ -56,7 +57,7 @@ impl Reference {
         let lo = (v_lo / dv).floor().max(1.0) as usize;
         let hi = ((v_hi / dv).ceil() as usize).min((0.99 / dv).round() as usize);
         let opts = Options::default().with_c0(at.c0);
-        let solved: Vec<Vec<(f64, f64, f64)>> = Branch::ALL
+        let solved: Vec<Vec<(f64, f64, f64)>> = BRANCHES
             .par_iter()
             .map(|&b| {
                 if !listed.contains(&b) {
@@ -87,10 +88,7 @@ impl Reference {
 
     /// Δa of `branch` at `v` (NaN outside the branch).
     pub fn da(&self, branch: Branch, v: f64) -> f64 {
-        let i = Branch::ALL
-            .iter()
-            .position(|b| *b == branch)
-            .expect("listed");
+        let i = BRANCHES.iter().position(|b| *b == branch).expect("listed");
         let c = &self.da_curves[i];
         match (c.first(), c.last()) {
             (Some(lo), Some(hi)) if v >= lo.0 && v <= hi.0 && c.len() > 1 => cubic_at(c, v),
@@ -100,16 +98,20 @@ impl Reference {
 
     /// Follow every branch at reduced spontaneous curvature `c0` over `[v_lo, v_hi]` (clipped
     /// to (0, 1]) in steps of 0.005; a stomatocyte branch keeps only its up–down asymmetric
-    /// shapes ([`ASYMMETRIC`]).
+    /// shapes ([`ASYMMETRIC`]). The pear's curve is empty: a diagram lists it only with ADE or
+    /// the bilayer couple ([`Reference::at`]).
     pub fn new(c0: f64, v_lo: f64, v_hi: f64) -> Self {
         let lo = (v_lo / DV).floor().max(1.0) as usize;
         // Below v = 1, where the prolate and oblate branches meet at the sphere.
         let hi = ((v_hi / DV).ceil() as usize).min((0.995 / DV).round() as usize);
         let vs: Vec<f64> = (lo..=hi).map(|i| i as f64 * DV).collect();
         let opts = Options::default().with_c0(c0);
-        let solved: Vec<Vec<(f64, f64, f64)>> = Branch::ALL
+        let solved: Vec<Vec<(f64, f64, f64)>> = BRANCHES
             .par_iter()
             .map(|&b| {
+                if b == Branch::Pear {
+                    return Vec::new();
+                }
                 axisym::follow(b, &vs, &opts)
                     .shapes
                     .iter()
@@ -121,7 +123,7 @@ impl Reference {
         Self::of_solved(&solved)
     }
 
-    /// The reference of `(v, e, Δa)` per branch of [`Branch::ALL`].
+    /// The reference of `(v, e, Δa)` per branch of [`BRANCHES`].
     fn of_solved(solved: &[Vec<(f64, f64, f64)>]) -> Self {
         Reference {
             curves: solved
@@ -137,10 +139,7 @@ impl Reference {
 
     /// The curve of `branch`.
     pub fn curve(&self, branch: Branch) -> &[(f64, f64)] {
-        let i = Branch::ALL
-            .iter()
-            .position(|b| *b == branch)
-            .expect("listed");
+        let i = BRANCHES.iter().position(|b| *b == branch).expect("listed");
         &self.curves[i]
     }
 
@@ -165,7 +164,7 @@ impl Reference {
     pub fn is_transition(&self, a: Branch, b: Branch, v: f64) -> bool {
         let e = 0.5 * (self.e(a, v) + self.e(b, v));
         e.is_finite()
-            && Branch::ALL
+            && BRANCHES
                 .iter()
                 .filter(|c| **c != a && **c != b)
                 .all(|&c| self.e(c, v).partial_cmp(&e) != Some(std::cmp::Ordering::Less))

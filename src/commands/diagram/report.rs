@@ -6,7 +6,7 @@
 use super::case::CaseResult;
 use super::extrapolate::{Orders, Point};
 use super::reference::{Reference, TRANSITIONS};
-use super::spec::{branch_named, SliceAt};
+use super::spec::{branch_named, SliceAt, BRANCHES};
 use crate::analysis::axisym::Branch;
 use crate::analysis::curves::crossings;
 use crate::error::{Error, Result};
@@ -19,9 +19,9 @@ fn error(reference: &Reference, branch: &str, v: f64, e: f64) -> f64 {
     e / reference.e(b, v) - 1.0
 }
 
-/// Per branch of [`Branch::ALL`]: its points as `(v, e)` in increasing v, by `coords`.
+/// Per branch of [`BRANCHES`]: its points as `(v, e)` in increasing v, by `coords`.
 pub fn branch_points(points: &[Point], coords: fn(&Point) -> (f64, f64)) -> Vec<Vec<(f64, f64)>> {
-    Branch::ALL
+    BRANCHES
         .iter()
         .map(|b| {
             let mut pts: Vec<(f64, f64)> = points
@@ -71,7 +71,7 @@ pub fn kinds(reference: &Reference) -> Vec<Kind> {
 pub fn transitions(points: &[Point], reference: &Reference) -> Vec<(String, [f64; 3])> {
     let extrapolated = branch_points(points, |p| (p.v, p.e));
     let finest = branch_points(points, |p| (p.finest().v, p.finest().e));
-    let index = |b: Branch| Branch::ALL.iter().position(|x| *x == b).expect("listed");
+    let index = |b: Branch| BRANCHES.iter().position(|x| *x == b).expect("listed");
     let single = |vs: Vec<f64>| if vs.len() == 1 { vs[0] } else { f64::NAN };
     TRANSITIONS
         .iter()
@@ -140,13 +140,13 @@ pub fn write_csv(
 
     let mut s = String::from(
         "index,branch,v_target,r0,n,points,v,v_diffuse,e,e_reference,error,sigma,residual,\
-         iterations,stopped,da,da_surface,da_reference,wall_seconds\n",
+         iterations,stopped,da,da_surface,da_reference,skewness,wall_seconds\n",
     );
     for r in results {
         let b = branch_named(&r.branch).expect("listed");
         let _ = writeln!(
             s,
-            "{},{},{},{},{}x{}x{},{},{:.8},{:.8},{:.8},{:.8},{:.3e},{:.8e},{:.3e},{},{},{:.8},{:.8},{:.8},{:.2}",
+            "{},{},{},{},{}x{}x{},{},{:.8},{:.8},{:.8},{:.8},{:.3e},{:.8e},{:.3e},{},{},{:.8},{:.8},{:.8},{:.5},{:.2}",
             r.index,
             r.branch,
             r.v_target,
@@ -167,6 +167,7 @@ pub fn write_csv(
             r.da.unwrap_or(f64::NAN),
             r.da_surface.unwrap_or(f64::NAN),
             reference.da(b, r.v),
+            r.skewness.unwrap_or(f64::NAN),
             r.wall_seconds,
         );
     }
@@ -182,7 +183,7 @@ pub fn write_csv(
     write(out, "transitions.csv", &s)?;
 
     let mut s = String::from("branch,v,e\n");
-    for (b, c) in Branch::ALL.iter().zip(&reference.curves) {
+    for (b, c) in BRANCHES.iter().zip(&reference.curves) {
         for (v, e) in c {
             let _ = writeln!(s, "{},{v:.6},{e:.8}", b.name());
         }
@@ -362,7 +363,7 @@ pub fn write_error_chart(
         Axis::linear(format!("{energy} / {energy}_reference(v) − 1  [%]")),
     );
     fig.legend = Corner::UpperRight;
-    for (i, b) in Branch::ALL.into_iter().enumerate() {
+    for (i, b) in BRANCHES.into_iter().enumerate() {
         let pct = |v: f64, e: f64| 100.0 * (e / reference.e(b, v) - 1.0);
         let mine: Vec<&Point> = points.iter().filter(|p| p.branch == b.name()).collect();
         if mine.is_empty() {

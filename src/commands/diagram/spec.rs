@@ -267,9 +267,13 @@ impl Case {
 /// `c̄0` as it appears in folder names (`-0.5` → `m0.50`).
 pub use crate::commands::axisym::phase::c0_tag;
 
+/// The branches a diagram may list, in its order: those of c0 = 0 and, in an ADE or
+/// bilayer-couple diagram, the pear.
+pub const BRANCHES: [Branch; 4] = Branch::WITH_PEAR;
+
 /// The branch called `name`.
 pub fn branch_named(name: &str) -> Option<Branch> {
-    Branch::ALL.into_iter().find(|b| b.name() == name)
+    BRANCHES.into_iter().find(|b| b.name() == name)
 }
 
 impl DiagramSpec {
@@ -323,7 +327,7 @@ impl DiagramSpec {
                     ),
                 ));
             };
-            validate_branches(&key, branches, slice.c0)?;
+            validate_branches(&key, branches, slice)?;
         }
         if self.r0.len() < 2 {
             return Err(Error::config(
@@ -561,7 +565,7 @@ impl DiagramSpec {
             let Some(branches) = self.branches_at(slice).1 else {
                 continue;
             };
-            for branch in Branch::ALL {
+            for branch in BRANCHES {
                 let Some(vs) = branches.get(branch.name()) else {
                     continue;
                 };
@@ -602,30 +606,32 @@ impl DiagramSpec {
     }
 }
 
-/// Check the reduced volumes `branches` listed under `key` for c̄0 = `c0`: known branches,
+/// Check the reduced volumes `branches` listed under `key` for the slice `at`: known branches
+/// (the pear only with ADE or the bilayer couple, whose references solve each listed branch),
 /// non-empty distinct lists, inside the range where the branch is computed (at c̄0 = 0 the
-/// ranges of the c0 = 0 diagram; elsewhere (0.3, 1), the start shape's solve refusing a volume
-/// the branch does not reach).
-fn validate_branches(key: &str, branches: &Branches, c0: f64) -> Result<()> {
+/// ranges of the c0 = 0 diagram; elsewhere, and for the pear, (0.3, 1), the start shape's
+/// solve refusing a volume the branch does not reach).
+fn validate_branches(key: &str, branches: &Branches, slice: SliceAt) -> Result<()> {
+    let c0 = slice.c0;
     if branches.is_empty() {
         return Err(Error::config(key, "list at least one branch"));
     }
     for (name, vs) in branches {
         let at = format!("{key}.{name}");
-        let Some(branch) = branch_named(name) else {
-            return Err(Error::config(
-                at,
-                "unknown branch (prolate, oblate or stomatocyte)",
-            ));
+        let known = if slice.couple.is_some() {
+            "prolate, oblate, stomatocyte or pear"
+        } else {
+            "prolate, oblate or stomatocyte; the pear with ade or bilayer_couple"
+        };
+        let branch = match branch_named(name) {
+            Some(Branch::Pear) if slice.couple.is_none() => None,
+            b => b,
+        };
+        let Some(branch) = branch else {
+            return Err(Error::config(at, format!("unknown branch ({known})")));
         };
         let (lo, hi) = match branch {
-            // Not listed by `branch_named`: diagram files hold the c0 = 0 branches.
-            Branch::Pear => {
-                return Err(Error::config(
-                    at,
-                    "unknown branch (prolate, oblate or stomatocyte)",
-                ))
-            }
+            Branch::Pear => (0.3, 1.0),
             _ if c0 != 0.0 => (0.3, 1.0),
             Branch::Prolate => (0.3, 1.0),
             Branch::Oblate => (0.51, 1.0),

@@ -7,7 +7,7 @@
 
 use super::merge::Slice;
 use super::report::Kind;
-use super::spec::{branch_named, Couple};
+use super::spec::{branch_named, Couple, BRANCHES};
 use crate::analysis::axisym::{phase, Branch, Options};
 use crate::commands::axisym::phase::phase_figure;
 use crate::error::{Error, Result};
@@ -392,7 +392,7 @@ fn error_chart(slices: &[Slice]) -> Figure {
     let mut fig = Figure::new(title, Axis::linear(x), Axis::linear(y));
     fig.legend = Corner::LowerLeft;
     let shapes = [Shape::Circle, Shape::Square, Shape::Triangle];
-    for (i, b) in Branch::ALL.iter().enumerate() {
+    for (i, b) in BRANCHES.iter().enumerate() {
         let pts = |finest: bool| -> Vec<(f64, f64)> {
             slices
                 .iter()
