@@ -180,6 +180,11 @@ fn bad_diagram_files_name_the_key() {
             r#"{"branches": {"stomatocyte": [0.7]}, "r0": [8, 10, 12]}"#,
             "branches.stomatocyte",
         ),
+        // The pear only with ADE or the bilayer couple.
+        (
+            r#"{"branches": {"pear": [0.8]}, "r0": [8, 10, 12]}"#,
+            "branches.pear",
+        ),
         (
             r#"{"branches": {"prolate": [0.8]}, "r0": [8, 10, 2]}"#,
             "r0",
