@@ -5,7 +5,7 @@
 //! v(x) = v∞ + c_v x^{p_v},   e(x) = e∞ + c_e x^{p_e},
 //! ```
 //!
-//! with the orders `p_v`, `p_e` shared by all points of the diagram (of every c̄0) and fitted by least squares
+//! (and the φ = 0 surface's Δa likewise) with the orders `p_v`, `p_e` shared by all points of the diagram (of every c̄0) and fitted by least squares
 //! ([`crate::analysis::curves::common_order`]), and `v∞`, `e∞` by a least-squares fit per point at those
 //! orders ([`crate::analysis::curves::power_fit`]). Both coordinates move: at finite ε the φ = 0 surface
 //! relaxes to another reduced volume than the sharp start's (by about 0.01 at R0 = 24ε), so

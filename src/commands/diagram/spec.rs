@@ -606,7 +606,7 @@ impl DiagramSpec {
     }
 }
 
-/// Check the reduced volumes `branches` listed under `key` for the slice `at`: known branches
+/// Check the reduced volumes `branches` listed under `key` for `slice`: known branches
 /// (the pear only with ADE or the bilayer couple, whose references solve each listed branch),
 /// non-empty distinct lists, inside the range where the branch is computed (at c̄0 = 0 the
 /// ranges of the c0 = 0 diagram; elsewhere, and for the pear, (0.3, 1), the start shape's
