@@ -235,8 +235,8 @@ pub fn table(
     }
     let _ = writeln!(
         s,
-        "orders in ε/R0 (least squares over all points): v {:.2}, e {:.2}, Δa of φ = 0 {:.2}",
-        orders.v, orders.e, orders.da_surface
+        "orders in ε/R0 (least squares over all points): v {:.2}, e {:.2}",
+        orders.v, orders.e
     );
     for p in points.iter().filter(|p| !p.dropped.is_empty()) {
         let r0: Vec<String> = p.dropped.iter().map(|c| c.r0.to_string()).collect();
