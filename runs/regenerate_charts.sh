@@ -39,7 +39,8 @@
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
 #   diagram_c0_fine  diagram diagram_c0_fine.json, 165 cases      ~17-35 min (cases: 1 968 s)
 #   diagram_ade      diagram diagram_ade.json, 60 cases (h = ε/2, R0 24-40ε)     13.5 min (cases: 1 594 s), measured
-#   diagram_bc       diagram diagram_bc.json, 36 cases (h = ε/2, R0 24-40ε)  36.6 min at load 7-8 (cases: 4 032 s), measured
+#   diagram_bc       diagram diagram_bc.json, 36 cases (h = ε/2, R0 24-40ε)  36.6 min at load 7-8 (cases: 4 032 s), measured; rerun 2026-12-06 on one thread beside two other runs: cases 3 323 s
+#   diagram_bc_pear  diagram diagram_bc_pear.json, 9 cases (h = ε/2, R0 24-32ε)   55 min on one thread beside two other runs (cases: 3 237 s), measured 2026-12-06
 #   budding3d        run budding3d.json (200 000 steps), measure, render    ~14 min (820 s recorded)
 #   deflation3d      run deflation3d.json (215 000 steps), measure, render     280 s, measured
 #   dumbbell3d       run dumbbell3d.json (150 000 steps), render  ~11 min (as budding3d, 3/4 the steps)
@@ -55,7 +56,7 @@ VESICLE=${VESICLE:-target/release/vesicle}
 WORK=${WORK:-out/regenerate}
 CHEAP=(convergence stability precision pear3d)
 ALL=(convergence stability stability_ade pinning resolution precision pear3d budding onset heating rates shear shear3d contrast axisym_c0 axisym_bc
-     axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade diagram_bc budding3d deflation3d
+     axisym_ade diagram diagram_fine diagram_c0 diagram_c0_fine diagram_ade diagram_bc diagram_bc_pear budding3d deflation3d
      dumbbell3d pearling3d triaxial3d starfish3d)
 
 # Run the program, echoing the command.
@@ -137,7 +138,7 @@ group_onset() {
     studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40
 }
 group_heating() { studies heating heating; }
-group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_tension_l4 rates3d_sigma10 rates3d_sigma10_l5 rates_inextensible rates3d_inextensible; }
+group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates3d_free_fine rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_tension_l4 rates3d_sigma10 rates3d_sigma10_l5 rates_inextensible rates3d_inextensible; }
 group_shear() { studies shear shear shear_box; }
 group_shear3d() { studies shear shear3d shear3d_box shear3d_length; }
 group_contrast() {
@@ -172,6 +173,7 @@ group_diagram_c0() { diagram diagram_c0; }
 group_diagram_c0_fine() { diagram diagram_c0_fine; }
 group_diagram_ade() { diagram diagram_ade; }
 group_diagram_bc() { diagram diagram_bc; }
+group_diagram_bc_pear() { diagram diagram_bc_pear; }
 group_budding3d() {
     scene budding3d
     vesicle measure "$out" --force
@@ -267,6 +269,7 @@ FIGURES=(
     diagram_ade_phase.png=diagram_ade/phase.png
     diagram_ade_errors.png=diagram_ade/errors.png
     diagram_bc_errors.png=diagram_bc/errors.png
+    diagram_bc_pear_thumbnails.png=diagram_bc_pear/thumbnails.png
     budding3d_010000.png=scenes/budding3d_010000.png
     budding3d_110000.png=scenes/budding3d_110000.png
     budding3d_200000.png=scenes/budding3d_200000.png

@@ -4,7 +4,7 @@
 //! dotted and lighter) and `thumbnails.png` (the cases' shape pictures side by side).
 
 use super::reference::Reference;
-use super::spec::{SliceAt, BRANCHES};
+use super::spec::{Couple, SliceAt, BRANCHES};
 use crate::error::Result;
 use crate::output::{ensure_font, write_rgb_png, OutputError, RgbImage, FONT_FAMILY};
 use plotters::prelude::*;
@@ -97,13 +97,22 @@ fn draw(
     transitions: &[Transition],
 ) -> DrawResult {
     root.fill(&WHITE)?;
-    let (caption, energy) = if at.couple.is_some() {
+    let (caption, energy) = if let Some(Couple::Ade { .. }) = at.couple {
         (
             format!(
                 "ADE diagram at {}: phase field (L-BFGS) against the axisymmetric reference",
                 at.describe()
             ),
             "reduced energy w = e + πα(Δa − Δa0)²",
+        )
+    } else if at.couple.is_some() {
+        (
+            format!(
+                "Bilayer-couple diagram at {}: phase field (L-BFGS) against the axisymmetric \
+                 reference",
+                at.describe()
+            ),
+            "reduced bending energy e = ∮(2H − c0)² dA / 16π",
         )
     } else if at.c0 == 0.0 {
         (
