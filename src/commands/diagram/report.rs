@@ -6,7 +6,7 @@
 use super::case::CaseResult;
 use super::extrapolate::{Orders, Point};
 use super::reference::{Reference, TRANSITIONS};
-use super::spec::{branch_named, SliceAt, BRANCHES};
+use super::spec::{branch_named, Couple, SliceAt, BRANCHES};
 use crate::analysis::axisym::Branch;
 use crate::analysis::curves::crossings;
 use crate::error::{Error, Result};
@@ -356,7 +356,11 @@ pub fn write_error_chart(
             at.describe()
         )
     };
-    let energy = if at.couple.is_some() { "w" } else { "e" };
+    let energy = if let Some(Couple::Ade { .. }) = at.couple {
+        "w"
+    } else {
+        "e"
+    };
     let mut fig = Figure::new(
         title,
         Axis::linear("reduced volume v"),
