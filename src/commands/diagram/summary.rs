@@ -391,7 +391,12 @@ fn error_chart(slices: &[Slice]) -> Figure {
     };
     let mut fig = Figure::new(title, Axis::linear(x), Axis::linear(y));
     fig.legend = Corner::LowerLeft;
-    let shapes = [Shape::Circle, Shape::Square, Shape::Triangle, Shape::Diamond];
+    let shapes = [
+        Shape::Circle,
+        Shape::Square,
+        Shape::Triangle,
+        Shape::Diamond,
+    ];
     for (i, b) in BRANCHES.iter().enumerate() {
         let pts = |finest: bool| -> Vec<(f64, f64)> {
             slices
