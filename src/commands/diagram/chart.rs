@@ -97,38 +97,35 @@ fn draw(
     transitions: &[Transition],
 ) -> DrawResult {
     root.fill(&WHITE)?;
-    let (caption, energy) = if let Some(Couple::Ade { .. }) = at.couple {
-        (
+    let (caption, energy) = match at.couple {
+        Some(Couple::Ade { .. }) => (
             format!(
                 "ADE diagram at {}: phase field (L-BFGS) against the axisymmetric reference",
                 at.describe()
             ),
             "reduced energy w = e + πα(Δa − Δa0)²",
-        )
-    } else if at.couple.is_some() {
-        (
+        ),
+        Some(Couple::Bc { .. }) => (
             format!(
                 "Bilayer-couple diagram at {}: phase field (L-BFGS) against the axisymmetric \
                  reference",
                 at.describe()
             ),
             "reduced bending energy e = ∮(2H − c0)² dA / 16π",
-        )
-    } else if at.c0 == 0.0 {
-        (
+        ),
+        None if at.c0 == 0.0 => (
             "Shape diagram at c0 = 0: phase field (L-BFGS) against the axisymmetric reference"
                 .to_string(),
             "reduced bending energy e = ∮(2H)² dA / 16π",
-        )
-    } else {
-        (
+        ),
+        None => (
             format!(
                 "Shape diagram at c0 R0 = {}: phase field (L-BFGS) against the axisymmetric \
                  reference",
                 at.c0
             ),
             "reduced bending energy e = ∮(2H − c0)² dA / 16π",
-        )
+        ),
     };
     let mut chart = ChartBuilder::on(root)
         .margin(20)

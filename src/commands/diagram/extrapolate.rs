@@ -149,11 +149,7 @@ pub fn extrapolate(results: &[CaseResult], orders: Orders) -> Vec<Point> {
                 power_fit(order, &x, &y).0
             }
         };
-        let da = if p.cases.iter().all(|c| c.da.is_some()) {
-            at(|c| c.da.unwrap_or(f64::NAN), DA_ORDER)
-        } else {
-            f64::NAN
-        };
+        let da = at(|c| c.da.unwrap_or(f64::NAN), DA_ORDER);
         let da_surface = at(|c| c.da_surface.unwrap_or(f64::NAN), DA_ORDER);
         (p.v, p.e, p.da, p.da_surface) =
             (at(|c| c.v, orders.v), at(|c| c.e, orders.e), da, da_surface);

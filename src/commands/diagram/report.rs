@@ -356,7 +356,7 @@ pub fn write_error_chart(
             at.describe()
         )
     };
-    let energy = if let Some(Couple::Ade { .. }) = at.couple {
+    let energy = if matches!(at.couple, Some(Couple::Ade { .. })) {
         "w"
     } else {
         "e"

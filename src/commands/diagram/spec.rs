@@ -616,18 +616,15 @@ fn validate_branches(key: &str, branches: &Branches, slice: SliceAt) -> Result<(
     if branches.is_empty() {
         return Err(Error::config(key, "list at least one branch"));
     }
+    let known = if slice.couple.is_some() {
+        "prolate, oblate, stomatocyte or pear"
+    } else {
+        "prolate, oblate or stomatocyte; the pear with ade or bilayer_couple"
+    };
     for (name, vs) in branches {
         let at = format!("{key}.{name}");
-        let known = if slice.couple.is_some() {
-            "prolate, oblate, stomatocyte or pear"
-        } else {
-            "prolate, oblate or stomatocyte; the pear with ade or bilayer_couple"
-        };
-        let branch = match branch_named(name) {
-            Some(Branch::Pear) if slice.couple.is_none() => None,
-            b => b,
-        };
-        let Some(branch) = branch else {
+        let listable = |b: &Branch| *b != Branch::Pear || slice.couple.is_some();
+        let Some(branch) = branch_named(name).filter(listable) else {
             return Err(Error::config(at, format!("unknown branch ({known})")));
         };
         let (lo, hi) = match branch {
