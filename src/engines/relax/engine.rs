@@ -23,8 +23,13 @@ impl Engine for RelaxEngine {
         self.cur.measures
     }
 
+    /// The residual of the current state; infinite while it is off a constraint (a start that
+    /// the first iteration retracts is not stationary, whatever its gradient).
     fn residual(&self) -> f64 {
-        self.residual
+        match self.off_constraints() {
+            (false, false) => self.residual,
+            _ => f64::INFINITY,
+        }
     }
 
     fn set_area(&mut self, area: AreaConstraint) {

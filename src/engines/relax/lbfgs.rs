@@ -236,12 +236,7 @@ impl RelaxEngine {
     /// retraction; [`Rejection::AreaDifferenceDrift`] if a state off M = M0 cannot be retracted
     /// onto it (a Δa out of reach of the start along q_M: the run would hold another Δa).
     pub(super) fn retract_start(&mut self, t: f64) -> Result<(), StepError> {
-        let target = self.area.target;
-        let off = self.area.method != AreaMethod::None
-            && (self.cur.measures.area - target).abs() > OFF_CONSTRAINT * target.abs();
-        let off_couple = self
-            .couple
-            .is_some_and(|c| c.off(self.cur.measures.curvature, OFF_CONSTRAINT));
+        let (off, off_couple) = self.off_constraints();
         if !off && !off_couple {
             return Ok(());
         }
@@ -269,6 +264,18 @@ impl RelaxEngine {
                 _ => Ok(()),
             }
         }
+    }
+
+    /// Whether the current state is off A = A0 and off M = M0 (the bilayer couple's), each by
+    /// more than [`OFF_CONSTRAINT`] relative: a start the next iteration retracts.
+    pub(super) fn off_constraints(&self) -> (bool, bool) {
+        let target = self.area.target;
+        let off = self.area.method != AreaMethod::None
+            && (self.cur.measures.area - target).abs() > OFF_CONSTRAINT * target.abs();
+        let off_couple = self
+            .couple
+            .is_some_and(|c| c.off(self.cur.measures.curvature, OFF_CONSTRAINT));
+        (off, off_couple)
     }
 
     /// Pairs held in the memory (at most `lbfgs_memory`).

@@ -16,6 +16,17 @@
 //! H x ≈ [ĝ(φ̂* + τx̂) − ĝ(φ̂* − τx̂)] / (2τ) + σ* c_σ |k|² x̂     (error O(τ²)).
 //! ```
 //!
+//! **Area difference.** With area-difference elasticity the gradient carries λ(M) δM/δφ with
+//! λ = κ_λ(M − M0) ([`crate::problem::area_difference`]), and the difference above is the
+//! Hessian of F_sc + F_ade. With the bilayer couple, M = M0 is a third constraint with its own
+//! multiplier λ*: H = ∇²F_sc + σ*∇²A + λ*∇²M, whose products add λ*[m̂(φ̂* + τx̂) −
+//! m̂(φ̂* − τx̂)]/(2τ) (m̂ = FT[δM/δφ]). σ* and λ* are then the least-squares pair that makes
+//! ĝ + σ*â + λ*m̂ (â = c_σ|k|²φ̂*, the area's gradient) smallest in the M⁻¹ norm over k ≠ 0.
+//! M is even under z → −z, like A and V, so odd perturbations are tangent to its constraint
+//! too, and λ of either law does not move along them to first order: on odd fields the two
+//! laws' Hessians are the same operator at the same state and multiplier (the ADE one's
+//! rank-one part κ_λ ∇M ∇Mᵀ vanishes there).
+//!
 //! The eigenproblem is H x = λ M x with M the relaxation metric
 //! ([`Metric`], the bulk Hessian 2ε⁴k⁴ + 8ε²k² + 8): B = M⁻¹H is self-adjoint in
 //! ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*), and its spectrum is clustered about 1 in the bulk, with the
@@ -39,6 +50,7 @@ pub mod lobpcg;
 
 use crate::engines::spectral::evaluator::{Evaluator, ExplicitTerm, Metric, State};
 use crate::engines::Diverged;
+use crate::problem::area_difference::{AreaDifference, Law};
 use crate::problem::config::Laplacian;
 use crate::problem::grid::Grid;
 use crate::problem::model::C0;
@@ -59,6 +71,8 @@ pub struct OddHessian {
     hat: Array3<Complex64>,
     /// σ*, the stationary state's area multiplier.
     sigma: f64,
+    /// λ*, the bilayer couple's multiplier (0 without the couple; ADE's λ is the evaluator's).
+    couple: f64,
     /// ‖φ*‖ over the box.
     norm: f64,
     /// The translation t̂ = i k_z φ̂*, M-normalised.
@@ -74,8 +88,9 @@ pub struct OddHessian {
 impl OddHessian {
     /// The second variation at `phi` (a stationary state on `grid`, even in z, with z the last
     /// axis, periodic, and x, y mirrored or periodic) of the energy with interface width `eps`,
-    /// spontaneous curvature `c0` and Laplacian `laplacian`, on `threads` workers. σ* is the
-    /// L2 projection's multiplier at `phi` (the one that makes μ most nearly uniform).
+    /// spontaneous curvature `c0` and Laplacian `laplacian`, and the area-difference term
+    /// `area_difference` if any, on `threads` workers. σ* (and with the bilayer couple λ*) are
+    /// the multipliers that make μ most nearly uniform at `phi` (module documentation).
     ///
     /// # Errors
     /// [`Diverged`] if `phi` is not finite.
@@ -85,6 +100,7 @@ impl OddHessian {
     pub fn new(
         grid: Grid,
         (eps, c0, laplacian): (f64, C0, Laplacian),
+        area_difference: Option<AreaDifference>,
         phi: &Array3<f64>,
         threads: usize,
     ) -> Result<Self, Diverged> {
@@ -98,9 +114,11 @@ impl OddHessian {
             ExplicitTerm::Gradient(metric),
             threads,
         );
+        if area_difference.is_some() {
+            ev = ev.with_curvature();
+            ev.area_difference = area_difference;
+        }
         let state = ev.state_of(phi, 0.0)?;
-        let (qq, gq) = state.multiplier_sums;
-        let sigma = if qq > 0.0 { -gq / qq } else { 0.0 };
         let shape = state.hat.raw_dim();
         let sym = &ev.symbols;
         let k2 = Array3::from_shape_fn(shape, |(a, b, c)| {
@@ -118,11 +136,21 @@ impl OddHessian {
             let k = if 2 * c == n { 0.0 } else { kz[c] };
             Complex64::new(0.0, k) * state.hat[[a, b, c]]
         });
+        let (sigma, couple) = match area_difference.map(|t| t.law) {
+            Some(Law::Couple { .. }) => {
+                couple_multipliers(&state, metric.c_sigma, (&k2, &w), |k| metric.at(k))
+            }
+            _ => {
+                let (qq, gq) = state.multiplier_sums;
+                (if qq > 0.0 { -gq / qq } else { 0.0 }, 0.0)
+            }
+        };
         let scratch = ev.blank();
         let mut hessian = OddHessian {
             norm: 0.0,
             hat: state.hat,
             sigma,
+            couple,
             translation,
             phase,
             k2,
@@ -143,6 +171,11 @@ impl OddHessian {
     /// σ*, the state's area multiplier.
     pub fn sigma(&self) -> f64 {
         self.sigma
+    }
+
+    /// λ*, the bilayer couple's multiplier of the state (0 without the couple).
+    pub fn couple_multiplier(&self) -> f64 {
+        self.couple
     }
 
     /// ⟨u, v⟩_M = Σ_k w M(k) Re(û v̂*).
@@ -231,11 +264,22 @@ impl OddHessian {
                 .and(x)
                 .for_each(|s, &p, &v| *s = p + sign * tau * v);
             self.ev.evaluate(&mut self.scratch, 0.0, None, None)?;
-            let g = &self.scratch.nonlinear;
-            if sign > 0.0 {
-                out.assign(g);
-            } else {
-                Zip::from(&mut *out).and(g).for_each(|o, &m| *o -= m);
+            let (g, m, lambda) = (
+                &self.scratch.nonlinear,
+                &self.scratch.curvature_hat,
+                self.couple,
+            );
+            match (sign > 0.0, lambda != 0.0) {
+                (true, false) => out.assign(g),
+                (false, false) => Zip::from(&mut *out).and(g).for_each(|o, &v| *o -= v),
+                (true, true) => Zip::from(&mut *out)
+                    .and(g)
+                    .and(m)
+                    .for_each(|o, &v, &c| *o = v + lambda * c),
+                (false, true) => Zip::from(&mut *out)
+                    .and(g)
+                    .and(m)
+                    .for_each(|o, &v, &c| *o -= v + lambda * c),
             }
         }
         let (metric, sigma) = (self.metric, self.sigma);
@@ -288,6 +332,45 @@ impl OddHessian {
         self.ev.transform.forward(&mut field, &mut out);
         out
     }
+}
+
+/// The bilayer couple's multipliers (σ*, λ*) at `state`: the least-squares solution of
+/// ĝ + σâ + λm̂ ≈ 0 in the M⁻¹ norm over k ≠ 0 (â = c_σ|k|²φ̂, m̂ = FT[δM/δφ]; `k2` and `w` per
+/// mode, `metric` M(|k|²)), from the 2 × 2 normal equations
+///
+/// ```text
+/// [⟨â,â⟩ ⟨â,m̂⟩] [σ]     [⟨ĝ,â⟩]
+/// [⟨m̂,â⟩ ⟨m̂,m̂⟩] [λ] = − [⟨ĝ,m̂⟩],     ⟨u, v⟩ = Σ_k w Re(û v̂*)/M(k).
+/// ```
+fn couple_multipliers(
+    state: &State,
+    c_sigma: f64,
+    (k2, w): (&Array3<f64>, &Array3<f64>),
+    metric: impl Fn(f64) -> f64,
+) -> (f64, f64) {
+    let mut s = [0.0; 5]; // ⟨a,a⟩, ⟨a,m⟩, ⟨m,m⟩, ⟨g,a⟩, ⟨g,m⟩
+    let re = |u: Complex64, v: Complex64| u.re * v.re + u.im * v.im;
+    Zip::from(&state.hat)
+        .and(&state.curvature_hat)
+        .and(&state.nonlinear)
+        .and(k2)
+        .and(w)
+        .for_each(|&p, &m, &g, &k, &w| {
+            if k == 0.0 {
+                return;
+            }
+            let (a, f) = (p * (c_sigma * k), w / metric(k));
+            s[0] += f * re(a, a);
+            s[1] += f * re(a, m);
+            s[2] += f * re(m, m);
+            s[3] += f * re(g, a);
+            s[4] += f * re(g, m);
+        });
+    let det = s[0] * s[2] - s[1] * s[1];
+    (
+        -(s[3] * s[2] - s[4] * s[1]) / det,
+        -(s[0] * s[4] - s[1] * s[3]) / det,
+    )
 }
 
 #[cfg(test)]

@@ -1,10 +1,12 @@
 //! The onset without a seed (`"method": "hessian"`): the lowest eigenvalue of the symmetric
-//! state's second variation on up–down odd perturbations, followed in c̄0 to its zero.
+//! state's second variation on up–down odd perturbations, followed in c̄0 (or in Δa of the
+//! bilayer couple) to its zero.
 //!
-//! For each c̄0 of the path in turn, from the previous state: c0 = c̄0/R0 is set and the field
-//! relaxed by L-BFGS on the box mirrored across x, y *and z* (area held at the first step's
-//! A0, volume conserved), so that the state is the up–down symmetric stationary state whether
-//! or not it is stable. Its unfolded field is restricted to the box mirrored across x and y
+//! For each value of the path in turn, from the previous state: c0 = c̄0/R0 (or the couple's
+//! Δa) is set and the field relaxed by L-BFGS on the box mirrored across x, y *and z* (area
+//! held at the first step's A0, volume conserved), so that the state is the up–down symmetric
+//! stationary state whether or not it is stable. With the couple the second variation carries
+//! the state's multiplier λ* of M = Δa M₁ ([`OddHessian`]). Its unfolded field is restricted to the box mirrored across x and y
 //! only, where up–down odd fields live, and [`OddHessian::lowest`] gives λ, the lowest
 //! eigenvalue of the constrained second variation on them, translation removed. λ > 0: the
 //! symmetric state is stable against every up–down odd perturbation the box holds; λ < 0: it is
@@ -18,7 +20,8 @@ use super::{Onset, Relaxation, Spec};
 use crate::engines::stability::OddHessian;
 use crate::engines::Diverged;
 use crate::error::{Error, Result};
-use crate::problem::config::{C0Spec, Scene, Symmetry};
+use crate::problem::area_difference::AreaDifference;
+use crate::problem::config::{Scene, Symmetry};
 use crate::problem::grid::Grid;
 use crate::problem::model::C0;
 use crate::problem::setup::{self, Problem};
@@ -63,7 +66,7 @@ struct Path {
     area: Option<f64>,
     /// The last eigenvector (the next solve's start).
     vector: Option<Array3<Complex64>>,
-    /// The states computed, as (c̄0, field on the reduced box) for warm starts.
+    /// The states computed, as (the path's value, field on the reduced box) for warm starts.
     states: Vec<(f64, Array3<f64>)>,
 }
 
@@ -91,8 +94,9 @@ impl EigenRun<'_> {
             states: Vec::new(),
         };
         let mut samples: Vec<Sample> = Vec::new();
-        for &c0 in &spec.c0 {
-            let s = self.sample(&scene, &mut path, c0, "path", spec)?;
+        let parameter = spec.parameter();
+        for &value in spec.path() {
+            let s = self.sample(&scene, &mut path, value, "path", spec)?;
             let unstable = s.eigenvalue < 0.0;
             samples.push(s);
             if unstable {
@@ -101,12 +105,15 @@ impl EigenRun<'_> {
         }
         if samples[0].eigenvalue < 0.0 {
             return Err(Error::config(
-                "c0",
+                parameter.key(),
                 format!(
-                    "the first symmetric state (c0 R0 = {}, R0 = {} eps) is already unstable \
+                    "the first symmetric state ({} = {}, R0 = {} eps) is already unstable \
                      to up-down odd perturbations (lowest eigenvalue {:.3e}): start the path \
                      lower",
-                    spec.c0[0], self.r0, samples[0].eigenvalue
+                    parameter.label(),
+                    spec.path()[0],
+                    self.r0,
+                    samples[0].eigenvalue
                 ),
             ));
         }
@@ -115,10 +122,10 @@ impl EigenRun<'_> {
         if samples[n - 1].eigenvalue < 0.0 {
             bracket.0 = samples[n - 2].clone();
             for _ in 0..spec.bisections {
-                let c0 = linear_root(&bracket.0, &bracket.1, |s| s.relaxation.c0);
-                let c0 = (c0 * 1e9).round() / 1e9;
-                path.warm_start_below(c0);
-                let s = self.sample(&scene, &mut path, c0, "refine", spec)?;
+                let value = linear_root(&bracket.0, &bracket.1, |s| s.relaxation.value);
+                let value = (value * 1e9).round() / 1e9;
+                path.warm_start_below(value);
+                let s = self.sample(&scene, &mut path, value, "refine", spec)?;
                 if s.eigenvalue < 0.0 {
                     bracket.1 = s.clone();
                 } else {
@@ -129,72 +136,92 @@ impl EigenRun<'_> {
         }
         let (lo, hi) = &bracket;
         let crossed = hi.eigenvalue < 0.0;
-        let (onset, v) = if crossed {
-            (
-                linear_root(lo, hi, |s| s.relaxation.c0),
-                linear_root(lo, hi, |s| s.relaxation.v),
-            )
-        } else {
-            (f64::NAN, lo.relaxation.v)
+        let at_root = |of: fn(&Sample) -> f64| {
+            if crossed {
+                linear_root(lo, hi, of)
+            } else {
+                of(lo)
+            }
         };
         let result = Onset {
             r0: self.r0,
             seed: 0.0,
-            below: lo.relaxation.c0,
-            above: if crossed { hi.relaxation.c0 } else { f64::NAN },
-            onset,
-            v,
+            below: lo.relaxation.value,
+            above: if crossed {
+                hi.relaxation.value
+            } else {
+                f64::NAN
+            },
+            onset: if crossed {
+                at_root(|s| s.relaxation.value)
+            } else {
+                f64::NAN
+            },
+            v: at_root(|s| s.relaxation.v),
+            c0: at_root(|s| s.relaxation.c0),
+            da_surface: at_root(|s| s.relaxation.da_surface),
             sharp: f64::NAN,
             shift: f64::NAN,
+            sharp_c0: f64::NAN,
+            shift_c0: f64::NAN,
             relaxations: samples.len(),
             wall_seconds: began.elapsed().as_secs_f64(),
         };
         Ok((samples, result))
     }
 
-    /// Relax the symmetric state at c̄0 = `c0` from `path`'s current field and find its lowest
-    /// odd eigenvalue (from the last eigenvector).
+    /// Relax the symmetric state at the path's value `value` from `path`'s current field and
+    /// find its lowest odd eigenvalue (from the last eigenvector).
     fn sample(
         &self,
         scene: &Scene,
         path: &mut Path,
-        c0: f64,
+        value: f64,
         stage: &'static str,
         spec: &Spec,
     ) -> Result<Sample> {
         let began = Instant::now();
         let eps = scene.eps;
-        let c = c0 / (self.r0 * eps);
+        let parameter = spec.parameter();
         let mut at = scene.clone();
-        at.c0 = C0Spec::Uniform(c);
+        parameter.set(&mut at, value, self.r0 * eps);
         let relaxed = relax_seeded(
             &mut path.problem,
             at.clone(),
             (self.r0 * eps, 0.0),
             &mut path.area,
         )?;
-        path.states.push((c0, path.problem.phi.clone()));
+        path.states.push((value, path.problem.phi.clone()));
         let odd_box = Grid::new(&scene.n, scene.h, &[true, true, false]);
         let phi = odd_box.restrict(&relaxed.full);
         let c0_field = C0::new(&at.c0, &odd_box, eps)?;
+        let area_difference = path.area.and_then(|a0| AreaDifference::of(&at, a0));
+        let failed = |d: Diverged| {
+            Error::Study(format!(
+                "the second variation at {} = {value}: {}",
+                parameter.label(),
+                d.0
+            ))
+        };
         let mut hessian = OddHessian::new(
             odd_box,
             (eps, c0_field, scene.laplacian),
+            area_difference,
             &phi,
             scene.threads(),
         )
-        .map_err(failed(c0))?;
-        let translation = hessian.translation_stiffness().map_err(failed(c0))?;
+        .map_err(failed)?;
+        let translation = hessian.translation_stiffness().map_err(failed)?;
         let lowest = hessian
             .lowest(
                 path.vector.as_ref(),
                 spec.eigen_tolerance,
                 spec.eigen_products,
             )
-            .map_err(failed(c0))?;
+            .map_err(failed)?;
         let sample = Sample {
             r0: self.r0,
-            relaxation: Relaxation::of(stage, c0, &relaxed),
+            relaxation: Relaxation::of(stage, (parameter, value), &relaxed),
             sigma: hessian.sigma(),
             eigenvalue: lowest.value,
             eigen_residual: lowest.residual,
@@ -204,9 +231,10 @@ impl EigenRun<'_> {
         };
         path.vector = Some(lowest.vector);
         eprintln!(
-            "R0 = {} eps, c0 R0 = {c0} ({stage}): {} after {} iterations, lowest odd eigenvalue \
+            "R0 = {} eps, {} = {value} ({stage}): {} after {} iterations, lowest odd eigenvalue \
              {:.4e} (residual {:.1e}, {} products), translation {:.1e}",
             self.r0,
+            parameter.label(),
             sample.relaxation.stopped,
             sample.relaxation.iterations,
             sample.eigenvalue,
@@ -219,13 +247,13 @@ impl EigenRun<'_> {
 }
 
 impl Path {
-    /// Start the next relaxation from the computed state of largest c̄0 below `c0` (the path
-    /// rises, so that is the nearest from below).
-    fn warm_start_below(&mut self, c0: f64) {
+    /// Start the next relaxation from the computed state of largest value below `value` (the
+    /// path rises, so that is the nearest from below).
+    fn warm_start_below(&mut self, value: f64) {
         if let Some((_, phi)) = self
             .states
             .iter()
-            .filter(|(c, _)| *c < c0)
+            .filter(|(c, _)| *c < value)
             .max_by(|a, b| a.0.total_cmp(&b.0))
         {
             self.problem.phi.assign(phi);
@@ -233,13 +261,8 @@ impl Path {
     }
 }
 
-/// The error of a second variation that could not be formed at c̄0 = `c0`.
-fn failed(c0: f64) -> impl Fn(Diverged) -> Error {
-    move |d| Error::Study(format!("the second variation at c0 R0 = {c0}: {}", d.0))
-}
-
-/// The root of the line through (c̄0, λ) of `lo` and `hi`, read in `of` (c̄0, or v interpolated
-/// to the root).
+/// The root of the line through (the path's value, λ) of `lo` and `hi`, read in `of` (the
+/// value, or another column interpolated to the root).
 fn linear_root(lo: &Sample, hi: &Sample, of: impl Fn(&Sample) -> f64) -> f64 {
     let t = lo.eigenvalue / (lo.eigenvalue - hi.eigenvalue);
     of(lo) + t * (of(hi) - of(lo))
@@ -250,6 +273,7 @@ mod tests {
     use super::*;
     use crate::analysis::axisym::{self, Branch, Options};
     use crate::commands::study::onset::spec::base_scene;
+    use crate::problem::config::C0Spec;
 
     /// The sign of the lowest odd eigenvalue is the symmetric state's stability. The symmetric
     /// prolate (v = 0.8, R0 = 20ε, h = ε, relaxed to 1e-6) displaced along its lowest odd
@@ -284,7 +308,7 @@ mod tests {
             let phi = odd_box.restrict(&symmetric.full);
             let c = C0::new(&scene.c0, &odd_box, 1.0).expect("c0");
             let mut hessian =
-                OddHessian::new(odd_box.clone(), (1.0, c, scene.laplacian), &phi, 1).expect("H");
+                OddHessian::new(odd_box.clone(), (1.0, c, scene.laplacian), None, &phi, 1).expect("H");
             let lowest = hessian.lowest(None, 1e-9, 2000).expect("an eigenvalue");
             assert_eq!(
                 lowest.value < 0.0,

@@ -32,6 +32,12 @@
 //! Writes `onset_steps.csv` (every relaxation), `onset.csv` (one row per R0 and seed),
 //! `onset.txt`, and the charts `onset_skewness` (|skewness| against c̄0, every run) and
 //! `onset_eps` (the onset against ε/R0 beside the sharp instability).
+//!
+//! **The bilayer couple.** With a path in `da` instead of `c0` ([`Parameter::Couple`], the
+//! Hessian method only) the states hold Δa = M/M₁ at c0 = 0, the second variation carries the
+//! couple's multiplier, and the sharp instability is Δa of the sharp prolate at the run's v and
+//! at c̄0*(v) ([`couple_at`]). Each state also reports its c̄0,eff and the φ = 0 surface's Δa, so
+//! that the onset is compared in the held Δa, in the surface's Δa and in c̄0,eff.
 
 pub mod hessian;
 pub mod report;
@@ -49,7 +55,7 @@ pub use hessian::Sample;
 use ndarray::Array3;
 use rayon::prelude::*;
 use spec::{base_scene, check};
-pub use spec::{Method, Spec};
+pub use spec::{Method, Parameter, Spec};
 use std::path::Path;
 use std::time::Instant;
 
@@ -59,8 +65,15 @@ use std::time::Instant;
 pub struct Relaxation {
     /// `path` (the coarse path), `bisection` (seeded) or `refine` (hessian).
     pub stage: &'static str,
-    /// c̄0 = c0 R0.
+    /// The path's value: c̄0, or Δa of the bilayer couple ([`Parameter`]).
+    pub value: f64,
+    /// c̄0 = c0 R0, or the couple's state's effective c̄0,eff = −λR0/(√2ε) (its multiplier λ
+    /// read as a uniform spontaneous curvature).
     pub c0: f64,
+    /// Δa held by the bilayer couple (NaN for spontaneous curvature).
+    pub da: f64,
+    /// Δa of the φ = 0 surface.
+    pub da_surface: f64,
     /// L-BFGS iterations.
     pub iterations: usize,
     /// How the relaxation ended (`stationary` when `stop_residual` was met).
@@ -74,12 +87,19 @@ pub struct Relaxation {
 }
 
 impl Relaxation {
-    /// The relaxation `relaxed` at c̄0 = `c0`, in `stage`.
-    fn of(stage: &'static str, c0: f64, relaxed: &budding::Relaxed) -> Self {
+    /// The relaxation `relaxed` at the value `value` of the path's `parameter`, in `stage`.
+    fn of(stage: &'static str, (parameter, value): (Parameter, f64), relaxed: &budding::Relaxed) -> Self {
         let rec = &relaxed.record;
+        let (c0, da) = match (parameter, &rec.couple) {
+            (Parameter::Couple, Some(c)) => (c.c0_eff, value),
+            _ => (value, f64::NAN),
+        };
         Relaxation {
             stage,
+            value,
             c0,
+            da,
+            da_surface: relaxed.measure.surface_da,
             iterations: rec.step,
             stopped: relaxed.stopped.to_string(),
             residual: rec.residual,
@@ -117,25 +137,35 @@ impl Step {
     }
 }
 
-/// The onset of one run; a row of `onset.csv`.
+/// The onset of one run; a row of `onset.csv`. Its values are the path's ([`Parameter`]).
 #[derive(Clone, Debug)]
 pub struct Onset {
     /// R0/ε.
     pub r0: f64,
     /// Seed strength δ.
     pub seed: f64,
-    /// Last c̄0 whose state stayed symmetric.
+    /// Last value whose state stayed symmetric.
     pub below: f64,
-    /// First c̄0 whose state left symmetry (NaN: none on the path).
+    /// First value whose state left symmetry (NaN: none on the path).
     pub above: f64,
     /// The onset, the bracket's midpoint (NaN without a bracket).
     pub onset: f64,
     /// φ = 0 reduced volume of the last symmetric state.
     pub v: f64,
-    /// The sharp prolate's loss of up–down stability at `v` (NaN: not in the bracket searched).
+    /// c̄0 at the onset: the onset itself for spontaneous curvature, the state's c̄0,eff for the
+    /// bilayer couple (interpolated like `v`; NaN for seeded runs).
+    pub c0: f64,
+    /// Δa of the φ = 0 surface at the onset (interpolated like `v`; NaN for seeded runs).
+    pub da_surface: f64,
+    /// The sharp prolate's loss of up–down stability at `v`, in the path's parameter (NaN: not
+    /// in the bracket searched).
     pub sharp: f64,
     /// onset − sharp.
     pub shift: f64,
+    /// The same instability in c̄0: c̄0*(v) (for spontaneous curvature, `sharp` itself).
+    pub sharp_c0: f64,
+    /// `c0` − `sharp_c0`: the shift in c̄0 (c̄0,eff for the couple).
+    pub shift_c0: f64,
     /// Relaxations of the run.
     pub relaxations: usize,
     /// Wall seconds of the run.
@@ -162,9 +192,17 @@ impl Study for OnsetStudy {
 
     fn measure(spec: &Spec, _dir: &Path) -> Result<(Output, Report)> {
         check(spec)?;
-        let opts = Options::default().with_c0(spec.c0[0]);
-        let start = axisym::solve(Branch::Prolate, spec.v, &opts)
-            .map_err(|e| Error::config("v", format!("the start prolate: {e}")))?;
+        let parameter = spec.parameter();
+        let first = spec.path()[0];
+        let start = match parameter {
+            Parameter::C0 => {
+                axisym::solve(Branch::Prolate, spec.v, &Options::default().with_c0(first))
+            }
+            Parameter::Couple => {
+                axisym::bc_solution(Branch::Prolate, spec.v, first, &Options::default())
+            }
+        }
+        .map_err(|e| Error::config(parameter.key(), format!("the start prolate: {e}")))?;
         let mut steps = Vec::new();
         let mut samples = Vec::new();
         let mut onsets = Vec::new();
@@ -174,9 +212,13 @@ impl Study for OnsetStudy {
                 let run = EigenRun { base: &scene, r0 };
                 let (path, onset) = run.onset(spec, (&start.r, &start.z))?;
                 eprintln!(
-                    "R0 = {r0} eps: lowest odd eigenvalue crosses 0 at c0 R0 = {:.4} (v = {:.4}; \
+                    "R0 = {r0} eps: lowest odd eigenvalue crosses 0 at {} = {:.4} (v = {:.4}; \
                      {} states, {:.0} s)",
-                    onset.onset, onset.v, onset.relaxations, onset.wall_seconds
+                    parameter.label(),
+                    onset.onset,
+                    onset.v,
+                    onset.relaxations,
+                    onset.wall_seconds
                 );
                 samples.extend(path);
                 onsets.push(onset);
@@ -202,8 +244,17 @@ impl Study for OnsetStudy {
             }
         }
         onsets.par_iter_mut().for_each(|o| {
-            o.sharp = sharp_onset(o.v, spec.c0[0]).unwrap_or(f64::NAN);
+            let from = match parameter {
+                Parameter::C0 => first,
+                Parameter::Couple => 0.0,
+            };
+            o.sharp_c0 = sharp_onset(o.v, from).unwrap_or(f64::NAN);
+            o.sharp = match parameter {
+                Parameter::C0 => o.sharp_c0,
+                Parameter::Couple => couple_at(o.v, o.sharp_c0).unwrap_or(f64::NAN),
+            };
             o.shift = o.onset - o.sharp;
+            o.shift_c0 = o.c0 - o.sharp_c0;
         });
         let report = match spec.method {
             Method::Hessian => report::eigen_report(spec, &samples, &onsets)?,
@@ -239,6 +290,19 @@ pub fn sharp_onset(v: f64, from: f64) -> Option<f64> {
         lo = hi;
     }
     None
+}
+
+/// The bilayer couple's loss of up–down stability at reduced volume `v`, given the
+/// spontaneous-curvature instability `c0` = c̄0*(v) ([`sharp_onset`] from c̄0 = 0): Δa of the
+/// prolate at `v` and `c0`. A BC shape is an SC shape at c̄0,eff, and an up–down odd
+/// perturbation moves neither Δa nor v to first order, so the two families' prolates lose
+/// stability at the same shape. `None` where the prolate cannot be solved (or `c0` is NaN).
+pub fn couple_at(v: f64, c0: f64) -> Option<f64> {
+    if !c0.is_finite() {
+        return None;
+    }
+    let prolate = axisym::solve(Branch::Prolate, v, &Options::default().with_c0(c0)).ok()?;
+    Some(prolate.da())
 }
 
 /// Step in c̄0 of the search for the sharp instability's bracket.
@@ -311,8 +375,12 @@ impl Run<'_> {
             above,
             onset: 0.5 * (below + above),
             v: v_below,
+            c0: f64::NAN,
+            da_surface: f64::NAN,
             sharp: f64::NAN,
             shift: f64::NAN,
+            sharp_c0: f64::NAN,
+            shift_c0: f64::NAN,
             relaxations: steps.len(),
             wall_seconds: 0.0,
         };
@@ -338,7 +406,7 @@ impl Run<'_> {
         let step = Step {
             r0: self.r0,
             seed: self.seed,
-            relaxation: Relaxation::of(stage, c0, &relaxed),
+            relaxation: Relaxation::of(stage, (Parameter::C0, c0), &relaxed),
             skewness: m.skewness,
             neck: m.neck.map_or(f64::NAN, |(r, _)| r / eps),
             pieces: m.pieces,

@@ -18,7 +18,7 @@
 //! alone. s_∞ is the extrapolated shift; the two fits' difference shows how far the data are
 //! from the linear law.
 
-use super::{Onset, Relaxation, Sample, Spec, Step};
+use super::{Onset, Parameter, Relaxation, Sample, Spec, Step};
 use crate::commands::study::fit;
 use crate::commands::study::harness::Report;
 use crate::commands::study::table::{self, Column, Format};
@@ -43,13 +43,18 @@ impl Relaxed for Sample {
     }
 }
 
-/// The columns of a row's [`Relaxation`]: stage, c̄0, iterations, how it stopped, residual, e, v.
+/// The columns of a row's [`Relaxation`]: stage, c̄0 (c̄0,eff for the couple), Δa held and of
+/// the φ = 0 surface, iterations, how it stopped, residual, e, v.
 fn relaxation_columns<R: Relaxed>() -> Vec<Column<R>> {
     vec![
         Column::both("stage", "stage", Format::Plain, |r| {
             r.relaxation().stage.into()
         }),
         Column::both("c0", "c0R0", Format::Fixed(4), |r| r.relaxation().c0.into()),
+        Column::both("da", "da", Format::Fixed(4), |r: &R| r.relaxation().da.into()).or("-"),
+        Column::both("da_surface", "da surface", Format::Fixed(4), |r| {
+            r.relaxation().da_surface.into()
+        }),
         Column::both("iterations", "iters", Format::Plain, |r| {
             r.relaxation().iterations.into()
         }),
@@ -114,8 +119,20 @@ impl table::Row for Onset {
             .or("none"),
             Column::both("onset", "onset", Format::Fixed(4), |r| r.onset.into()),
             Column::both("v", "v", Format::Fixed(4), |r| r.v.into()),
+            Column::both("c0", "c0R0", Format::Fixed(4), |r: &Self| r.c0.into()).or("-"),
+            Column::both("da_surface", "da surface", Format::Fixed(4), |r: &Self| {
+                r.da_surface.into()
+            })
+            .or("-"),
             Column::both("sharp", "sharp", Format::Fixed(4), |r| r.sharp.into()),
             Column::both("shift", "shift", Format::Fixed(4), |r| r.shift.into()),
+            Column::both("sharp_c0", "sharp c0R0", Format::Fixed(4), |r| {
+                r.sharp_c0.into()
+            }),
+            Column::both("shift_c0", "shift c0R0", Format::Fixed(4), |r: &Self| {
+                r.shift_c0.into()
+            })
+            .or("-"),
             Column::both("relaxations", "relax", Format::Plain, |r| {
                 r.relaxations.into()
             }),
@@ -348,17 +365,24 @@ fn onset_chart(spec: &Spec, onsets: &[Onset], limits: &[SeedLimit]) -> Figure {
         let pts = limits.iter().map(|l| (1.0 / l.r0, l.shift)).collect();
         series.push(("phase field, seed -> 0".to_string(), pts));
     }
-    shift_chart(series, onsets)
+    shift_chart(series, onsets, Parameter::C0)
 }
 
 /// The shifts of `series` (name, points (ε/R0, onset − sharp)) against ε/R0, each with its
 /// least-squares line (dashed, to ε/R0 = 0), and the sharp value 0, up to the largest ε/R0 of
-/// `onsets`.
-fn shift_chart(series: Vec<(String, Vec<(f64, f64)>)>, onsets: &[Onset]) -> Figure {
+/// `onsets`, in the path's `parameter`.
+fn shift_chart(
+    series: Vec<(String, Vec<(f64, f64)>)>,
+    onsets: &[Onset],
+    parameter: Parameter,
+) -> Figure {
     let mut fig = Figure::new(
         "Budding onset: shift from the sharp instability against eps/R0",
         Axis::linear("eps / R0"),
-        Axis::linear("onset - sharp instability at the run's v (c0 R0)"),
+        Axis::linear(format!(
+            "onset - sharp instability at the run's v ({})",
+            parameter.label()
+        )),
     );
     fig.legend = Corner::LowerLeft;
     let shapes = [
@@ -435,14 +459,21 @@ impl table::Row for Sample {
 /// `Error::Config` if a CSV row cannot be written (a bug).
 pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result<Report> {
     let mut text = String::new();
+    let label = spec.parameter().label();
+    let model = match spec.parameter() {
+        Parameter::C0 => "",
+        Parameter::Couple => " (bilayer couple, c0 = 0)",
+    };
     let _ = writeln!(
         text,
-        "budding onset without a seed: the up-down symmetric stationary state of the prolate \
-         at v = {} (sharp start at c0 R0 = {}), relaxed by L-BFGS on the box mirrored across \
-         x, y and z, and the lowest eigenvalue of its second variation on up-down odd fields \
-         (translation removed), c0 R0 stepped up until it is negative, then {} regula falsi \
-         steps",
-        spec.v, spec.c0[0], spec.bisections
+        "budding onset without a seed{model}: the up-down symmetric stationary state of the \
+         prolate at v = {} (sharp start at {label} = {}), relaxed by L-BFGS on the box mirrored \
+         across x, y and z, and the lowest eigenvalue of its second variation on up-down odd \
+         fields (translation removed), {label} stepped up until it is negative, then {} regula \
+         falsi steps",
+        spec.v,
+        spec.path()[0],
+        spec.bisections
     );
     text.push_str(&table::text(samples));
     unconverged(&mut text, samples.iter().map(|s| &s.relaxation));
@@ -458,20 +489,38 @@ pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result
     }
     text.push('\n');
     text.push_str(&table::text(onsets));
+    let sharp = match spec.parameter() {
+        Parameter::C0 => {
+            "the zero in c0 R0 of the axisymmetric prolate's up-down test function at that v"
+        }
+        Parameter::Couple => {
+            "da of the axisymmetric prolate at that v and at the zero in c0 R0 of its up-down \
+             test function (a bilayer-couple shape is a spontaneous-curvature shape at c0,eff); \
+             c0R0: the state's c0,eff = -lambda R0/(sqrt 2 eps) of its multiplier lambda"
+        }
+    };
     let _ = writeln!(
         text,
-        "onset: the root of the line through the last bracket's (c0 R0, eigenvalue); v the \
-         phi = 0 reduced volume interpolated to it; sharp: the zero in c0 R0 of the \
-         axisymmetric prolate's up-down test function at that v; shift = onset - sharp"
+        "onset: the root of the line through the last bracket's ({label}, eigenvalue); v, c0R0 \
+         and da surface: the phi = 0 reduced volume, c0 and da interpolated to it; sharp: \
+         {sharp}; shift = onset - sharp; sharp c0R0: the zero in c0 R0 of the prolate's \
+         up-down test function at v; shift c0R0 = c0R0 - sharp c0R0"
     );
-    let points: Vec<(f64, f64)> = onsets.iter().map(|o| (o.r0, o.shift)).collect();
-    let (all, finest) = intercepts(&points);
-    if all.is_finite() {
-        let _ = writeln!(
-            text,
-            "shift extrapolated to eps/R0 -> 0 (linear in eps/R0): {all:+.4} over every R0, \
-             {finest:+.4} through the two finest"
-        );
+    let mut shifts: Vec<(&str, fn(&Onset) -> f64)> = vec![("shift", |o| o.shift)];
+    if spec.parameter() == Parameter::Couple {
+        shifts.push(("da surface - sharp", |o| o.da_surface - o.sharp));
+        shifts.push(("shift c0R0 (of c0,eff)", |o| o.shift_c0));
+    }
+    for (name, of) in shifts {
+        let points: Vec<(f64, f64)> = onsets.iter().map(|o| (o.r0, of(o))).collect();
+        let (all, finest) = intercepts(&points);
+        if all.is_finite() {
+            let _ = writeln!(
+                text,
+                "{name} extrapolated to eps/R0 -> 0 (linear in eps/R0): {all:+.4} over every \
+                 R0, {finest:+.4} through the two finest"
+            );
+        }
     }
     let mut report = Report {
         text,
@@ -487,19 +536,23 @@ pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result
         .collect();
     report.chart(
         "onset_eps",
-        shift_chart(vec![("phase field, no seed".to_string(), pts)], onsets),
+        shift_chart(
+            vec![("phase field, no seed".to_string(), pts)],
+            onsets,
+            spec.parameter(),
+        ),
     );
     Ok(report)
 }
 
-/// The lowest odd eigenvalue scaled by (R0/ε)⁴ against c̄0 for every R0 (by colour), sorted in
-/// c̄0, with the sharp instability at each run's v (a vertical line in its colour) and the zero.
+/// The lowest odd eigenvalue scaled by (R0/ε)⁴ against the path's value for every R0 (by
+/// colour), sorted, with the sharp instability at each run's v (a vertical line in its colour) and the zero.
 /// The shape modes' eigenvalues fall about like (ε/R0)⁴ (measured at c̄0 = 3, h = 2ε/3: λ (R0/ε)⁴
 /// = 0.72, 0.75, 0.75, 0.76, 0.87 at R0 = 20, 24, 28, 32, 40ε), so the scaled curves compare.
 fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure {
     let mut fig = Figure::new(
         "Budding onset: lowest up-down odd eigenvalue of the symmetric state",
-        Axis::linear("c0 R0"),
+        Axis::linear(spec.parameter().label()),
         Axis::linear("lowest odd eigenvalue of M^-1 H x (R0/eps)^4"),
     );
     fig.legend = Corner::LowerLeft;
@@ -508,7 +561,7 @@ fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure
         let mut pts: Vec<(f64, f64)> = samples
             .iter()
             .filter(|s| s.r0 == r0)
-            .map(|s| (s.relaxation.c0, s.eigenvalue * r0.powi(4)))
+            .map(|s| (s.relaxation.value, s.eigenvalue * r0.powi(4)))
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         for p in &pts {
@@ -534,7 +587,8 @@ fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure
             );
         }
     }
-    let (first, last) = (spec.c0[0], spec.c0[spec.c0.len() - 1]);
+    let path = spec.path();
+    let (first, last) = (path[0], path[path.len() - 1]);
     fig.push(Series::new(
         "zero (dashed: sharp instability)",
         vec![(first, 0.0), (last, 0.0)],

@@ -1,15 +1,25 @@
-//! The onset study's file: its keys ([`Spec`]), their checks, and the scene of one R0 with the
-//! box sized to the start prolate and the budded pear (the heating study's [`sized_scene`]).
+//! The onset study's file: its keys ([`Spec`]), their checks, the path's parameter
+//! ([`Parameter`]: c̄0, or Δa of the bilayer couple), and the scene of one R0 with the box sized
+//! to the start prolate and the budded pear (the heating study's [`sized_scene`]).
 
 use super::super::budding::MAX_EPS_C0;
 use super::super::heating::spec::sized_scene;
 use crate::error::{Error, Result};
-use crate::problem::config::Scene;
+use crate::problem::config::{BilayerCoupleSpec, C0Spec, Scene};
 use serde::Deserialize;
 use serde_json::Value;
 
 /// Keys of the scene that the study sets itself.
-const STUDY_KEYS: [&str; 6] = ["initial", "n", "c0", "dynamics", "symmetry", "volume"];
+const STUDY_KEYS: [&str; 8] = [
+    "initial",
+    "n",
+    "c0",
+    "dynamics",
+    "symmetry",
+    "volume",
+    "ade",
+    "bilayer_couple",
+];
 
 /// Most bisections of an onset bracket the file may ask for (2⁻¹² of a coarse step is far
 /// below what the stop residual resolves).
@@ -40,9 +50,14 @@ pub struct Spec {
     /// The seed strengths δ, each a run of its own at every R0, in (0, 0.1] (`seeded` only).
     #[serde(default)]
     pub seeds: Vec<f64>,
-    /// The coarse path in c̄0 = c0 R0, increasing: stepped up until the first state that is
-    /// not up–down symmetric.
+    /// The coarse path in c̄0 = c0 R0 (spontaneous curvature), increasing: stepped up until the
+    /// first state that is not up–down symmetric. One of `c0` and `da`.
+    #[serde(default)]
     pub c0: Vec<f64>,
+    /// The coarse path in Δa of the bilayer couple (c0 = 0), increasing, as `c0` is for the
+    /// spontaneous-curvature model (`hessian` only). One of `c0` and `da`.
+    #[serde(default)]
+    pub da: Vec<f64>,
     /// Bisections of the bracket (last symmetric c̄0, first asymmetric c̄0), each from the last
     /// symmetric state; with `hessian`, regula falsi steps on the eigenvalue.
     pub bisections: usize,
@@ -52,6 +67,61 @@ pub struct Spec {
     /// `hessian`: the most products with the second variation per eigenvalue.
     #[serde(default = "default_eigen_products")]
     pub eigen_products: usize,
+}
+
+/// What the path steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Parameter {
+    /// c̄0 = c0 R0 of the spontaneous-curvature model (`c0`).
+    C0,
+    /// Δa held by the bilayer couple at c0 = 0 (`da`).
+    Couple,
+}
+
+impl Parameter {
+    /// The file's key of the path.
+    pub fn key(self) -> &'static str {
+        match self {
+            Parameter::C0 => "c0",
+            Parameter::Couple => "da",
+        }
+    }
+
+    /// The path's variable as tables and charts print it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Parameter::C0 => "c0 R0",
+            Parameter::Couple => "da",
+        }
+    }
+
+    /// `scene` at the path's value `value`, for a vesicle of radius `r0` (length units):
+    /// c0 = c̄0/R0, or the bilayer couple holding Δa = `value`.
+    pub fn set(self, scene: &mut Scene, value: f64, r0: f64) {
+        match self {
+            Parameter::C0 => scene.c0 = C0Spec::Uniform(value / r0),
+            Parameter::Couple => scene.bilayer_couple = Some(BilayerCoupleSpec { da: value }),
+        }
+    }
+}
+
+impl Spec {
+    /// The path's parameter: `c0` or `da` (the file has one, [`check`]).
+    pub fn parameter(&self) -> Parameter {
+        if self.da.is_empty() {
+            Parameter::C0
+        } else {
+            Parameter::Couple
+        }
+    }
+
+    /// The coarse path: the values of `c0` or `da`.
+    pub fn path(&self) -> &[f64] {
+        match self.parameter() {
+            Parameter::C0 => &self.c0,
+            Parameter::Couple => &self.da,
+        }
+    }
 }
 
 /// How the onset study finds the onset.
@@ -122,11 +192,42 @@ pub fn check(spec: &Spec) -> Result<()> {
     if spec.eigen_products < 2 {
         return Err(Error::config("eigen_products", "needs at least 2"));
     }
-    if spec.c0.len() < 2 || spec.c0.windows(2).any(|w| w[1] <= w[0]) {
+    match (spec.c0.is_empty(), spec.da.is_empty()) {
+        (false, false) => {
+            return Err(Error::config(
+                "da",
+                "give the path in c0 (spontaneous curvature) or in da (the bilayer couple), \
+                 not both",
+            ))
+        }
+        (true, true) => return Err(Error::config("c0", "needs the path: c0 or da")),
+        _ => {}
+    }
+    let key = spec.parameter().key();
+    let path = spec.path();
+    if path.len() < 2 || path.windows(2).any(|w| w[1] <= w[0]) || path.iter().any(|v| !v.is_finite())
+    {
         return Err(Error::config(
-            "c0",
-            "needs two or more values of c0 R0, increasing",
+            key,
+            format!("needs two or more values of {}, increasing", spec.parameter().label()),
         ));
+    }
+    if spec.parameter() == Parameter::Couple {
+        if spec.method != Method::Hessian {
+            return Err(Error::config(
+                "da",
+                "the bilayer couple's path takes the hessian method (\"method\": \"hessian\")",
+            ));
+        }
+        if let Some(d) = spec.da.iter().find(|d| **d <= 1.0) {
+            return Err(Error::config(
+                "da",
+                format!(
+                    "a prolate has da > 1 (1 is the sphere), got {d}: the up-down instability \
+                     lies on the prolate branch"
+                ),
+            ));
+        }
     }
     let smallest = spec.r0[0];
     if let Some(c) = spec
@@ -159,8 +260,9 @@ pub fn check(spec: &Spec) -> Result<()> {
 /// `Error::Config` naming `scene.<key>` for a key the study sets, a scene without
 /// `stop_residual` or an invalid scene.
 pub fn base_scene(spec: &Spec, r0: f64, r: &[f64], z: &[f64]) -> Result<Scene> {
-    let set_by = "initial: the axisymmetric prolate at v and c0[0]; n: sized to R0; c0: the \
-                  path; dynamics: relaxational; symmetry: x and y";
+    let set_by = "initial: the axisymmetric prolate at v and the path's first value; n: sized \
+                  to R0; c0, ade, bilayer_couple: the path; dynamics: relaxational; symmetry: \
+                  x and y";
     let scene = sized_scene(&spec.scene, &STUDY_KEYS, set_by, r0, (r, z))?;
     if scene.stop_residual.is_none() {
         return Err(Error::config(
@@ -199,7 +301,9 @@ mod tests {
     /// asymmetry: the symmetric state would never be left) or above 0.1, a path that does not
     /// increase, ε|c0| above 0.2 at the smallest R0 (c0 R0 = 2.5 at 10ε), too many bisections,
     /// a scene key the study sets, a scene without a stop residual, seeds given to the hessian
-    /// method (it seeds nothing) and an eigensolver tolerance or cap out of range.
+    /// method (it seeds nothing), an eigensolver tolerance or cap out of range; and for the
+    /// bilayer couple's path: both paths or none, the seeded method, Δa ≤ 1 (no prolate) and a
+    /// path that does not increase.
     #[test]
     fn bad_files_are_refused_naming_the_key() {
         assert!(spec(|_| {}).is_ok());
@@ -236,5 +340,36 @@ mod tests {
         });
         assert!(products.contains("`eigen_products`"), "{products}");
         assert!(refused(|v| v["method"] = json!("lanczos")).contains("unknown variant"));
+        let couple = |v: &mut Value| {
+            hessian(v);
+            v.as_object_mut().expect("an object").remove("c0");
+            v["da"] = json!([1.1, 1.15]);
+        };
+        assert!(spec(couple).is_ok());
+        let both = refused(|v| {
+            couple(v);
+            v["c0"] = json!([1.0, 1.5]);
+        });
+        assert!(both.contains("`da`") && both.contains("not both"), "{both}");
+        let none = refused(|v| v.as_object_mut().expect("an object").remove("c0").map(|_| ()).unwrap_or(()));
+        assert!(none.contains("`c0`"), "{none}");
+        let seeded = refused(|v| {
+            couple(v);
+            v["method"] = json!("seeded");
+            v["seeds"] = json!([0.02]);
+        });
+        assert!(seeded.contains("`da`") && seeded.contains("hessian"), "{seeded}");
+        let sphere = refused(|v| {
+            couple(v);
+            v["da"] = json!([1.0, 1.1]);
+        });
+        assert!(sphere.contains("`da`"), "{sphere}");
+        let falling = refused(|v| {
+            couple(v);
+            v["da"] = json!([1.2, 1.1]);
+        });
+        assert!(falling.contains("`da`"), "{falling}");
+        let set = refused(|v| v["scene"]["bilayer_couple"] = json!({"da": 1.1}));
+        assert!(set.contains("`scene.bilayer_couple`"), "{set}");
     }
 }

@@ -9,8 +9,12 @@ fn onset(r0: f64, seed: f64, shift: f64) -> Onset {
         above: f64::NAN,
         onset: 3.6 + shift,
         v: 0.787,
+        c0: 3.6 + shift,
+        da_surface: f64::NAN,
         sharp: 3.6,
         shift,
+        sharp_c0: 3.6,
+        shift_c0: shift,
         relaxations: 0,
         wall_seconds: 0.0,
     }
