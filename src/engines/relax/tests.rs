@@ -214,8 +214,8 @@ fn a_start_off_the_area_constraint_is_relaxed_not_stalled() {
     }
 }
 
-/// With the bilayer couple (3D cases, Δa held 0.2% above the start's) every accepted state is
-/// on both constraints, A = A0 and M = M0 to 1e-12 (relative), and both multipliers do what
+/// With the bilayer couple (3D cases, Δa held 0.2% above the start's) the start reports an
+/// infinite residual (it is off M = M0) and every accepted state is on both constraints, A = A0 and M = M0 to 1e-12 (relative), and both multipliers do what
 /// they are for: r is M-orthogonal to q_A = M⁻¹â and q_M = M⁻¹m̂, and so is the direction
 /// d = d' + c_A q_A + c_M q_M, to 1e-10 of |r|_M |q|_M (round-off of the 2×2 solves; a
 /// gradient without its λm̂ misses ⟨r, q_A⟩_M by 0.16 of that), in at most four evaluations an
@@ -236,6 +236,12 @@ fn the_couple_holds_both_constraints_and_its_gradient_is_tangent_to_both() {
         e.set_area_difference(AreaDifference::new(Law::Couple { da }, eps, a0))
             .expect("the couple");
         let m0 = e.couple.expect("the couple").target;
+        // Off M = M0 the start is not stationary, however small its gradient: a stop rule
+        // must not end the run before the first iteration retracts it.
+        assert!(
+            Engine::residual(&e).is_infinite(),
+            "{case:?}: a start off M0"
+        );
         for i in 0..12 {
             e.step(i as f64, 1.0).expect("iteration");
             assert!(!e.stalled, "{case:?}: stalled at {i}");
@@ -272,6 +278,10 @@ fn the_couple_holds_both_constraints_and_its_gradient_is_tangent_to_both() {
                 }
             }
         }
+        assert!(
+            Engine::residual(&e).is_finite(),
+            "{case:?}: on both constraints"
+        );
         // The work: the start's retraction and the 12 iterations' trials with their Newton
         // iterations on M (measured 41 and 43; 3–4 an iteration this early in a relaxation).
         let evaluations = e.couple.expect("the couple").evaluations;

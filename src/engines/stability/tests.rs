@@ -186,6 +186,14 @@ fn the_couples_second_variation_is_the_ade_one_at_its_multiplier() {
         let d = &from_bc - u;
         bc.dot(&d, &d).sqrt() / size
     };
-    assert!(gap(&from_ade) < 1e-7, "BC against ADE: {:e}", gap(&from_ade));
-    assert!(gap(&from_sc) > 1e-2, "BC against no term: {:e}", gap(&from_sc));
+    assert!(
+        gap(&from_ade) < 1e-7,
+        "BC against ADE: {:e}",
+        gap(&from_ade)
+    );
+    assert!(
+        gap(&from_sc) > 1e-2,
+        "BC against no term: {:e}",
+        gap(&from_sc)
+    );
 }

@@ -5,15 +5,16 @@
 //! For each value of the path in turn, from the previous state: c0 = c̄0/R0 (or the couple's
 //! Δa) is set and the field relaxed by L-BFGS on the box mirrored across x, y *and z* (area
 //! held at the first step's A0, volume conserved), so that the state is the up–down symmetric
-//! stationary state whether or not it is stable. With the couple the second variation carries
-//! the state's multiplier λ* of M = Δa M₁ ([`OddHessian`]). Its unfolded field is restricted to the box mirrored across x and y
-//! only, where up–down odd fields live, and [`OddHessian::lowest`] gives λ, the lowest
-//! eigenvalue of the constrained second variation on them, translation removed. λ > 0: the
-//! symmetric state is stable against every up–down odd perturbation the box holds; λ < 0: it is
-//! not. The path stops at the first λ < 0; the zero is then refined by regula falsi on λ(c̄0)
-//! (`bisections` more states, each relaxed from the nearest symmetric state below), and the
+//! stationary state whether or not it is stable. Its unfolded field is restricted to the box
+//! mirrored across x and y only, where up–down odd fields live, and [`OddHessian::lowest`]
+//! gives λ, the lowest eigenvalue of the constrained second variation on them, translation
+//! removed. λ > 0: the symmetric state is stable against every up–down odd perturbation the box
+//! holds; λ < 0: it is not. The path stops at the first λ < 0; the zero is then refined by
+//! regula falsi on λ along the path (`bisections` more states, each relaxed from the nearest
+//! symmetric state below), and the
 //! onset is the last linear root. No seed, no skewness threshold and no early stop of a
-//! departing state enter it.
+//! departing state enter it. With the couple the second variation also carries the state's
+//! multiplier of M = Δa M₁ ([`OddHessian`]).
 
 use super::budding::{relax_seeded, within};
 use super::{Onset, Relaxation, Spec};
@@ -308,7 +309,8 @@ mod tests {
             let phi = odd_box.restrict(&symmetric.full);
             let c = C0::new(&scene.c0, &odd_box, 1.0).expect("c0");
             let mut hessian =
-                OddHessian::new(odd_box.clone(), (1.0, c, scene.laplacian), None, &phi, 1).expect("H");
+                OddHessian::new(odd_box.clone(), (1.0, c, scene.laplacian), None, &phi, 1)
+                    .expect("H");
             let lowest = hessian.lowest(None, 1e-9, 2000).expect("an eigenvalue");
             assert_eq!(
                 lowest.value < 0.0,

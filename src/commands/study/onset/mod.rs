@@ -88,7 +88,11 @@ pub struct Relaxation {
 
 impl Relaxation {
     /// The relaxation `relaxed` at the value `value` of the path's `parameter`, in `stage`.
-    fn of(stage: &'static str, (parameter, value): (Parameter, f64), relaxed: &budding::Relaxed) -> Self {
+    fn of(
+        stage: &'static str,
+        (parameter, value): (Parameter, f64),
+        relaxed: &budding::Relaxed,
+    ) -> Self {
         let rec = &relaxed.record;
         let (c0, da) = match (parameter, &rec.couple) {
             (Parameter::Couple, Some(c)) => (c.c0_eff, value),

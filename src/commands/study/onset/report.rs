@@ -51,7 +51,10 @@ fn relaxation_columns<R: Relaxed>() -> Vec<Column<R>> {
             r.relaxation().stage.into()
         }),
         Column::both("c0", "c0R0", Format::Fixed(4), |r| r.relaxation().c0.into()),
-        Column::both("da", "da", Format::Fixed(4), |r: &R| r.relaxation().da.into()).or("-"),
+        Column::both("da", "da", Format::Fixed(4), |r: &R| {
+            r.relaxation().da.into()
+        })
+        .or("-"),
         Column::both("da_surface", "da surface", Format::Fixed(4), |r| {
             r.relaxation().da_surface.into()
         }),

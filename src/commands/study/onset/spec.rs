@@ -205,11 +205,16 @@ pub fn check(spec: &Spec) -> Result<()> {
     }
     let key = spec.parameter().key();
     let path = spec.path();
-    if path.len() < 2 || path.windows(2).any(|w| w[1] <= w[0]) || path.iter().any(|v| !v.is_finite())
+    if path.len() < 2
+        || path.windows(2).any(|w| w[1] <= w[0])
+        || path.iter().any(|v| !v.is_finite())
     {
         return Err(Error::config(
             key,
-            format!("needs two or more values of {}, increasing", spec.parameter().label()),
+            format!(
+                "needs two or more values of {}, increasing",
+                spec.parameter().label()
+            ),
         ));
     }
     if spec.parameter() == Parameter::Couple {
@@ -351,14 +356,23 @@ mod tests {
             v["c0"] = json!([1.0, 1.5]);
         });
         assert!(both.contains("`da`") && both.contains("not both"), "{both}");
-        let none = refused(|v| v.as_object_mut().expect("an object").remove("c0").map(|_| ()).unwrap_or(()));
+        let none = refused(|v| {
+            v.as_object_mut()
+                .expect("an object")
+                .remove("c0")
+                .map(|_| ())
+                .unwrap_or(())
+        });
         assert!(none.contains("`c0`"), "{none}");
         let seeded = refused(|v| {
             couple(v);
             v["method"] = json!("seeded");
             v["seeds"] = json!([0.02]);
         });
-        assert!(seeded.contains("`da`") && seeded.contains("hessian"), "{seeded}");
+        assert!(
+            seeded.contains("`da`") && seeded.contains("hessian"),
+            "{seeded}"
+        );
         let sphere = refused(|v| {
             couple(v);
             v["da"] = json!([1.0, 1.1]);
