@@ -624,6 +624,69 @@ fn onset_hessian_quick_study_finds_the_eigenvalue_zero() {
     charts_exist(&out, &["onset_eigenvalue", "onset_eps"]);
 }
 
+/// `study onset` with a path in `da` (the bilayer couple), quick: the symmetric BC prolate
+/// started at v = 0.72, R0 = 12ε, h = ε, Δa = 1.22, 1.235, 1.25 (below the coarse lattice's
+/// onset). Every state holds its Δa (the `da` column is the path's value) and is stationary; as
+/// Δa grows the couple's c̄0,eff must rise (the sharp prolate's ∂c̄0,eff/∂Δa > 0: measured 0.96,
+/// 1.09, 1.21) and the lowest odd eigenvalue fall towards the instability (measured 1.61e-4,
+/// 1.26e-4, 1.03e-4), staying positive: no onset, so `onset` and `shift` are empty. The φ = 0
+/// surface's Δa is measured at every state, within 2% of the held one (measured 0.25–1.3% below
+/// it). The sharp columns at the last state's v (0.712): the spontaneous-curvature instability
+/// c̄0* within 0.05 of 2.36, and the BC bifurcation Δa of the sharp prolate there, which lies
+/// above the BC prolate's Δa at c̄0,eff = 0 for v = 0.72 (1.2158; measured 1.2522).
+#[test]
+fn onset_couple_quick_study_follows_the_bc_prolate_towards_its_instability() {
+    let (_tmp, out, stdout) = quick_study_of("onset", "onset_bc");
+    assert!(stdout.contains("bilayer couple"), "{stdout}");
+    let table = |name: &str| {
+        let path = out.join(name);
+        let head = header(&path);
+        let names: Vec<String> = head.split(',').map(str::to_string).collect();
+        (names, csv_fields(&path))
+    };
+    let (names, rows) = table("onset_eigen.csv");
+    let num = |i: usize, name: &str| -> f64 {
+        rows[i][names.iter().position(|c| c == name).unwrap()]
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(rows.len(), 3, "three path states");
+    for (i, da) in [1.22, 1.235, 1.25].into_iter().enumerate() {
+        assert_eq!(num(i, "da"), da);
+        assert_eq!(
+            rows[i][names.iter().position(|c| c == "stopped").unwrap()],
+            "stationary"
+        );
+        let surface = num(i, "da_surface");
+        assert!((surface / da - 1.0).abs() < 0.02, "{surface} against {da}");
+    }
+    let c0: Vec<f64> = (0..3).map(|i| num(i, "c0")).collect();
+    let lambda: Vec<f64> = (0..3).map(|i| num(i, "eigenvalue")).collect();
+    assert!(c0[0] < c0[1] && c0[1] < c0[2], "c0,eff {c0:?}");
+    assert!(
+        lambda[0] > lambda[1] && lambda[1] > lambda[2] && lambda[2] > 0.0,
+        "{lambda:?}"
+    );
+    let (names, onsets) = table("onset.csv");
+    let at = |name: &str| -> f64 {
+        onsets[0][names.iter().position(|c| c == name).unwrap()]
+            .parse()
+            .unwrap()
+    };
+    assert!(at("onset").is_nan() && at("shift").is_nan());
+    assert!(
+        (at("sharp_c0") - 2.36).abs() < 0.05,
+        "sharp c0 {}",
+        at("sharp_c0")
+    );
+    assert!(
+        at("sharp") > 1.2158 && at("sharp") < 1.3,
+        "sharp {}",
+        at("sharp")
+    );
+    charts_exist(&out, &["onset_eigenvalue", "onset_eps"]);
+}
+
 /// `study pinning --quick`: the prolate (v0 0.75) at R0 = 10 … 10.75ε and a half-cell shift, at
 /// h = ε and ε/2. A finer lattice pins less: the pinning figure at h = ε/2 must be at least 10×
 /// below that at h = ε (measured 1.9e-6 against 8.6e-4, a factor 460; the issue measured 2.0e-4
