@@ -254,12 +254,13 @@ enum Study {
         after_help = "Example:\n  vesicle study budding runs/studies/budding.json --out out/budding [--quick]"
     )]
     Budding(StudyArgs),
-    /// The budding onset: the c0 R0 where the prolate at v leaves up-down symmetry (a coarse
-    /// path of L-BFGS relaxations, each after a small seeded asymmetry, then bisection), at
-    /// several R0 and seed strengths, extrapolated in eps/R0 beside the sharp prolate's loss of
-    /// up-down stability at the same v.
+    /// The budding onset: the c0 R0 (or, with a path in da, the bilayer couple's Δa) where the
+    /// prolate at v leaves up-down symmetry (a coarse path of L-BFGS relaxations, each after a
+    /// small seeded asymmetry, then bisection; or the sign of the symmetric state's lowest
+    /// up-down odd eigenvalue), at several R0, extrapolated in eps/R0 beside the sharp
+    /// prolate's loss of up-down stability at the same v.
     #[command(
-        after_help = "Example:\n  vesicle study onset runs/studies/onset.json --out out/onset [--quick]"
+        after_help = "Examples:\n  vesicle study onset runs/studies/onset.json --out out/onset [--quick]\n  vesicle study onset runs/studies/onset_bc.json --out out/onset_bc"
     )]
     Onset(StudyArgs),
     /// Budding on heating (ADE): from the axisymmetric ADE prolate at v, Δa0 stepped up and
