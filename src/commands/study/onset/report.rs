@@ -454,6 +454,9 @@ impl table::Row for Sample {
     }
 }
 
+/// A number read from an onset row (a shift to extrapolate).
+type Reading = fn(&Onset) -> f64;
+
 /// The report of the Hessian method (`"method": "hessian"`): the symmetric states `samples`
 /// with their eigenvalues, the `onsets`, the shift's extrapolation in ε/R0, and the charts
 /// `onset_eigenvalue` and `onset_eps`.
@@ -509,7 +512,7 @@ pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result
          {sharp}; shift = onset - sharp; sharp c0R0: the zero in c0 R0 of the prolate's \
          up-down test function at v; shift c0R0 = c0R0 - sharp c0R0"
     );
-    let mut shifts: Vec<(&str, fn(&Onset) -> f64)> = vec![("shift", |o| o.shift)];
+    let mut shifts: Vec<(&str, Reading)> = vec![("shift", |o| o.shift)];
     if spec.parameter() == Parameter::Couple {
         shifts.push(("da surface - sharp", |o| o.da_surface - o.sharp));
         shifts.push(("shift c0R0 (of c0,eff)", |o| o.shift_c0));
