@@ -26,6 +26,7 @@
 #   budding          study budding budding.json (41 relaxations, h = 2ε/3)   ~32 min (8.5 min CPU), measured
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
 #                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 5 + 10, one thread, loaded), measured
+#                    + onset_bc{,_r32}.json (the bilayer couple's pear transition)  1 112 s + 1 721 s (one thread each, side by side), measured 2026-12-07
 #   heating          study heating heating.json (51 relaxations, 14 references)   220 s (one thread), measured
 #   rates            study rates rates.json + rates3d.json + rates3d_box{,8,10}.json + rates3d_free{,_fine}.json + rates_free.json + rates_fine.json + rates_l6.json + rates3d_tension{,_fine}.json + rates3d_sigma10.json + rates3d_tension_l4.json + rates3d_sigma10_l5.json + rates{,3d}_inextensible.json   747 s (two cores) + 2 519 s (recorded) + 1 848 s + 248 s + 428 s + 3 389 s + 6 681 s + 182 s + 2 935 s + 753 s + 2 300 s + 4 072 s + 2 114 s + 1 074 s + 1 265 s + 959 s + (see rates3d_inextensible's rates.txt) (one thread beside other runs, measured 2026-12-06)
 #   shear            study shear shear.json + shear_box.json (2D)   3 036 s + 445 s on one thread beside other runs, measured 2026-12-06
@@ -135,7 +136,7 @@ group_budding() {
     for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
 }
 group_onset() {
-    studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40
+    studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40 onset_bc onset_bc_r32
 }
 group_heating() { studies heating heating; }
 group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates3d_free_fine rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_tension_l4 rates3d_sigma10 rates3d_sigma10_l5 rates_inextensible rates3d_inextensible; }
@@ -238,6 +239,7 @@ FIGURES=(
     onset_skewness.png=onset/onset_skewness.png
     onset_seeds_skewness.png=onset_seeds/onset_skewness.png
     onset_eigenvalue.png=onset_hessian/onset_eigenvalue.png
+    onset_bc_eigenvalue.png=onset_bc/onset_eigenvalue.png
     heating_neck.png=heating/heating_neck.png
     shear_contrast.png=shear_contrast/inclination_contrast.png
     heating_w.png=heating/heating_w.png
