@@ -147,6 +147,39 @@ fn quick_study_of(kind: &str, stem: &str) -> (tempfile::TempDir, std::path::Path
     (tmp, out, String::from_utf8_lossy(&o.stdout).to_string())
 }
 
+/// The header's names and the rows of the CSV file at `path`.
+fn named_table(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let names = header(path).split(',').map(str::to_string).collect();
+    (names, csv_fields(path))
+}
+
+/// A CSV file's rows, read by column name.
+struct Csv {
+    names: Vec<String>,
+    rows: Vec<Vec<String>>,
+}
+
+impl Csv {
+    /// The file at `path`.
+    fn read(path: &Path) -> Self {
+        let (names, rows) = named_table(path);
+        Csv { names, rows }
+    }
+
+    /// The cell of row `i` in the column `name`.
+    fn text(&self, i: usize, name: &str) -> &str {
+        let column = self.names.iter().position(|c| c == name);
+        &self.rows[i][column.unwrap_or_else(|| panic!("no column {name}"))]
+    }
+
+    /// The cell of row `i` in the column `name`, as a number.
+    fn num(&self, i: usize, name: &str) -> f64 {
+        let cell = self.text(i, name);
+        cell.parse()
+            .unwrap_or_else(|_| panic!("{name}: {cell} is not a number"))
+    }
+}
+
 /// Both chart files of each stem exist and are not empty.
 fn charts_exist(out: &Path, stems: &[&str]) {
     for stem in stems {
@@ -537,12 +570,7 @@ fn budding_quick_study_stays_a_symmetric_prolate() {
 fn onset_quick_study_brackets_the_onset() {
     let (_tmp, out, stdout) = quick_study("onset");
     assert!(stdout.contains("budding onset"));
-    let table = |name: &str| {
-        let path = out.join(name);
-        let head = header(&path);
-        let names: Vec<String> = head.split(',').map(str::to_string).collect();
-        (names, csv_fields(&path))
-    };
+    let table = |name: &str| named_table(&out.join(name));
     let (names, steps) = table("onset_steps.csv");
     let step =
         |i: usize, name: &str| steps[i][names.iter().position(|c| c == name).unwrap()].clone();
@@ -580,12 +608,7 @@ fn onset_quick_study_brackets_the_onset() {
 fn onset_hessian_quick_study_finds_the_eigenvalue_zero() {
     let (_tmp, out, stdout) = quick_study_of("onset", "onset_hessian");
     assert!(stdout.contains("budding onset without a seed"));
-    let table = |name: &str| {
-        let path = out.join(name);
-        let head = header(&path);
-        let names: Vec<String> = head.split(',').map(str::to_string).collect();
-        (names, csv_fields(&path))
-    };
+    let table = |name: &str| named_table(&out.join(name));
     let (names, rows) = table("onset_eigen.csv");
     let num = |i: usize, name: &str| -> f64 {
         rows[i][names.iter().position(|c| c == name).unwrap()]
@@ -638,41 +661,23 @@ fn onset_hessian_quick_study_finds_the_eigenvalue_zero() {
 fn onset_couple_quick_study_follows_the_bc_prolate_towards_its_instability() {
     let (_tmp, out, stdout) = quick_study_of("onset", "onset_bc");
     assert!(stdout.contains("bilayer couple"), "{stdout}");
-    let table = |name: &str| {
-        let path = out.join(name);
-        let head = header(&path);
-        let names: Vec<String> = head.split(',').map(str::to_string).collect();
-        (names, csv_fields(&path))
-    };
-    let (names, rows) = table("onset_eigen.csv");
-    let num = |i: usize, name: &str| -> f64 {
-        rows[i][names.iter().position(|c| c == name).unwrap()]
-            .parse()
-            .unwrap()
-    };
-    assert_eq!(rows.len(), 3, "three path states");
+    let states = Csv::read(&out.join("onset_eigen.csv"));
+    assert_eq!(states.rows.len(), 3, "three path states");
     for (i, da) in [1.22, 1.235, 1.25].into_iter().enumerate() {
-        assert_eq!(num(i, "da"), da);
-        assert_eq!(
-            rows[i][names.iter().position(|c| c == "stopped").unwrap()],
-            "stationary"
-        );
-        let surface = num(i, "da_surface");
+        assert_eq!(states.num(i, "da"), da);
+        assert_eq!(states.text(i, "stopped"), "stationary");
+        let surface = states.num(i, "da_surface");
         assert!((surface / da - 1.0).abs() < 0.02, "{surface} against {da}");
     }
-    let c0: Vec<f64> = (0..3).map(|i| num(i, "c0")).collect();
-    let lambda: Vec<f64> = (0..3).map(|i| num(i, "eigenvalue")).collect();
+    let c0: Vec<f64> = (0..3).map(|i| states.num(i, "c0")).collect();
+    let lambda: Vec<f64> = (0..3).map(|i| states.num(i, "eigenvalue")).collect();
     assert!(c0[0] < c0[1] && c0[1] < c0[2], "c0,eff {c0:?}");
     assert!(
         lambda[0] > lambda[1] && lambda[1] > lambda[2] && lambda[2] > 0.0,
         "{lambda:?}"
     );
-    let (names, onsets) = table("onset.csv");
-    let at = |name: &str| -> f64 {
-        onsets[0][names.iter().position(|c| c == name).unwrap()]
-            .parse()
-            .unwrap()
-    };
+    let onset = Csv::read(&out.join("onset.csv"));
+    let at = |name: &str| onset.num(0, name);
     assert!(at("onset").is_nan() && at("shift").is_nan());
     assert!(
         (at("sharp_c0") - 2.36).abs() < 0.05,
