@@ -421,3 +421,30 @@ fn the_stomatocyte_mirror_half_has_the_same_energy() {
     println!("fold at Δa = {:.4}, worst |Δe| = {worst:.2e}", da[fold]);
     assert!(worst < 2e-3, "the halves differ by {worst}");
 }
+
+/// The BC prolate's loss of up–down stability, walked along the BC branch in Δa, is the
+/// spontaneous-curvature prolate's at the same shape: at v = 0.8 its Δa is that of the SC
+/// prolate at the zero c̄0* of the SC test function, to 1e-8 (measured 1e-12), and its c̄0,eff is
+/// c̄0* (measured 1e-10). At v = 0.6996 the search at fixed c̄0 finds nothing (the SC prolate of
+/// fixed c̄0 folds: along the BC branch c̄0,eff peaks near 2.13), while the walk finds the
+/// bifurcation, at Δa between the prolate's at c̄0,eff = 0 (1.2432) and L_pear (√2), with
+/// c̄0,eff below that peak (measured Δa = 1.3028, c̄0,eff = 2.122).
+#[test]
+fn the_bc_bifurcation_is_the_sc_one_and_is_found_past_the_sc_fold() {
+    let o = opts();
+    let b = axisym::bc_bifurcation(0.8, &o).expect("the BC bifurcation at v = 0.8");
+    let c = axisym::prolate_updown_zero(0.8, (3.0, 4.5), &o).expect("the SC zero");
+    let sc = axisym::solve(Branch::Prolate, 0.8, &o.with_c0(c)).expect("the SC prolate");
+    assert!(
+        (b.da() - sc.da()).abs() < 1e-8,
+        "{} against {}",
+        b.da(),
+        sc.da()
+    );
+    assert!((b.c0_eff - c).abs() < 1e-6, "{} against {c}", b.c0_eff);
+    let v = 0.6996;
+    assert!(axisym::prolate_updown_zero(v, (2.0, 2.5), &o).is_none());
+    let b = axisym::bc_bifurcation(v, &o).expect("the BC bifurcation at v = 0.6996");
+    assert!(b.da() > 1.2432 && b.da() < SQRT_2, "Δa {}", b.da());
+    assert!(b.c0_eff > 2.0 && b.c0_eff < 2.2, "c0,eff {}", b.c0_eff);
+}

@@ -562,24 +562,18 @@ fn to_full(s: &Solution, len: usize) -> Vec<f64> {
     a
 }
 
-/// The pear at `v`: the prolate's path scanned for the first sign change of `μ` from its SC
-/// shape towards larger `Δa`, refined by the secant method in `Δa` (BC solves), then the
-/// prolate just past it kicked along the unstable eigenvector and descended to the pear, which
-/// is followed both ways. Returns the path and the bifurcation `Δa`.
-fn pear_path(
-    v: f64,
-    opts: &Options,
-    ends: &mut impl FnMut(&Solution, bool) -> bool,
-) -> (Vec<Solution>, Option<Solution>) {
-    let none = (Vec::new(), None);
-    let Some((mut w, first, second)) = start_pair(Branch::Prolate, v, opts) else {
-        return none;
-    };
+/// Where the BC prolate at `v` loses up–down stability as `Δa` grows: its path scanned from
+/// its SC shape towards larger `Δa` for the first sign change of `μ`, refined by the secant
+/// method in `Δa` (BC solves). Along the BC path c̄0,eff need not grow monotonically (at
+/// v = 0.70 it peaks near 2.13, where the SC prolate of fixed c̄0 folds), so this walk finds
+/// bifurcations that a search at fixed c̄0 cannot. Returns the bifurcation and the prolates
+/// met on its unstable side (μ < 0, nearest it last); `None` if the path meets no sign change
+/// before its neck falls below `opts.neck_min`.
+fn prolate_bifurcation(v: f64, opts: &Options) -> Option<(Solution, Vec<Solution>)> {
+    let (mut w, first, second) = start_pair(Branch::Prolate, v, opts)?;
     w.basis.model = Model::Bc { da: first.eval.j };
     let s0 = solution(Branch::Prolate, &w.basis, &first);
-    let Some((mu0, _)) = updown(&s0, opts) else {
-        return none;
-    };
+    let (mu0, _) = updown(&s0, opts)?;
     // Walk the prolate towards larger Δa until μ changes sign.
     let mut bracket: Option<(Solution, f64, Solution, f64)> = None;
     let mut last = (s0, mu0);
@@ -608,9 +602,7 @@ fn pear_path(
     if let Some(((sa, ma), (sb, mb))) = pending {
         bracket = Some((sa, ma, sb, mb));
     }
-    let Some((sa, mut fa, sb, mut fb)) = bracket else {
-        return none;
-    };
+    let (sa, mut fa, sb, mut fb) = bracket?;
     // Secant (Illinois) on μ(Δa) with BC solves from the nearer bracketing shape.
     let (mut xa, mut xb) = (sa.da(), sb.da());
     let (mut ca, mut cb) = (sa.coefficients.clone(), sb.coefficients.clone());
@@ -653,6 +645,26 @@ fn pear_path(
         cb = s.coefficients.clone();
         best = s;
     }
+    Some((best, unstable))
+}
+
+/// Where the BC prolate at reduced volume `v` loses up–down stability (the BC pear's
+/// bifurcation), `None` if it does not ([`prolate_bifurcation`]).
+pub fn bc_bifurcation(v: f64, opts: &Options) -> Option<Solution> {
+    prolate_bifurcation(v, opts).map(|(b, _)| b)
+}
+
+/// The pear at `v`: from the prolate's bifurcation ([`prolate_bifurcation`]), the prolate just
+/// past it kicked along the unstable eigenvector and descended to the pear, which is followed
+/// both ways. Returns the path and the bifurcation.
+fn pear_path(
+    v: f64,
+    opts: &Options,
+    ends: &mut impl FnMut(&Solution, bool) -> bool,
+) -> (Vec<Solution>, Option<Solution>) {
+    let Some((best, unstable)) = prolate_bifurcation(v, opts) else {
+        return (Vec::new(), None);
+    };
     let da_b = best.da();
     let bif = Some(best.clone());
     // Prolates past the bifurcation on the unstable side (μ < 0), kicked along φ and

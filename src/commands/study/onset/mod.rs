@@ -35,9 +35,10 @@
 //!
 //! **The bilayer couple.** With a path in `da` instead of `c0` ([`Parameter::Couple`], the
 //! Hessian method only) the states hold Δa = M/M₁ at c0 = 0, the second variation carries the
-//! couple's multiplier, and the sharp instability is Δa of the sharp prolate at the run's v and
-//! at c̄0*(v) ([`couple_at`]). Each state also reports its c̄0,eff and the φ = 0 surface's Δa, so
-//! that the onset is compared in the held Δa, in the surface's Δa and in c̄0,eff.
+//! couple's multiplier, and the sharp instability is the sharp BC prolate's loss of up–down
+//! stability at the run's v ([`axisym::bc_bifurcation`]: its Δa and c̄0,eff). Each state also
+//! reports its c̄0,eff and the φ = 0 surface's Δa, so that the onset is compared in the held Δa,
+//! in the surface's Δa and in c̄0,eff.
 
 pub mod hessian;
 pub mod report;
@@ -166,7 +167,8 @@ pub struct Onset {
     pub sharp: f64,
     /// onset − sharp.
     pub shift: f64,
-    /// The same instability in c̄0: c̄0*(v) (for spontaneous curvature, `sharp` itself).
+    /// The same instability in c̄0: c̄0*(v) for spontaneous curvature (`sharp` itself), the
+    /// sharp BC bifurcation's c̄0,eff for the couple.
     pub sharp_c0: f64,
     /// `c0` − `sharp_c0`: the shift in c̄0 (c̄0,eff for the couple).
     pub shift_c0: f64,
@@ -248,14 +250,13 @@ impl Study for OnsetStudy {
             }
         }
         onsets.par_iter_mut().for_each(|o| {
-            let from = match parameter {
-                Parameter::C0 => first,
-                Parameter::Couple => 0.0,
-            };
-            o.sharp_c0 = sharp_onset(o.v, from).unwrap_or(f64::NAN);
-            o.sharp = match parameter {
-                Parameter::C0 => o.sharp_c0,
-                Parameter::Couple => couple_at(o.v, o.sharp_c0).unwrap_or(f64::NAN),
+            (o.sharp, o.sharp_c0) = match parameter {
+                Parameter::C0 => {
+                    let c0 = sharp_onset(o.v, first).unwrap_or(f64::NAN);
+                    (c0, c0)
+                }
+                Parameter::Couple => axisym::bc_bifurcation(o.v, &Options::default())
+                    .map_or((f64::NAN, f64::NAN), |b| (b.da(), b.c0_eff)),
             };
             o.shift = o.onset - o.sharp;
             o.shift_c0 = o.c0 - o.sharp_c0;
@@ -294,19 +295,6 @@ pub fn sharp_onset(v: f64, from: f64) -> Option<f64> {
         lo = hi;
     }
     None
-}
-
-/// The bilayer couple's loss of up–down stability at reduced volume `v`, given the
-/// spontaneous-curvature instability `c0` = c̄0*(v) ([`sharp_onset`] from c̄0 = 0): Δa of the
-/// prolate at `v` and `c0`. A BC shape is an SC shape at c̄0,eff, and an up–down odd
-/// perturbation moves neither Δa nor v to first order, so the two families' prolates lose
-/// stability at the same shape. `None` where the prolate cannot be solved (or `c0` is NaN).
-pub fn couple_at(v: f64, c0: f64) -> Option<f64> {
-    if !c0.is_finite() {
-        return None;
-    }
-    let prolate = axisym::solve(Branch::Prolate, v, &Options::default().with_c0(c0)).ok()?;
-    Some(prolate.da())
 }
 
 /// Step in c̄0 of the search for the sharp instability's bracket.

@@ -497,20 +497,21 @@ pub fn eigen_report(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Result
     text.push_str(&table::text(onsets));
     let sharp = match spec.parameter() {
         Parameter::C0 => {
-            "the zero in c0 R0 of the axisymmetric prolate's up-down test function at that v"
+            "the zero in c0 R0 of the axisymmetric prolate's up-down test function at that v; \
+             sharp c0R0: the same"
         }
         Parameter::Couple => {
-            "da of the axisymmetric prolate at that v and at the zero in c0 R0 of its up-down \
-             test function (a bilayer-couple shape is a spontaneous-curvature shape at c0,eff); \
-             c0R0: the state's c0,eff = -lambda R0/(sqrt 2 eps) of its multiplier lambda"
+            "da where the axisymmetric bilayer-couple prolate at that v, walked in da, first \
+             loses up-down stability (its test function, that of the spontaneous-curvature \
+             prolate at its c0,eff, crosses zero); sharp c0R0: its c0,eff there; c0R0: the \
+             state's c0,eff = -lambda R0/(sqrt 2 eps) of its multiplier lambda"
         }
     };
     let _ = writeln!(
         text,
         "onset: the root of the line through the last bracket's ({label}, eigenvalue); v, c0R0 \
          and da surface: the phi = 0 reduced volume, c0 and da interpolated to it; sharp: \
-         {sharp}; shift = onset - sharp; sharp c0R0: the zero in c0 R0 of the prolate's \
-         up-down test function at v; shift c0R0 = c0R0 - sharp c0R0"
+         {sharp}; shift = onset - sharp; shift c0R0 = c0R0 - sharp c0R0"
     );
     let mut shifts: Vec<(&str, Reading)> = vec![("shift", |o| o.shift)];
     if spec.parameter() == Parameter::Couple {
