@@ -21,7 +21,8 @@
 //! Hessian of F_sc + F_ade. With the bilayer couple, M = M0 is a third constraint with its own
 //! multiplier λ*: H = ∇²F_sc + σ*∇²A + λ*∇²M, whose products add λ*[m̂(φ̂* + τx̂) −
 //! m̂(φ̂* − τx̂)]/(2τ) (m̂ = FT[δM/δφ]). σ* and λ* are then the least-squares pair that makes
-//! ĝ + σ*â + λ*m̂ (â = c_σ|k|²φ̂*, the area's gradient) smallest in the M⁻¹ norm over k ≠ 0.
+//! ĝ + σ*â + λ*m̂ (â = c_σ|k|²φ̂*, the area's gradient) smallest in the norm Σ w|·|²/M(k) over
+//! k ≠ 0, M(k) the relaxation metric below.
 //! M is even under z → −z, like A and V, so odd perturbations are tangent to its constraint
 //! too, and λ of either law does not move along them to first order: on odd fields the two
 //! laws' Hessians are the same operator at the same state and multiplier (the ADE one's
@@ -335,8 +336,8 @@ impl OddHessian {
 }
 
 /// The bilayer couple's multipliers (σ*, λ*) at `state`: the least-squares solution of
-/// ĝ + σâ + λm̂ ≈ 0 in the M⁻¹ norm over k ≠ 0 (â = c_σ|k|²φ̂, m̂ = FT[δM/δφ]; `k2` and `w` per
-/// mode, `metric` M(|k|²)), from the 2 × 2 normal equations
+/// ĝ + σâ + λm̂ ≈ 0 in the norm Σ w|·|²/M(k) over k ≠ 0 (â = c_σ|k|²φ̂, m̂ = FT[δM/δφ]; `k2`
+/// and `w` per mode, `metric` the relaxation metric M(|k|²)), from the 2 × 2 normal equations
 ///
 /// ```text
 /// [⟨â,â⟩ ⟨â,m̂⟩] [σ]     [⟨ĝ,â⟩]
