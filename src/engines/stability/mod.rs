@@ -265,22 +265,18 @@ impl OddHessian {
                 .and(x)
                 .for_each(|s, &p, &v| *s = p + sign * tau * v);
             self.ev.evaluate(&mut self.scratch, 0.0, None, None)?;
-            let (g, m, lambda) = (
-                &self.scratch.nonlinear,
-                &self.scratch.curvature_hat,
-                self.couple,
-            );
-            match (sign > 0.0, lambda != 0.0) {
-                (true, false) => out.assign(g),
-                (false, false) => Zip::from(&mut *out).and(g).for_each(|o, &v| *o -= v),
-                (true, true) => Zip::from(&mut *out)
-                    .and(g)
-                    .and(m)
-                    .for_each(|o, &v, &c| *o = v + lambda * c),
-                (false, true) => Zip::from(&mut *out)
-                    .and(g)
-                    .and(m)
-                    .for_each(|o, &v, &c| *o -= v + lambda * c),
+            let g = &self.scratch.nonlinear;
+            if sign > 0.0 {
+                out.assign(g);
+            } else {
+                Zip::from(&mut *out).and(g).for_each(|o, &v| *o -= v);
+            }
+            // The couple's λ*∇²M x (its m̂ exists only with the area-difference term).
+            let lambda = sign * self.couple;
+            if lambda != 0.0 {
+                Zip::from(&mut *out)
+                    .and(&self.scratch.curvature_hat)
+                    .for_each(|o, &c| *o += lambda * c);
             }
         }
         let (metric, sigma) = (self.metric, self.sigma);

@@ -123,7 +123,7 @@ impl EigenRun<'_> {
         if samples[n - 1].eigenvalue < 0.0 {
             bracket.0 = samples[n - 2].clone();
             for _ in 0..spec.bisections {
-                let value = linear_root(&bracket.0, &bracket.1, |s| s.relaxation.value);
+                let value = linear_root(&bracket.0, &bracket.1, |s| s.relaxation.value(parameter));
                 let value = (value * 1e9).round() / 1e9;
                 path.warm_start_below(value);
                 let s = self.sample(&scene, &mut path, value, "refine", spec)?;
@@ -137,7 +137,7 @@ impl EigenRun<'_> {
         }
         let (lo, hi) = &bracket;
         let crossed = hi.eigenvalue < 0.0;
-        let at_root = |of: fn(&Sample) -> f64| {
+        let at_root = |of: &dyn Fn(&Sample) -> f64| {
             if crossed {
                 linear_root(lo, hi, of)
             } else {
@@ -147,20 +147,20 @@ impl EigenRun<'_> {
         let result = Onset {
             r0: self.r0,
             seed: 0.0,
-            below: lo.relaxation.value,
+            below: lo.relaxation.value(parameter),
             above: if crossed {
-                hi.relaxation.value
+                hi.relaxation.value(parameter)
             } else {
                 f64::NAN
             },
             onset: if crossed {
-                at_root(|s| s.relaxation.value)
+                at_root(&|s| s.relaxation.value(parameter))
             } else {
                 f64::NAN
             },
-            v: at_root(|s| s.relaxation.v),
-            c0: at_root(|s| s.relaxation.c0),
-            da_surface: at_root(|s| s.relaxation.da_surface),
+            v: at_root(&|s| s.relaxation.v),
+            c0: at_root(&|s| s.relaxation.c0),
+            da_surface: at_root(&|s| s.relaxation.da_surface),
             sharp: f64::NAN,
             shift: f64::NAN,
             sharp_c0: f64::NAN,

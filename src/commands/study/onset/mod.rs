@@ -66,8 +66,6 @@ use std::time::Instant;
 pub struct Relaxation {
     /// `path` (the coarse path), `bisection` (seeded) or `refine` (hessian).
     pub stage: &'static str,
-    /// The path's value: c̄0, or Δa of the bilayer couple ([`Parameter`]).
-    pub value: f64,
     /// c̄0 = c0 R0, or the couple's state's effective c̄0,eff = −λR0/(√2ε) (its multiplier λ
     /// read as a uniform spontaneous curvature).
     pub c0: f64,
@@ -88,6 +86,14 @@ pub struct Relaxation {
 }
 
 impl Relaxation {
+    /// The path's value at this state: c̄0, or the couple's Δa.
+    pub fn value(&self, parameter: Parameter) -> f64 {
+        match parameter {
+            Parameter::C0 => self.c0,
+            Parameter::Couple => self.da,
+        }
+    }
+
     /// The relaxation `relaxed` at the value `value` of the path's `parameter`, in `stage`.
     fn of(
         stage: &'static str,
@@ -95,13 +101,12 @@ impl Relaxation {
         relaxed: &budding::Relaxed,
     ) -> Self {
         let rec = &relaxed.record;
-        let (c0, da) = match (parameter, &rec.couple) {
-            (Parameter::Couple, Some(c)) => (c.c0_eff, value),
-            _ => (value, f64::NAN),
+        let (c0, da) = match parameter {
+            Parameter::C0 => (value, f64::NAN),
+            Parameter::Couple => (rec.couple.as_ref().map_or(f64::NAN, |c| c.c0_eff), value),
         };
         Relaxation {
             stage,
-            value,
             c0,
             da,
             da_surface: relaxed.measure.surface_da,

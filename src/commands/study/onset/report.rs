@@ -568,7 +568,12 @@ fn eigenvalue_chart(spec: &Spec, samples: &[Sample], onsets: &[Onset]) -> Figure
         let mut pts: Vec<(f64, f64)> = samples
             .iter()
             .filter(|s| s.r0 == r0)
-            .map(|s| (s.relaxation.value, s.eigenvalue * r0.powi(4)))
+            .map(|s| {
+                (
+                    s.relaxation.value(spec.parameter()),
+                    s.eigenvalue * r0.powi(4),
+                )
+            })
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         for p in &pts {
