@@ -1097,6 +1097,17 @@ fn boxes_out_of_order_in_the_rates_study_are_exit_2() {
     );
 }
 
+/// Each mobility of a list is a family of its own, smallest first: a list out of order, or a
+/// mobility that is not positive, is refused with exit 2 naming `mobility`.
+#[test]
+fn mobilities_out_of_order_or_not_positive_in_the_rates_study_are_exit_2() {
+    rates_study_is_refused(
+        |v| v["mobility"] = serde_json::json!([0.16, 0.04]),
+        "mobility",
+    );
+    rates_study_is_refused(|v| v["mobility"] = serde_json::json!([0.0]), "mobility");
+}
+
 /// `runs/studies/rates.json` changed by `edit` is refused with exit 2, a message holding `key`,
 /// and no output folder.
 fn rates_study_is_refused(edit: impl FnOnce(&mut Value), key: &str) {

@@ -324,6 +324,7 @@ fn an_inextensible_quasi_circle_relaxes_at_the_constrained_rate() {
                 mirror: false,
                 viscosity_ratio: 1.0,
                 inextensible: true,
+                mobility: 0.01,
             };
             let m = measure::run(&spec, &case).expect("runs");
             assert!((m.box_factor - 0.6197).abs() < 1e-4, "{}", m.box_factor);
@@ -334,6 +335,51 @@ fn an_inextensible_quasi_circle_relaxes_at_the_constrained_rate() {
     assert!(ratios[1].1 > ratios[0].1, "{ratios:?}");
     let limit = value_at_zero(&ratios);
     assert!((limit - 1.0).abs() < 0.05, "extrapolated ratio {limit}");
+}
+
+/// The diffusive channel beside the flow: at η = 10⁵ (the flow's rate a few percent of the
+/// mobility's) the quasi-circle's n = 2 (σ = 0, M = 0.01, L = 8R on the quarter box, R = 12 and
+/// 16ε) relaxes through μ's flux across the membrane, at the sharp rate
+/// Γ_D = M n(n² − 1)(n² − 3/2)κ/(2R⁵) (`problem::flow::circle_diffusive_rate`; 6Mη/R² of the
+/// flow's). The phase field's channel is faster by its own O(ε/R), about 1 + 3ε/R (measured
+/// 1.265 and 1.190 at R = 12, 16ε; about 1.13 at 24ε in a run at η = 10⁴), and the line through
+/// the two sizes lands within 5% of 1 (measured −3.5%). A channel of twice or half the sharp
+/// rate would land near +100% or −50%; the flow alone would read 0.
+#[test]
+fn the_diffusive_channel_relaxes_at_its_sharp_rate() {
+    let spec: Spec = serde_json::from_value(json!({
+        "study": "rates", "h_over_eps": 0.5, "viscosity": 1e5, "mobility": 0.01,
+        "amplitude": 0.02, "dt_max": 300.0, "step_per_rate": 0.02, "e_folds": 0.005,
+        "prepare_steps": 20,
+        "circle": {"box": 8, "mirror": true,
+                   "groups": [{"modes": [2], "sigma_bar": [0], "r0": [12, 16]}]}
+    }))
+    .expect("spec");
+    spec.validate().expect("valid");
+    let points: Vec<(f64, f64)> = [12.0, 16.0]
+        .iter()
+        .map(|&size| {
+            let m = measure::run(
+                &spec,
+                &Case {
+                    size,
+                    box_ratio: 8.0,
+                    ..mode_two(Kind::Circle)(true)
+                },
+            )
+            .expect("runs");
+            assert!(m.diffusive_share > 20.0, "share {}", m.diffusive_share);
+            // The flow's part, 1 within its few percent, is a share of 1/20 or less.
+            let measured_over_sharp = (m.ratio - 1.0) / m.diffusive_share;
+            assert!(
+                measured_over_sharp > 1.0 && measured_over_sharp < 1.6,
+                "R {size}: {measured_over_sharp}"
+            );
+            (1.0 / size, measured_over_sharp)
+        })
+        .collect();
+    let limit = value_at_zero(&points);
+    assert!((limit - 1.0).abs() < 0.05, "{points:?} -> {limit}");
 }
 
 /// The quasi-circle's mode n = 3 at σ = 0 and η_in/η_out = `lambda` (R = 10 and 14ε, L = 4R,
@@ -360,6 +406,7 @@ fn mode_three_limit(lambda: f64) -> f64 {
                 mirror: false,
                 viscosity_ratio: lambda,
                 inextensible: false,
+                mobility: 0.01,
             };
             let m = measure::run(&spec, &case).expect("runs");
             assert!(m.ratio > 0.85 && m.ratio < 1.0, "R {size}: {}", m.ratio);
@@ -445,6 +492,7 @@ fn mode_two(kind: Kind) -> impl Fn(bool) -> Case {
         mirror,
         viscosity_ratio: 1.0,
         inextensible: false,
+        mobility: 0.01,
     }
 }
 

@@ -47,6 +47,35 @@ pub fn flat_rate(k: f64, kappa: f64, sigma: f64, eta: f64) -> f64 {
     (kappa * k.powi(4) + sigma * k * k) / (4.0 * eta * k)
 }
 
+/// The diffusive channel's rate (the mobility's, beside the flow's) of the quasi-sphere's mode
+/// l, Γ_D R⁵/(Mκ) = (2l + 1)(l + 2)(l − 1)[l(l + 1) + σ̄]/4.
+///
+/// In the sharp limit μ is harmonic off the membrane (∂φ/∂t = M∇²μ = 0 in the bulk) and on it
+/// holds half the restoring pressure: the layer's force ∫μ∇φ dn = −2μn̂ balances the normal
+/// stress p ζ of a displacement ζ Y_lm, with p = κ(l + 2)(l − 1)[l(l + 1) + σ̄]/R⁴. With
+/// μ ∝ (r/R)^l inside and (R/r)^{l+1} outside, the jump of the flux across the layer moves it
+/// at 2V = M[∂_nμ] = −M(2l + 1)pζ/(2R). Over the flow's rate ([`sphere_rate`]) this is
+/// Mη(2l + 1)²(2l − 1)(2l + 3)/(8l(l + 1)R²): 10.9 Mη/R² at l = 2.
+pub fn sphere_diffusive_rate(l: usize, sigma_bar: f64) -> f64 {
+    let l = l as f64;
+    (2.0 * l + 1.0) * (l + 2.0) * (l - 1.0) * (l * (l + 1.0) + sigma_bar) / 4.0
+}
+
+/// The diffusive channel's rate of the quasi-circle's mode n, Γ_D R⁵/(Mκ) =
+/// n(n² − 1)(n² − 3/2 + σ̄)/2: as [`sphere_diffusive_rate`] with μ ∝ (r/R)^{±n}, whose flux jumps
+/// by 2n μ/R, and p = κ(n² − 1)(n² − 3/2 + σ̄)/R⁴. Over the flow's rate ([`circle_rate`]):
+/// 2(n² − 1)Mη/R².
+pub fn circle_diffusive_rate(n: usize, sigma_bar: f64) -> f64 {
+    let n = n as f64;
+    n * (n * n - 1.0) * (n * n - 1.5 + sigma_bar) / 2.0
+}
+
+/// The diffusive channel's rate of a flat membrane's mode of wavenumber k (one interface):
+/// Γ_D = Mk(κk⁴ + σk²)/2 (μ ∝ e^{−k|y|} on both sides); over [`flat_rate`], 2Mηk².
+pub fn flat_diffusive_rate(k: f64, kappa: f64, sigma: f64, mobility: f64) -> f64 {
+    mobility * k * (kappa * k.powi(4) + sigma * k * k) / 2.0
+}
+
 /// The factor by which unequal viscosities (η_in = λη_out, the rates' η the outside's) change
 /// the quasi-circle's rate of any mode: 2/(1 + λ). The interface's normal velocity per unit
 /// normal force of mode n is nR/(2(n² − 1)(η_in + η_out)) (the Stokes solutions r^{±n},
@@ -308,6 +337,27 @@ mod tests {
         for (s, want) in [(0.0, 1.25), (10.0, 6.25), (100.0, 51.25)] {
             assert!((circle_rate(2, s) - want).abs() < 1e-12, "{s}");
         }
+    }
+
+    /// The diffusive channel's share of the flow's rate is the closed forms' ratio:
+    /// 10.9375 Mη/R² for l = 2 (25·3·7/48), 6 Mη/R² for n = 2, 2Mηk² for the flat membrane, at
+    /// any σ̄ (the pressure cancels).
+    #[test]
+    fn the_diffusive_shares_are_the_closed_forms() {
+        for s in [0.0, 10.0, 100.0] {
+            assert!((sphere_diffusive_rate(2, s) / sphere_rate(2, s) - 10.9375).abs() < 1e-12);
+            assert!((circle_diffusive_rate(2, s) / circle_rate(2, s) - 6.0).abs() < 1e-12);
+            let share = |l: f64| {
+                (2.0 * l + 1.0).powi(2) * (2.0 * l - 1.0) * (2.0 * l + 3.0) / (8.0 * l * (l + 1.0))
+            };
+            for l in 3..=6 {
+                let ratio = sphere_diffusive_rate(l, s) / sphere_rate(l, s);
+                assert!((ratio - share(l as f64)).abs() < 1e-12 * ratio, "l = {l}");
+            }
+        }
+        let (k, kappa, sigma, eta, m) = (0.3, 1.7, 0.2, 2.0, 0.01);
+        let share = flat_diffusive_rate(k, kappa, sigma, m) / flat_rate(k, kappa, sigma, eta);
+        assert!((share - 2.0 * m * eta * k * k).abs() < 1e-15);
     }
 
     /// The contrast factors: 1 at λ = 1; at l = 2 Taylor's 40(λ + 1)/((2λ + 3)(19λ + 16)) over

@@ -74,6 +74,8 @@ pub struct Case {
     pub viscosity_ratio: f64,
     /// A locally inextensible membrane (full periodic box, λ = 1).
     pub inextensible: bool,
+    /// M of the diffusive channel.
+    pub mobility: f64,
 }
 
 impl Case {
@@ -117,6 +119,9 @@ pub struct Measured {
     pub box_factor: f64,
     /// Γ / (theory × box factor).
     pub ratio: f64,
+    /// The sharp diffusive channel's rate over the flow's ([`diffusive_rate`] / (theory × box
+    /// factor)): the part of `ratio` above 1 the mobility alone explains.
+    pub diffusive_share: f64,
     /// Largest relative deviation of ln|Q| from the fitted line, over the fit.
     pub fit_residual: f64,
     /// δ ≈ σ/(3ε), the relative widening of the interface's profile the fixed tension holds
@@ -161,6 +166,25 @@ pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
             let k = 2.0 * PI / r;
             theory::flat_rate(k, kappa(), case.sigma_bar * kappa() * k * k, eta)
                 * theory::planar_contrast_factor(lambda)
+        }
+    }
+}
+
+/// The sharp diffusive channel's rate of `case` in free space, in units of 1/time: the
+/// mobility's, in parallel with the flow's [`sharp_rate`] ([`theory::sphere_diffusive_rate`]);
+/// it does not depend on the viscosities or the inextensibility.
+pub fn diffusive_rate(case: &Case) -> f64 {
+    let (r, m) = (case.size, case.mobility);
+    match case.kind {
+        Kind::Circle => {
+            theory::circle_diffusive_rate(case.mode, case.sigma_bar) * m * kappa() / r.powi(5)
+        }
+        Kind::Sphere => {
+            theory::sphere_diffusive_rate(case.mode, case.sigma_bar) * m * kappa() / r.powi(5)
+        }
+        Kind::Flat => {
+            let k = 2.0 * PI / r;
+            theory::flat_diffusive_rate(k, kappa(), tension(case), m)
         }
     }
 }
@@ -233,7 +257,7 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
         "scheme": "sbdf2", "dt": dt, "t_end": t_end,
         "prepare_steps": spec.prepare_steps,
         "dynamics": "stokes",
-        "flow": {"viscosity": spec.viscosity, "mobility": spec.mobility,
+        "flow": {"viscosity": spec.viscosity, "mobility": case.mobility,
                  "viscosity_inside": case.viscosity_ratio * spec.viscosity,
                  "inextensible": case.inextensible},
         "area": {"method": "fixed", "sigma": sigma},
@@ -306,6 +330,7 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
         theory,
         box_factor: factor,
         ratio: rate / (theory * factor),
+        diffusive_share: diffusive_rate(case) / (theory * factor),
         fit_residual,
         widening: tension(case) / 3.0,
         max_speed,

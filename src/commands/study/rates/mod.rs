@@ -43,6 +43,7 @@ impl Row for Measured {
             Column::both("viscosity_ratio", "eta_in/eta_out", Format::Plain, |r| {
                 r.case.viscosity_ratio.into()
             }),
+            Column::both("mobility", "M", Format::Plain, |r| r.case.mobility.into()),
             Column::both("size", "R or lambda", Format::Plain, |r: &Self| {
                 r.case.size.into()
             })
@@ -63,6 +64,9 @@ impl Row for Measured {
             }),
             Column::both("ratio", "rate/(sharp x box)", Format::Fixed(4), |r| {
                 r.ratio.into()
+            }),
+            Column::both("diffusive_share", "diffusive share", Format::Sci(1), |r| {
+                r.diffusive_share.into()
             }),
             Column::both("fit_residual", "fit residual", Format::Sci(1), |r| {
                 r.fit_residual.into()
@@ -92,6 +96,8 @@ pub struct Rate {
     pub sigma_bar: f64,
     /// η_in/η_out.
     pub viscosity_ratio: f64,
+    /// M of the diffusive channel.
+    pub mobility: f64,
     /// Γ η_outR³/κ of the sharp theory (closed vesicles; with the contrast's factor), or Γ/(κk³/4η) − 1 = σ̄ (flat: NaN).
     pub reduced_theory: f64,
     /// L/R of the boxes: "4", or "8 10 -> inf" where each size's ratio is taken to L → ∞.
@@ -120,6 +126,7 @@ impl Row for Rate {
             Column::both("viscosity_ratio", "eta_in/eta_out", Format::Plain, |r| {
                 r.viscosity_ratio.into()
             }),
+            Column::both("mobility", "M", Format::Plain, |r| r.mobility.into()),
             Column::both("reduced_theory", "G eta R^3/kappa", Format::Fixed(4), |r| {
                 r.reduced_theory.into()
             }),
@@ -226,14 +233,15 @@ impl Progress {
         let elapsed = self.started.elapsed().as_secs_f64();
         let eta = elapsed * (self.work.iter().sum::<f64>() / done - 1.0);
         eprintln!(
-            "rates [{}/{}] {} {} {} sigma_bar {} R {} L/R {}: rate {:.4e}, ratio {:.4}, fit \
-             residual {:.1e}, {} steps, {:.0} s | {elapsed:.0} s, ETA {eta:.0} s",
+            "rates [{}/{}] {} {} {} sigma_bar {} M {} R {} L/R {}: rate {:.4e}, ratio {:.4}, \
+             fit residual {:.1e}, {} steps, {:.0} s | {elapsed:.0} s, ETA {eta:.0} s",
             self.finished,
             self.work.len(),
             c.kind.name(),
             c.mode,
             c.membrane_model(),
             c.sigma_bar,
+            c.mobility,
             c.size,
             c.box_ratio,
             m.rate,
@@ -245,8 +253,8 @@ impl Progress {
     }
 }
 
-/// The cases of the spec, grouped by (membrane, mode, σ̄), each group's sizes coarse (small
-/// R/ε) to fine, and each size's boxes small to large.
+/// The cases of the spec, grouped by (membrane, mode, σ̄, λ, model, M), each group's sizes
+/// coarse (small R/ε) to fine, and each size's boxes small to large.
 fn groups(spec: &Spec) -> Vec<Vec<Case>> {
     let mut out = Vec::new();
     for (kind, family) in [(Kind::Circle, &spec.circle), (Kind::Sphere, &spec.sphere)] {
@@ -257,7 +265,7 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
             for &mode in &g.modes {
                 for &sigma_bar in &g.sigma_bar {
                     for &viscosity_ratio in &g.viscosity_ratio {
-                        for &model in &g.models {
+                        for (&model, &mobility) in pairs(&g.models, &spec.mobility) {
                             out.push(
                                 sizes
                                     .iter()
@@ -271,6 +279,7 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
                                             mirror: f.mirror,
                                             viscosity_ratio,
                                             inextensible: model == spec::Model::Inextensible,
+                                            mobility,
                                         })
                                     })
                                     .collect(),
@@ -285,7 +294,7 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
         let mut sizes = f.wavelengths.clone();
         sizes.sort_by(f64::total_cmp);
         for &sigma_bar in &f.sigma_bar {
-            for &viscosity_ratio in &f.viscosity_ratio {
+            for (&viscosity_ratio, &mobility) in pairs(&f.viscosity_ratio, &spec.mobility) {
                 out.push(
                     sizes
                         .iter()
@@ -298,6 +307,7 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
                             mirror: false,
                             viscosity_ratio,
                             inextensible: false,
+                            mobility,
                         })
                         .collect(),
                 );
@@ -305,6 +315,11 @@ fn groups(spec: &Spec) -> Vec<Vec<Case>> {
         }
     }
     out
+}
+
+/// Every (a, b), a the outer loop.
+fn pairs<'a, A, B>(a: &'a [A], b: &'a [B]) -> impl Iterator<Item = (&'a A, &'a B)> {
+    a.iter().flat_map(move |x| b.iter().map(move |y| (x, y)))
 }
 
 /// The value at x = 0 of the polynomial through `(x_i, y_i)`: Σ_i y_i Π_{j≠i} x_j/(x_j − x_i).
@@ -378,6 +393,7 @@ fn extrapolate(group: &[Measured]) -> Rate {
         mode: first.mode,
         sigma_bar: first.sigma_bar,
         viscosity_ratio: first.viscosity_ratio,
+        mobility: first.mobility,
         reduced_theory: match first.kind {
             Kind::Flat => f64::NAN,
             _ => {
@@ -407,6 +423,7 @@ fn chart(rates: &[Rate]) -> Figure {
         Axis::linear("rate / (sharp rate x box factor)"),
     );
     fig.legend = Corner::LowerLeft;
+    let several_mobilities = rates.iter().any(|r| r.mobility != rates[0].mobility);
     let marks = [
         Shape::Circle,
         Shape::Square,
@@ -427,6 +444,9 @@ fn chart(rates: &[Rate]) -> Figure {
             label.push_str(", inextensible");
         } else if r.viscosity_ratio != 1.0 {
             label.push_str(&format!(", eta_in/eta_out {}", r.viscosity_ratio));
+        }
+        if several_mobilities {
+            label.push_str(&format!(", M {}", r.mobility));
         }
         if r.boxes.contains("inf") {
             label.push_str(&format!(", L/R {}", r.boxes));
@@ -467,6 +487,28 @@ mod tests {
         let pts: Vec<(f64, f64)> = [0.1, 0.05, 0.02].iter().map(|&x| (x, q(x))).collect();
         assert!((value_at_zero(&pts) - 1.0).abs() < 1e-12);
         assert!((value_at_zero(&[(0.2, 0.3), (0.1, 0.4)]) - 0.5).abs() < 1e-12);
+    }
+
+    /// A list of mobilities makes one family per M (each extrapolated in ε/R on its own), with
+    /// every size in each and the scene's `flow.mobility` the case's.
+    #[test]
+    fn each_mobility_is_a_family_of_its_own() {
+        let spec: Spec = serde_json::from_value(serde_json::json!({
+            "study": "rates", "h_over_eps": 0.5, "viscosity": 1.0, "mobility": [0.01, 0.16],
+            "amplitude": 0.02, "dt_max": 3.0, "step_per_rate": 0.02, "e_folds": 0.5,
+            "prepare_steps": 20,
+            "circle": {"box": 8, "groups": [{"modes": [2], "sigma_bar": [0], "r0": [8, 12]}]}
+        }))
+        .expect("spec");
+        spec.validate().expect("valid");
+        let families = groups(&spec);
+        assert_eq!(families.len(), 2);
+        for (family, m) in families.iter().zip([0.01, 0.16]) {
+            assert_eq!(family.len(), 2);
+            assert!(family.iter().all(|c| c.mobility == m));
+            let scene = measure::scene(&spec, &family[0], 1e-3, 1.0).expect("scene");
+            assert_eq!(scene.flow.as_ref().map(|f| f.mobility), Some(m));
+        }
     }
 
     /// The box extrapolation is in (R/L)^d: it takes the sharp factor's own box series to free

@@ -19,8 +19,10 @@ pub struct Spec {
     pub h_over_eps: f64,
     /// η.
     pub viscosity: f64,
-    /// M of the diffusive channel.
-    pub mobility: f64,
+    /// M of the diffusive channel: one number, or a list, smallest first; every case runs at
+    /// each, and each M is extrapolated in ε/R on its own.
+    #[serde(deserialize_with = "one_or_many")]
+    pub mobility: Vec<f64>,
     /// The seeded mode's amplitude: relative to R (circle, sphere) or to λ (flat).
     pub amplitude: f64,
     /// The largest Δt (the explicit flow's stability: Δt = 4 ran and Δt = 8 diverged at
@@ -146,12 +148,20 @@ impl Spec {
         h_over_eps(self.h_over_eps)?;
         for (key, v) in [
             ("viscosity", self.viscosity),
-            ("mobility", self.mobility),
             ("dt_max", self.dt_max),
             ("step_per_rate", self.step_per_rate),
             ("e_folds", self.e_folds),
         ] {
             positive(key, v)?;
+        }
+        if self.mobility.is_empty() || self.mobility.iter().any(|&m| !(m > 0.0 && m.is_finite())) {
+            return Err(Error::config("mobility", "need values M > 0, at least one"));
+        }
+        if self.mobility.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(Error::config(
+                "mobility",
+                "list the mobilities once each, smallest first",
+            ));
         }
         if !(self.amplitude > 0.0 && self.amplitude < 0.2) {
             return Err(Error::config(
