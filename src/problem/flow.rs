@@ -138,10 +138,71 @@ pub fn inextensible_box_factor(dim: usize, mode: usize, r_over_l: f64) -> f64 {
 /// the tension holds the surface divergence to zero exactly when it does no work on the
 /// velocity, mᵀP(F + t m) = 0 for a normal force F, so
 /// P_eff = P_nn − (Pm)_n²/(mᵀPm).
-fn constrained_mobility(dim: usize, [nn, nt, tt]: [f64; 3]) -> f64 {
+fn constrained_mobility(dim: usize, p: [f64; 3]) -> f64 {
+    let (pm_n, mpm) = tension_coupling(dim, p);
+    p[0] - pm_n * pm_n / mpm
+}
+
+/// (Pm)_n and mᵀPm of the tension field's force m = (−(d − 1), 1) ([`constrained_mobility`]).
+fn tension_coupling(dim: usize, [nn, nt, tt]: [f64; 3]) -> (f64, f64) {
     let c = (dim - 1) as f64;
-    let pm_n = -c * nn + nt;
-    nn - pm_n * pm_n / (c * c * nn - 2.0 * c * nt + tt)
+    (-c * nn + nt, c * c * nn - 2.0 * c * nt + tt)
+}
+
+/// The coefficient C of the diffuse membrane's dilational surface viscosity η_d = C ε³/M, with
+/// g(t) = t tanh t − ln cosh t − ln 2:
+///
+/// ```text
+/// C = 2√2 ∫ g(t)² dt ≈ 2.147
+/// ```
+///
+/// A flow that stretches the membrane at the surface rate α = ∇_s·u squeezes the layer along
+/// its normal n (u_n = −αn). To hold the profile φ₀ = tanh(n/(√2ε)) the mobility must carry φ
+/// back across it, M∂_nμ = −α∫_{−∞}^n sφ₀'(s) ds = −α√2ε g(n/(√2ε)), which dissipates
+/// M∫(∂_nμ)² dn = (α²/M) 2√2ε³∫g² per unit area: a surface viscosity η_d against dilation,
+/// whatever the energy. The integral by Simpson's rule over |t| ≤ 20 (g falls as t e^{−2t}).
+pub fn dilational_viscosity_coefficient() -> f64 {
+    let g = |t: f64| t * t.tanh() - t.cosh().ln() - std::f64::consts::LN_2;
+    let (intervals, half_width) = (40_000, 20.0);
+    let dt = 2.0 * half_width / intervals as f64;
+    let sum: f64 = (0..=intervals)
+        .map(|i| {
+            let weight = match i {
+                0 => 1.0,
+                i if i == intervals => 1.0,
+                i if i % 2 == 1 => 4.0,
+                _ => 2.0,
+            };
+            weight * g(-half_width + i as f64 * dt).powi(2)
+        })
+        .sum();
+    2.0 * SQRT_2 * sum * dt / 3.0
+}
+
+/// The factor by which a dilational surface viscosity η_d multiplies the drop's rate of the
+/// quasi-sphere's mode l (`dim` 3) or the quasi-circle's n (`dim` 2), at the Boussinesq number
+/// Bq = η_d/(ηR), in free space (`r_over_l` None) or the periodic box. The surface stress
+/// s = η_d∇_s·u is a tension field whose force is (s/R)m ([`constrained_mobility`]), and
+/// mᵀv = −R∫Y² ∇_s·u, so with P in units of the drop's normal mobility (R/η times
+/// 2l(l+1)/((2l−1)(2l+1)(2l+3)) in 3D, n/(4(n² − 1)) in 2D) scaled by Bq:
+///
+/// ```text
+/// P_eff / P_nn = 1 − (Pm)_n² / (P_nn (1 + mᵀPm))      (l = 2 in free space: 1 − Bq/(35 + 22Bq))
+/// ```
+///
+/// 1 at Bq = 0, the inextensible factor as Bq → ∞; 1 in 2D free space at every Bq (the drop's
+/// flow does not stretch a circle).
+pub fn dilational_factor(dim: usize, mode: usize, bq: f64, r_over_l: Option<f64>) -> f64 {
+    let m = mode as f64;
+    let drop = if dim == 2 {
+        m / (4.0 * (m * m - 1.0))
+    } else {
+        2.0 * m * (m + 1.0) / ((2.0 * m - 1.0) * (2.0 * m + 1.0) * (2.0 * m + 3.0))
+    };
+    let scale = bq * drop / free_mobilities(dim, mode)[0];
+    let p = mobilities(dim, mode, r_over_l);
+    let (pm_n, mpm) = tension_coupling(dim, p);
+    1.0 - scale * pm_n * pm_n / (p[0] * (1.0 + scale * mpm))
 }
 
 /// The mobility matrix [P_nn, P_nt, P_tt] of the mode's normal force density Y r̂ δ(|x| − R)
@@ -358,6 +419,36 @@ mod tests {
         let (k, kappa, sigma, eta, m) = (0.3, 1.7, 0.2, 2.0, 0.01);
         let share = flat_diffusive_rate(k, kappa, sigma, m) / flat_rate(k, kappa, sigma, eta);
         assert!((share - 2.0 * m * eta * k * k).abs() < 1e-15);
+    }
+
+    /// The dilational surface viscosity: C = 2√2∫g² = 2.1473 (the quadrature against a finer
+    /// and wider one, 1e-10); the factor is 1 at Bq = 0, tends to the inextensible factor
+    /// (21/22 at l = 2) as Bq grows, is 1 − Bq/(35 + 22Bq) at l = 2 in free space (the closed
+    /// form of mᵀPm = 22/35 and (Pm)_n²/P_nn = 2/245 in the drop's units) and 1 for the circle
+    /// in free space; in a box it lies between 1 and the box's inextensible factor over its drop
+    /// factor.
+    #[test]
+    fn the_dilational_viscosity_interpolates_between_the_drop_and_the_inextensible_membrane() {
+        let c = dilational_viscosity_coefficient();
+        assert!((c - 2.1473).abs() < 1e-4, "{c}");
+        for bq in [0.1, 1.0, 10.0] {
+            let f = dilational_factor(3, 2, bq, None);
+            assert!(
+                (f - (1.0 - bq / (35.0 + 22.0 * bq))).abs() < 1e-12,
+                "Bq {bq}: {f}"
+            );
+            assert!((dilational_factor(2, 2, bq, None) - 1.0).abs() < 1e-12);
+        }
+        assert!((dilational_factor(3, 2, 0.0, None) - 1.0).abs() < 1e-15);
+        for l in 2..=6 {
+            let f = dilational_factor(3, l, 1e9, None);
+            assert!((f - inextensible_factor(3, l)).abs() < 1e-8, "l {l}: {f}");
+        }
+        let r_over_l = Some(0.125);
+        let boxed = dilational_factor(3, 2, 1.0, r_over_l);
+        let stiff = inextensible_box_factor(3, 2, 0.125) * inextensible_factor(3, 2)
+            / box_factor(3, 2, 0.125);
+        assert!(boxed < 1.0 && boxed > stiff, "{boxed} against {stiff}");
     }
 
     /// The contrast factors: 1 at λ = 1; at l = 2 Taylor's 40(λ + 1)/((2λ + 3)(19λ + 16)) over

@@ -122,6 +122,13 @@ pub struct Measured {
     /// The sharp diffusive channel's rate over the flow's ([`diffusive_rate`] / (theory × box
     /// factor)): the part of `ratio` above 1 the mobility alone explains.
     pub diffusive_share: f64,
+    /// Bq = η_d/(ηR), the diffuse membrane's dilational surface viscosity η_d = Cε³/M over ηR
+    /// ([`theory::dilational_viscosity_coefficient`]); NaN for the flat membrane.
+    pub boussinesq: f64,
+    /// The factor Bq puts on the sharp drop's rate in the case's box
+    /// ([`theory::dilational_factor`]); 1 for the inextensible membrane (it does not dilate),
+    /// NaN where it is not computed (the flat membrane, unequal viscosities).
+    pub dilation_factor: f64,
     /// Largest relative deviation of ln|Q| from the fitted line, over the fit.
     pub fit_residual: f64,
     /// δ ≈ σ/(3ε), the relative widening of the interface's profile the fixed tension holds
@@ -187,6 +194,25 @@ pub fn diffusive_rate(case: &Case) -> f64 {
             theory::flat_diffusive_rate(k, kappa(), tension(case), m)
         }
     }
+}
+
+/// Bq of `case` at the outside viscosity `eta` and the factor it puts on the drop's rate
+/// ([`Measured::boussinesq`], [`Measured::dilation_factor`]).
+pub fn dilation(case: &Case, eta: f64) -> (f64, f64) {
+    let dim = match case.kind {
+        Kind::Circle => 2,
+        Kind::Sphere => 3,
+        Kind::Flat => return (f64::NAN, f64::NAN),
+    };
+    let bq = theory::dilational_viscosity_coefficient() / (case.mobility * eta * case.size);
+    let factor = if case.inextensible {
+        1.0
+    } else if case.viscosity_ratio != 1.0 {
+        f64::NAN
+    } else {
+        theory::dilational_factor(dim, case.mode, bq, Some(1.0 / case.box_ratio))
+    };
+    (bq, factor)
 }
 
 /// The box factor of `case`.
@@ -296,6 +322,7 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
     let started = Instant::now();
     let theory = sharp_rate(case, spec.viscosity);
     let factor = box_factor(case);
+    let (boussinesq, dilation_factor) = dilation(case, spec.viscosity);
     let (plus, scene, max_speed) = moments(spec, case, theory * factor, 1.0)?;
     let (minus, _, _) = moments(spec, case, theory * factor, -1.0)?;
     let t_end = scene.t_end.unwrap_or(f64::NAN);
@@ -331,6 +358,8 @@ pub fn run(spec: &Spec, case: &Case) -> Result<Measured> {
         box_factor: factor,
         ratio: rate / (theory * factor),
         diffusive_share: diffusive_rate(case) / (theory * factor),
+        boussinesq,
+        dilation_factor,
         fit_residual,
         widening: tension(case) / 3.0,
         max_speed,

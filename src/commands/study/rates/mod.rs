@@ -68,6 +68,13 @@ impl Row for Measured {
             Column::both("diffusive_share", "diffusive share", Format::Sci(1), |r| {
                 r.diffusive_share.into()
             }),
+            Column::both("boussinesq", "Bq", Format::Sci(2), |r| r.boussinesq.into()),
+            Column::both(
+                "dilation_factor",
+                "dilation factor",
+                Format::Fixed(4),
+                |r| r.dilation_factor.into(),
+            ),
             Column::both("fit_residual", "fit residual", Format::Sci(1), |r| {
                 r.fit_residual.into()
             }),
