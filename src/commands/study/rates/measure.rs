@@ -53,6 +53,14 @@ impl Kind {
             Kind::Flat => "flat",
         }
     }
+
+    /// The dimension of its box: 3 for the sphere, 2 otherwise.
+    pub fn dim(self) -> usize {
+        match self {
+            Kind::Sphere => 3,
+            Kind::Circle | Kind::Flat => 2,
+        }
+    }
 }
 
 /// One case to run: the membrane, its mode (n, l, or λ/ε for the flat one), σ̄ and size.
@@ -182,35 +190,27 @@ pub fn sharp_rate(case: &Case, eta: f64) -> f64 {
 /// it does not depend on the viscosities or the inextensibility.
 pub fn diffusive_rate(case: &Case) -> f64 {
     let (r, m) = (case.size, case.mobility);
-    match case.kind {
-        Kind::Circle => {
-            theory::circle_diffusive_rate(case.mode, case.sigma_bar) * m * kappa() / r.powi(5)
-        }
-        Kind::Sphere => {
-            theory::sphere_diffusive_rate(case.mode, case.sigma_bar) * m * kappa() / r.powi(5)
-        }
-        Kind::Flat => {
-            let k = 2.0 * PI / r;
-            theory::flat_diffusive_rate(k, kappa(), tension(case), m)
-        }
-    }
+    let reduced = match case.kind {
+        Kind::Circle => theory::circle_diffusive_rate(case.mode, case.sigma_bar),
+        Kind::Sphere => theory::sphere_diffusive_rate(case.mode, case.sigma_bar),
+        Kind::Flat => return theory::flat_diffusive_rate(2.0 * PI / r, kappa(), tension(case), m),
+    };
+    reduced * m * kappa() / r.powi(5)
 }
 
 /// Bq of `case` at the outside viscosity `eta` and the factor it puts on the drop's rate
 /// ([`Measured::boussinesq`], [`Measured::dilation_factor`]).
 pub fn dilation(case: &Case, eta: f64) -> (f64, f64) {
-    let dim = match case.kind {
-        Kind::Circle => 2,
-        Kind::Sphere => 3,
-        Kind::Flat => return (f64::NAN, f64::NAN),
-    };
+    if case.kind == Kind::Flat {
+        return (f64::NAN, f64::NAN);
+    }
     let bq = theory::dilational_viscosity_coefficient() / (case.mobility * eta * case.size);
     let factor = if case.inextensible {
         1.0
     } else if case.viscosity_ratio != 1.0 {
         f64::NAN
     } else {
-        theory::dilational_factor(dim, case.mode, bq, Some(1.0 / case.box_ratio))
+        theory::dilational_factor(case.kind.dim(), case.mode, bq, Some(1.0 / case.box_ratio))
     };
     (bq, factor)
 }
@@ -259,7 +259,7 @@ pub fn scene(spec: &Spec, case: &Case, expected: f64, sign: f64) -> Result<Scene
     let sigma = tension(case);
     let (dim, n, initial) = match case.kind {
         Kind::Circle | Kind::Sphere => {
-            let dim = if case.kind == Kind::Circle { 2 } else { 3 };
+            let dim = case.kind.dim();
             let side = points(case.box_ratio * r, h);
             (
                 dim,

@@ -364,10 +364,7 @@ pub fn free_space_ratio(dim: usize, boxes: &[(f64, f64)]) -> f64 {
 /// extrapolation to ε/R = 0 through the last three sizes (the finest).
 fn extrapolate(group: &[Measured]) -> Rate {
     let first = &group[0].case;
-    let dim = match first.kind {
-        Kind::Sphere => 3,
-        _ => 2,
-    };
+    let dim = first.kind.dim();
     let boxes: Vec<f64> = group
         .iter()
         .filter(|m| m.case.size == first.size)
