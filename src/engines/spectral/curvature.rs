@@ -187,28 +187,23 @@ impl CoupleSums {
     }
 }
 
-/// The spectra of a step with a second affine term: φ̂, N̂ and m̂ (or the Stokes flow's T̂) of
-/// the current state (level 1) and, with two levels, of the one before.
+/// The spectra of a step with the area-difference term: φ̂, N̂ and m̂ of the current state
+/// (level 1) and, with two levels, of the one before.
 pub struct CoupleInputs<'a> {
     /// (φ̂, N̂, m̂) per level of history, the current state first.
     pub levels: Vec<[&'a [f64]; 3]>,
-    /// Whether R̂ carries the conserved flow's −|k|² (the area-difference term, whose m̂ enters
-    /// μ) or not (the Stokes flow's T̂ = FT[u_σ·∇φ], which enters ∂φ/∂t itself).
-    pub laplacian: bool,
 }
 
 /// P̂, Q̂, R̂ of `u` at one mode (the first `width` reals of each) from the inputs at real `i`,
-/// with the update's own factors ([`Update::at`]): R̂ = −|k|² Σ_j n_j m̂_j, or
-/// R̂ = −Σ_j n_j T̂_j for the Stokes flow.
+/// with the update's own factors ([`Update::at`]): R̂ = −|k|² Σ_j n_j m̂_j.
 fn update_at(u: &Update, inputs: &CoupleInputs, i: usize, k: f64, width: usize) -> [[f64; 2]; 3] {
     let f = u.at::<MAX_LEVELS>(k);
-    let g = if inputs.laplacian { k } else { 1.0 };
     let mut out = [[0.0; 2]; 3];
     for (j, [h, n, m]) in inputs.levels.iter().enumerate() {
         for c in 0..width {
             out[0][c] += f.h[j] * h[i + c] + f.n[j] * n[i + c];
             out[1][c] += f.q[j] * h[i + c];
-            out[2][c] -= g * f.n[j] * m[i + c];
+            out[2][c] -= k * f.n[j] * m[i + c];
         }
     }
     out

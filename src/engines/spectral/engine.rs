@@ -29,41 +29,42 @@ use rayon::prelude::*;
 // levels extends [`values`] and [`Inputs`].
 const _: () = assert!(MAX_LEVELS == 2);
 
-/// The modes of a piece in the reals `inputs` = [φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹], as the first `L`
-/// levels of history, zipped with the piece's |k|² and w. With one level the last two inputs
-/// may be any reals of the piece (they are not read).
+/// The modes of a piece in the reals `inputs` = [φ̂ⁿ, N̂ⁿ, T̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹, T̂ⁿ⁻¹] ([`Inputs`]),
+/// as the first `L` levels of history, zipped with the piece's |k|² and w. Inputs the sweep does
+/// not read (a second level with one, T̂ without a flow) may be any reals of the piece.
 #[inline(always)]
 fn values<'a, const W: usize, const L: usize>(
     p: &'a Piece,
-    inputs: [&'a [f64]; 4],
-) -> impl Iterator<Item = ([[&'a [f64; W]; 2]; L], (f64, f64))> + 'a {
-    let [x, n, x0, n0] = inputs.map(|v| p.modes::<W, _>(v).iter());
+    inputs: [&'a [f64]; 6],
+) -> impl Iterator<Item = ([[&'a [f64; W]; 3]; L], (f64, f64))> + 'a {
+    let [x, n, t, x0, n0, t0] = inputs.map(|v| p.modes::<W, _>(v).iter());
     x.zip(n)
-        .zip(x0.zip(n0))
+        .zip(t)
+        .zip(x0.zip(n0).zip(t0))
         .zip(p.symbols())
-        .map(|(((x, n), (x0, n0)), kw)| {
-            let levels = [[x, n], [x0, n0]];
+        .map(|((((x, n), t), ((x0, n0), t0)), kw)| {
+            let levels = [[x, n, t], [x0, n0, t0]];
             (std::array::from_fn(|j| levels[j]), kw)
         })
 }
 
 wide_fn! {
 /// One piece of [`CpuPasses::area_quadratic`], mode by mode from the piece's reals
-/// `inputs` ([`values`]): with P̂, Q̂ of [`Update::at`] and the area weight
-/// a = (3/(2√2)) ε |k|² w, returns (A_PP, A_PQ, A_QQ) = Σ a (|P̂|², Re P̂Q̂*, |Q̂|²). Each mode's
-/// factors are formed and used at once (`t` scratch for its three terms).
-fn quadratic_values<const L: usize, const W: usize>(
+/// `inputs` ([`values`]): with P̂, Q̂ of [`Update::at`] (Q̂ with the flow's T̂ when `FLOW`) and
+/// the area weight a = (3/(2√2)) ε |k|² w, returns (A_PP, A_PQ, A_QQ) = Σ a (|P̂|², Re P̂Q̂*,
+/// |Q̂|²). Each mode's factors are formed and used at once (`t` scratch for its three terms).
+fn quadratic_values<const L: usize, const W: usize, const FLOW: bool>(
     u: &Update,
     p: &Piece,
     area_prefactor: f64,
-    inputs: [&[f64]; 4],
+    inputs: [&[f64]; 6],
     t: &mut [[f64; PIECE]; 3],
 ) -> [f64; 3] {
     let len = p.len;
     let [tpp, tpq, tqq] = t;
     let terms = tpp[..len].iter_mut().zip(&mut tpq[..len]).zip(&mut tqq[..len]);
     for (((pp, pq), qq), (v, (k, w))) in terms.zip(values::<W, L>(p, inputs)) {
-        let (pv, qv) = u.at::<L>(k).apply::<W>(v);
+        let (pv, qv) = u.at::<L>(k).apply::<W, FLOW>(v);
         let aw = area_prefactor * k * w;
         *pp = aw * re_dot(pv, pv);
         *pq = aw * re_dot(pv, qv);
@@ -74,22 +75,23 @@ fn quadratic_values<const L: usize, const W: usize>(
 }
 
 wide_fn! {
-/// One piece of [`CpuPasses::write_update`], mode by mode: φ̂^{n+1} = P̂ + σQ̂ into
-/// `hat`, and the inverse transforms' inputs ([`write_inverse_value`]) into `copy` and `lap`;
-/// returns the piece's area (`t` scratch for each mode's term).
-fn write_values<const L: usize, const W: usize>(
+/// One piece of [`CpuPasses::write_update`], mode by mode: φ̂^{n+1} = P̂ + σQ̂ (Q̂ with the
+/// flow's T̂ when `FLOW`) into `hat`, and the inverse transforms' inputs
+/// ([`write_inverse_value`]) into `copy` and `lap`; returns the piece's area (`t` scratch for
+/// each mode's term).
+fn write_values<const L: usize, const W: usize, const FLOW: bool>(
     u: &Update,
     p: &Piece,
     area_prefactor: f64,
     sigma: f64,
-    inputs: [&[f64]; 4],
+    inputs: [&[f64]; 6],
     out: [&mut [f64]; 3],
     t: &mut [f64; PIECE],
 ) -> f64 {
     let [hat, copy, lap] = out.map(|o| p.modes_mut::<W, _>(o).iter_mut());
     let outputs = hat.zip(copy.zip(lap)).zip(&mut t[..p.len]);
     for (((hat, (copy, lap)), term), (v, (k, w))) in outputs.zip(values::<W, L>(p, inputs)) {
-        let (pv, qv) = u.at::<L>(k).apply::<W>(v);
+        let (pv, qv) = u.at::<L>(k).apply::<W, FLOW>(v);
         *hat = mode(|c| pv[c] + sigma * qv[c]);
         *term = write_inverse_value(*hat, k, area_prefactor * k * w, copy, lap);
     }
@@ -97,33 +99,52 @@ fn write_values<const L: usize, const W: usize>(
 }
 }
 
-/// φ̂ⁿ, N̂ⁿ and (two levels) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, as interleaved reals.
+/// φ̂ⁿ, N̂ⁿ, T̂ⁿ and (two levels) φ̂ⁿ⁻¹, N̂ⁿ⁻¹, T̂ⁿ⁻¹, as interleaved reals: T̂ the Stokes flow's
+/// advection per unit σ of a flow split in σ ([`super::flow`]), kept as the state's second
+/// spectrum.
 #[derive(Clone, Copy)]
 struct Inputs<'a> {
-    cur: (&'a [f64], &'a [f64]),
-    prev: Option<(&'a [f64], &'a [f64])>,
+    cur: [&'a [f64]; 3],
+    prev: Option<[&'a [f64]; 3]>,
 }
 
 impl<'a> Inputs<'a> {
-    /// The inputs of an update from `cur` reading `levels` levels of history (`prev` when
-    /// two).
-    fn new(cur: &'a State, prev: Option<&'a [Array3<Complex64>; 2]>, levels: usize) -> Self {
-        let flat = |a: &'a Array3<Complex64>| reals(a.as_slice().expect("standard layout"));
+    /// The inputs of an update from `cur` reading `levels` levels of history (`prev` and
+    /// `prev_t` when two); T̂ with `flow`.
+    fn new(
+        cur: &'a State,
+        (prev, prev_t): (
+            Option<&'a [Array3<Complex64>; 2]>,
+            Option<&'a Array3<Complex64>>,
+        ),
+        levels: usize,
+        flow: bool,
+    ) -> Self {
+        // Without a flow T̂ is not read: φ̂ stands in for it.
+        let second = |h: &'a Array3<Complex64>, t: Option<&'a Array3<Complex64>>| {
+            flat(t.filter(|_| flow).unwrap_or(h))
+        };
         Inputs {
-            cur: (flat(&cur.hat), flat(&cur.nonlinear)),
-            prev: prev.filter(|_| levels > 1).map(|[h, n]| (flat(h), flat(n))),
+            cur: [
+                flat(&cur.hat),
+                flat(&cur.nonlinear),
+                second(&cur.hat, Some(&cur.curvature_hat)),
+            ],
+            prev: prev
+                .filter(|_| levels > 1)
+                .map(|[h, n]| [flat(h), flat(n), second(h, prev_t)]),
         }
     }
 
-    /// The reals `range` of φ̂ⁿ, N̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹ (without a previous step the last two are
-    /// φ̂ⁿ, N̂ⁿ again: the one-level sweeps do not read them).
+    /// The reals `range` of φ̂ⁿ, N̂ⁿ, T̂ⁿ, φ̂ⁿ⁻¹, N̂ⁿ⁻¹, T̂ⁿ⁻¹ (without a previous step the last
+    /// three are those of the current one again: the one-level sweeps do not read them).
     #[inline]
-    fn reals(&self, range: std::ops::Range<usize>) -> [&'a [f64]; 4] {
-        let (h, n) = (&self.cur.0[range.clone()], &self.cur.1[range.clone()]);
-        match self.prev {
-            Some((h0, n0)) => [h, n, &h0[range.clone()], &n0[range]],
-            None => [h, n, h, n],
-        }
+    fn reals(&self, range: std::ops::Range<usize>) -> [&'a [f64]; 6] {
+        let [h, n, t] = self.cur.map(|v| &v[range.clone()]);
+        let [h0, n0, t0] = self
+            .prev
+            .map_or([h, n, t], |p| p.map(|v| &v[range.clone()]));
+        [h, n, t, h0, n0, t0]
     }
 }
 
@@ -132,14 +153,14 @@ fn flat(a: &Array3<Complex64>) -> &[f64] {
     reals(a.as_slice().expect("standard layout"))
 }
 
-/// The second affine term's inputs of an update reading `levels` levels: (φ̂, N̂, m̂ or T̂) of
-/// the current state `cur` and, with two, of the one before (`prev`, `prev_curvature`);
-/// `laplacian` for the area-difference term ([`CoupleInputs`]).
+/// The area-difference term's inputs of an update reading `levels` levels: (φ̂, N̂, m̂) of the
+/// current state `cur` and, with two, of the one before (`prev`, `prev_curvature`)
+/// ([`CoupleInputs`]).
 fn couple_inputs<'a>(
     cur: &'a State,
     prev: Option<&'a [Array3<Complex64>; 2]>,
     prev_curvature: Option<&'a Array3<Complex64>>,
-    (levels, laplacian): (usize, bool),
+    levels: usize,
 ) -> CoupleInputs<'a> {
     let mut inputs = vec![[
         flat(&cur.hat),
@@ -151,10 +172,7 @@ fn couple_inputs<'a>(
         let m = prev_curvature.expect("and its m̂");
         inputs.push([flat(h), flat(n), flat(m)]);
     }
-    CoupleInputs {
-        levels: inputs,
-        laplacian,
-    }
+    CoupleInputs { levels: inputs }
 }
 
 /// Frozen-coefficient stability bound of the semi-implicit step at σ = 0:
@@ -255,15 +273,10 @@ impl DeviceState for State {
 }
 
 impl CpuPasses {
-    /// The levels an update `u` reads and whether its second term carries −|k|²
-    /// ([`CoupleInputs`]).
-    fn levels(&self, u: &Update) -> (usize, bool) {
-        (u.levels(), !self.ev.has_flow())
-    }
-
     /// [`Passes::area_quadratic`] reading `L` levels of history.
-    fn area_quadratic_with<const L: usize>(&self, u: &Update) -> [f64; 3] {
-        let inputs = Inputs::new(&self.states.cur, self.states.prev.as_ref(), L);
+    fn area_quadratic_with<const L: usize, const FLOW: bool>(&self, u: &Update) -> [f64; 3] {
+        let history = (self.states.prev.as_ref(), self.prev_curvature.as_ref());
+        let inputs = Inputs::new(&self.states.cur, history, L, FLOW);
         let sym = &self.ev.symbols;
         let (task, total) = (sym.task_reals(), 2 * self.states.cur.hat.len());
         let partials = (0..total.div_ceil(task)).into_par_iter().map(|t| {
@@ -272,7 +285,8 @@ impl CpuPasses {
             let (a, len) = (sym.area_prefactor, task.min(total - t * task));
             for_each_piece(sym, t, len, |p, at| {
                 let x = inputs.reals(t * task + at..t * task + at + p.reals());
-                let s = per_width!(sym, W => quadratic_values::<L, W>(u, p, a, x, &mut terms));
+                let s =
+                    per_width!(sym, W => quadratic_values::<L, W, FLOW>(u, p, a, x, &mut terms));
                 acc = [acc[0] + s[0], acc[1] + s[1], acc[2] + s[2]];
             });
             acc
@@ -287,9 +301,13 @@ impl CpuPasses {
     /// [`Passes::write_update`] reading `L` levels of history: φ̂^{n+1} into `next.hat`, its
     /// copy into `next.nonlinear` and −|k|²φ̂^{n+1} into the evaluator's spare (see
     /// [`Evaluator::finish`]).
-    fn write_update_with<const L: usize>(&mut self, u: &Update, sigma: f64) -> f64 {
+    fn write_update_with<const L: usize, const FLOW: bool>(
+        &mut self,
+        u: &Update,
+        sigma: f64,
+    ) -> f64 {
         let States { cur, next, prev } = &mut self.states;
-        let inputs = Inputs::new(cur, prev.as_ref(), L);
+        let inputs = Inputs::new(cur, (prev.as_ref(), self.prev_curvature.as_ref()), L, FLOW);
         let sym = &self.ev.symbols;
         let task = sym.task_reals();
         let hat = reals_mut(next.hat.as_slice_mut().expect("standard layout"));
@@ -309,7 +327,7 @@ impl CpuPasses {
                     let out = [&mut hat[r.clone()], &mut copy[r.clone()], &mut lap[r]];
                     let a = sym.area_prefactor;
                     area += per_width!(sym, W => {
-                        write_values::<L, W>(u, p, a, sigma, x, out, &mut terms)
+                        write_values::<L, W, FLOW>(u, p, a, sigma, x, out, &mut terms)
                     });
                 });
                 area
@@ -334,16 +352,20 @@ impl Passes for CpuPasses {
     }
 
     fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure> {
-        Ok(match u.levels() {
-            1 => self.area_quadratic_with::<1>(u),
-            _ => self.area_quadratic_with::<2>(u),
+        Ok(match (u.levels(), self.ev.splits_flow()) {
+            (1, false) => self.area_quadratic_with::<1, false>(u),
+            (1, true) => self.area_quadratic_with::<1, true>(u),
+            (_, false) => self.area_quadratic_with::<2, false>(u),
+            (_, true) => self.area_quadratic_with::<2, true>(u),
         })
     }
 
     fn write_update(&mut self, u: &Update, sigma: f64) -> Result<f64, DeviceFailure> {
-        Ok(match u.levels() {
-            1 => self.write_update_with::<1>(u, sigma),
-            _ => self.write_update_with::<2>(u, sigma),
+        Ok(match (u.levels(), self.ev.splits_flow()) {
+            (1, false) => self.write_update_with::<1, false>(u, sigma),
+            (1, true) => self.write_update_with::<1, true>(u, sigma),
+            (_, false) => self.write_update_with::<2, false>(u, sigma),
+            (_, true) => self.write_update_with::<2, true>(u, sigma),
         })
     }
 
@@ -452,14 +474,13 @@ impl Passes for CpuPasses {
     fn couple_sums(&self, u: &Update) -> Result<CoupleSums, DeviceFailure> {
         let total = 2 * self.states.cur.hat.len();
         let (prev, prev_m) = (self.states.prev.as_ref(), self.prev_curvature.as_ref());
-        let inputs = couple_inputs(&self.states.cur, prev, prev_m, self.levels(u));
+        let inputs = couple_inputs(&self.states.cur, prev, prev_m, u.levels());
         Ok(couple_sums(&self.ev.symbols, u, &inputs, total))
     }
 
     fn add_couple(&mut self, u: &Update, lambda: f64) -> Result<f64, DeviceFailure> {
         let States { cur, next, prev } = &mut self.states;
-        let shape = (u.levels(), !self.ev.has_flow());
-        let inputs = couple_inputs(cur, prev.as_ref(), self.prev_curvature.as_ref(), shape);
+        let inputs = couple_inputs(cur, prev.as_ref(), self.prev_curvature.as_ref(), u.levels());
         let out = [
             reals_mut(next.hat.as_slice_mut().expect("standard layout")),
             reals_mut(next.nonlinear.as_slice_mut().expect("standard layout")),

@@ -262,10 +262,16 @@ impl Evaluator {
         self
     }
 
+    /// Whether the explicit term carries a Stokes flow split in σ ([`Flow::splits_tension`]):
+    /// the state's second spectrum is then the flow's advection per unit σ, T̂.
+    pub fn splits_flow(&self) -> bool {
+        self.flow.as_ref().is_some_and(Flow::splits_tension)
+    }
+
     /// Whether a state carries the spectrum of a second affine term (`State::curvature_hat`):
     /// the area-difference term's m̂ or the Stokes flow's T̂ (not at a fixed tension).
     pub fn has_second_term(&self) -> bool {
-        self.curvature.is_some() || self.flow.as_ref().is_some_and(Flow::splits_tension)
+        self.curvature.is_some() || self.splits_flow()
     }
 
     /// The state holding the real field `phi`, evaluated at time `t` with multiplier 0.

@@ -333,12 +333,25 @@ impl Flow {
                 };
             });
             transform.inverse(&mut self.spectrum, &mut self.gradient[c]);
-            for part in 0..parts {
-                Zip::from(&mut self.component[0])
-                    .and(&self.mu[part])
-                    .and(&self.gradient[c])
+            // The forces of both parts in one sweep: (f_b)_a = μ_b ∂_aφ, (f_σ)_a = μ_σ ∂_aφ.
+            let [f_b, f_s] = &mut self.component;
+            let g = &self.gradient[c];
+            if parts == 2 {
+                let [mu_b, mu_s] = &self.mu;
+                Zip::from(&mut *f_b)
+                    .and(&mut *f_s)
+                    .and(mu_b)
+                    .and(mu_s)
+                    .and(g)
+                    .par_for_each(|fb, fs, &mb, &ms, &g| (*fb, *fs) = (mb * g, ms * g));
+            } else {
+                Zip::from(&mut *f_b)
+                    .and(&self.mu[0])
+                    .and(g)
                     .par_for_each(|f, &mu, &g| *f = mu * g);
-                transform.forward(&mut self.component[0], &mut self.components[part][c]);
+            }
+            for part in 0..parts {
+                transform.forward(&mut self.component[part], &mut self.components[part][c]);
             }
         }
         if let (Some(viscous), Some(gradient)) = (self.viscosities.as_mut(), &self.shear_gradient) {
@@ -352,8 +365,8 @@ impl Flow {
         }
         for part in 0..parts {
             self.turn::<T>(part, T::picture);
-            self.project::<T>(sym, part);
         }
+        let projected_power = self.project::<T>(sym, sigma);
         let mut solve_iterations = 0;
         if let Some(constraint) = self.inextensibility.as_mut() {
             // Periodic axes only: the picture is the storage.
@@ -384,7 +397,9 @@ impl Flow {
                 }
                 viscous.dissipation(sym, &self.components, parts, sigma)
             }
-            None => self.dissipation::<T>(sym, sigma),
+            // The constraint's tension flow changed û after the projection.
+            None if self.inextensibility.is_some() => self.dissipation::<T>(sym, sigma),
+            None => projected_power,
         } + match self.inextensibility.as_mut() {
             Some(constraint) => {
                 constraint.relaxation(transform, sym, (&self.kappa, &self.axes), (parts, sigma))
@@ -510,57 +525,61 @@ impl Flow {
         }
     }
 
-    /// The Oseen projection in place on the force's spectra of `part` (0: σ = 0, 1: per unit
-    /// σ), in logical order and in the picture of [`Coefficient`] ([`Flow::turn`]):
-    /// s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k|²) (0 at k = 0), now û_a. On complex
+    /// The Oseen projection in place on the force's spectra of every part (0: σ = 0, 1: per
+    /// unit σ, absent at a fixed tension), in logical order and in the picture of
+    /// [`Coefficient`] ([`Flow::turn`]), in one sweep over the modes: at each, per part,
+    /// s = κ·f̂/|κ|², then f̂_a ← (f̂_a − κ_a s)/(η|k_a|²) (0 at k = 0), now û_a. On complex
     /// spectra an odd component's coefficient S enters as −iS; on a packed spectrum every
     /// component is odd and the sine coefficients S_a project as they stand:
     /// (S_a − κ_a s)/(η|k|²) with s = κ·S/|κ|². An odd component's top sine mode sits where
-    /// j_a = 0: κ_a = 0 there, so it is not projected, and (π/h)² is added to its |k|².
-    fn project<T: Coefficient>(&mut self, sym: &Symbols, part: usize) {
-        let (axes, kappa, modes) = (&self.axes, &self.kappa, self.modes);
-        let components = slices::<T>(&self.components[part]);
-        modes_mut(&mut self.spectrum, modes, sym, |i, idx, _, out: &mut T| {
-            let mut dot = T::default();
-            let mut norm = 0.0;
-            for (c, &a) in axes.iter().enumerate() {
-                let k = kappa[a][idx[a]];
-                dot = dot + components[c][i] * k;
-                norm += k * k;
+    /// j_a = 0: κ_a = 0 there, so it is not projected, and |k_a|² = |k|² + (π/h)². Returns the
+    /// power the projected flow dissipates at σ, η Σ_k w Σ_a |k_a|² |û_b + σû_σ|²
+    /// ([`Flow::dissipation`]), summed in the same sweep.
+    fn project<T: Coefficient>(&mut self, sym: &Symbols, sigma: f64) -> f64 {
+        let (axes, kappa, modes, eta) = (&self.axes, &self.kappa, self.modes, self.viscosity);
+        let top = self.top_k2s();
+        let (row, task) = (modes[2], task_modes(modes));
+        // Each task's chunk of every component's coefficients, the parts one after the other.
+        let len = modes.iter().product::<usize>();
+        let mut tasks: Vec<Vec<&mut [T]>> = (0..len.div_ceil(task)).map(|_| Vec::new()).collect();
+        for spectrum in self.components.iter_mut().flatten() {
+            let chunks = coefficients_mut::<T>(spectrum).chunks_mut(task);
+            for (task, chunk) in tasks.iter_mut().zip(chunks) {
+                task.push(chunk);
             }
-            *out = if norm > 0.0 { dot / norm } else { T::default() };
-        });
-        let eta = self.viscosity;
-        for (c, &a) in self.axes.iter().enumerate() {
-            let (kappa, s, top_k2) = (
-                &self.kappa[a],
-                coefficients::<T>(&self.spectrum),
-                self.top_k2_of(c),
-            );
-            modes_mut(
-                &mut self.components[part][c],
-                modes,
-                sym,
-                |i, idx, (k2, _), u: &mut T| {
-                    let k2 = if idx[a] == 0 { k2 + top_k2 } else { k2 };
-                    *u = if k2 > 0.0 {
-                        (*u - s[i] * kappa[idx[a]]) / (eta * k2)
-                    } else {
-                        T::default()
-                    };
-                },
-            );
         }
+        let d = axes.len();
+        let partials = tasks.into_par_iter().enumerate().map(|(t, mut chunk)| {
+            let parts = chunk.len() / d;
+            // Along a row: κ_a, |k_a|² and 1/(η|k_a|²) per component (0 at k = 0), 1/|κ|² (0
+            // where κ = 0), s, and each mode's Σ_a |k_a|²|û_b + σû_σ|².
+            let mut table = RowTable::<T>::new(row);
+            let mut power = 0.0;
+            for r in 0..chunk[0].len() / row {
+                let ([j0, j1], kb, wb) = row_symbols(sym, modes, t * task / row + r);
+                table.fill((sym, [j0, j1], kb), (axes, kappa, top), eta);
+                let at = r * row..(r + 1) * row;
+                for part in 0..parts {
+                    table.project(&mut chunk[part * d..(part + 1) * d], at.clone());
+                }
+                let base = chunk[..d].iter().map(|f| &f[at.clone()]);
+                let per_sigma = chunk[d..].iter().map(|f| &f[at.clone()]);
+                table.add_power(base, per_sigma, sigma);
+                let weights = sym.weight[2].iter().take(row).map(|&wl| wb * wl);
+                power += weights.zip(&table.power).map(|(w, p)| w * p).sum::<f64>();
+            }
+            power
+        });
+        eta * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
     }
 
-    /// (π/h)² for an odd component `c` (its top sine mode's share of |k|² where j_a = 0 in
+    /// Per component c: (π/h)² if it is odd (its top sine mode's share of |k|² where j_a = 0 in
     /// logical order), else 0.
-    fn top_k2_of(&self, c: usize) -> f64 {
-        if self.odd[c].is_some() {
-            self.top_k2
-        } else {
-            0.0
-        }
+    fn top_k2s(&self) -> [f64; 3] {
+        std::array::from_fn(|c| match self.odd.get(c) {
+            Some(Some(_)) => self.top_k2,
+            _ => 0.0,
+        })
     }
 
     /// η Σ_k w |k|² |û_b + σû_σ|² over the components, in logical order ([`Flow::turn`]): the
@@ -568,25 +587,127 @@ impl Flow {
     fn dissipation<T: Coefficient>(&self, sym: &Symbols, sigma: f64) -> f64 {
         let [base, per_sigma] = &self.components;
         let (base, per_sigma, modes) = (slices::<T>(base), slices::<T>(per_sigma), self.modes);
-        let len = modes.iter().product::<usize>();
+        let (len, d, top) = (
+            modes.iter().product::<usize>(),
+            self.axes.len(),
+            self.top_k2s(),
+        );
         let partials = (0..len.div_ceil(PAR_CHUNK)).into_par_iter().map(|t| {
             indexed(t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len), modes)
                 .map(|(i, idx)| {
                     let (k2, w) = mode_symbols(sym, idx);
-                    let u = self.axes.iter().enumerate().map(|(c, &a)| {
-                        let k2 = if idx[a] == 0 {
-                            k2 + self.top_k2_of(c)
-                        } else {
-                            k2
-                        };
-                        let s = per_sigma[c].get(i).copied().unwrap_or_default();
-                        k2 * (base[c][i] + s * sigma).norm_sqr()
+                    let k2s = component_k2s(k2, idx, &self.axes, top);
+                    let u = [base, per_sigma].map(|part| {
+                        std::array::from_fn(|c| part[c].get(i).copied().unwrap_or_default())
                     });
-                    w * u.sum::<f64>()
+                    w * mode_power(&k2s[..d], u, sigma)
                 })
                 .sum::<f64>()
         });
         self.viscosity * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
+    }
+}
+
+/// The per-mode tables of one row of modes for [`Flow::project`], so that its loops run along
+/// the row over plain slices: per component c, κ_a, |k_a|² and 1/(η|k_a|²); 1/|κ|²; and scratch
+/// for s = κ·f̂/|κ|² and each mode's power.
+struct RowTable<T> {
+    kappa: [Vec<f64>; 3],
+    k2: [Vec<f64>; 3],
+    inverse: [Vec<f64>; 3],
+    inverse_norm: Vec<f64>,
+    s: Vec<T>,
+    power: Vec<f64>,
+}
+
+impl<T: Coefficient> RowTable<T> {
+    /// Tables for rows of `len` modes.
+    fn new(len: usize) -> Self {
+        let zeros = || vec![0.0; len];
+        RowTable {
+            kappa: std::array::from_fn(|_| zeros()),
+            k2: std::array::from_fn(|_| zeros()),
+            inverse: std::array::from_fn(|_| zeros()),
+            inverse_norm: zeros(),
+            s: vec![T::default(); len],
+            power: zeros(),
+        }
+    }
+
+    /// The tables of the row (j0, j1), whose first two axes give `kb` of |k|², for the
+    /// components along `axes` (κ per axis, `top` per component: [`component_k2s`]) at
+    /// viscosity `eta`.
+    fn fill(
+        &mut self,
+        (sym, [j0, j1], kb): (&Symbols, [usize; 2], f64),
+        (axes, kappa, top): (&[usize], &[Vec<f64>; 3], [f64; 3]),
+        eta: f64,
+    ) {
+        for (j2, &kl) in sym.k2[2].iter().take(self.s.len()).enumerate() {
+            let idx = [j0, j1, j2];
+            let k2s = component_k2s(kb + kl, idx, axes, top);
+            let mut norm = 0.0;
+            for (c, &a) in axes.iter().enumerate() {
+                let k = kappa[a][idx[a]];
+                norm += k * k;
+                self.kappa[c][j2] = k;
+                self.k2[c][j2] = k2s[c];
+                self.inverse[c][j2] = if k2s[c] > 0.0 {
+                    1.0 / (eta * k2s[c])
+                } else {
+                    0.0
+                };
+            }
+            self.inverse_norm[j2] = if norm > 0.0 { 1.0 / norm } else { 0.0 };
+        }
+    }
+
+    /// The Oseen projection of one part's force along the row (the modes `at` of each
+    /// component's chunk), in place: s = κ·f̂/|κ|², f̂_a ← (f̂_a − κ_a s)/(η|k_a|²).
+    fn project(&mut self, components: &mut [&mut [T]], at: Range<usize>) {
+        self.s.fill(T::default());
+        for (f, kappa) in components.iter().zip(&self.kappa) {
+            for ((s, &f), &k) in self.s.iter_mut().zip(&f[at.clone()]).zip(kappa) {
+                *s = *s + f * k;
+            }
+        }
+        for (s, &i) in self.s.iter_mut().zip(&self.inverse_norm) {
+            *s = *s * i;
+        }
+        for ((f, kappa), inverse) in components.iter_mut().zip(&self.kappa).zip(&self.inverse) {
+            let f = &mut f[at.clone()];
+            for ((f, &s), (&k, &i)) in f.iter_mut().zip(&self.s).zip(kappa.iter().zip(inverse)) {
+                *f = (*f - s * k) * i;
+            }
+        }
+    }
+
+    /// Each mode's Σ_a |k_a|² |(û_b)_a + σ(û_σ)_a|² into `power`, from the row's projected
+    /// components (û_σ absent at a fixed tension).
+    fn add_power<'a>(
+        &mut self,
+        base: impl Iterator<Item = &'a [T]>,
+        per_sigma: impl Iterator<Item = &'a [T]>,
+        sigma: f64,
+    ) where
+        T: 'a,
+    {
+        self.power.fill(0.0);
+        let mut per_sigma = per_sigma.fuse();
+        for (b, k2) in base.zip(&self.k2) {
+            match per_sigma.next() {
+                Some(s) => {
+                    for (((p, &b), &s), &k2) in self.power.iter_mut().zip(b).zip(s).zip(k2) {
+                        *p += k2 * (b + s * sigma).norm_sqr();
+                    }
+                }
+                None => {
+                    for ((p, &b), &k2) in self.power.iter_mut().zip(b).zip(k2) {
+                        *p += k2 * b.norm_sqr();
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -674,15 +795,39 @@ pub(super) fn modes_mut<T: Coefficient>(
     sym: &Symbols,
     f: impl Fn(usize, [usize; 3], (f64, f64), &mut T) + Sync,
 ) {
+    let (row, task) = (modes[2], task_modes(modes));
     coefficients_mut::<T>(spectrum)
-        .par_chunks_mut(PAR_CHUNK)
+        .par_chunks_mut(task)
         .enumerate()
         .for_each(|(t, chunk)| {
-            let first = t * PAR_CHUNK;
-            for ((i, idx), out) in indexed(first..first + chunk.len(), modes).zip(chunk) {
-                f(i, idx, mode_symbols(sym, idx), out);
+            for (r, out) in chunk.chunks_mut(row).enumerate() {
+                let at = t * task / row + r;
+                let ([j0, j1], kb, wb) = row_symbols(sym, modes, at);
+                let along = sym.k2[2].iter().zip(&sym.weight[2]);
+                for (j2, (out, (&kl, &wl))) in out.iter_mut().zip(along).enumerate() {
+                    f(at * row + j2, [j0, j1, j2], (kb + kl, wb * wl), out);
+                }
             }
         });
+}
+
+/// Modes per parallel task of the row-wise sweeps: whole rows (the last axis), about
+/// [`PAR_CHUNK`] modes, at least one row.
+fn task_modes(modes: [usize; 3]) -> usize {
+    modes[2] * (PAR_CHUNK / modes[2]).max(1)
+}
+
+/// Row `r` of modes of index shape `modes` (the rows numbered over the first two axes): its
+/// (j0, j1), and the first two axes' share of |k|² and of the weight w ([`Symbols::row`]), to
+/// which the last axis's add and multiply.
+#[inline]
+fn row_symbols(sym: &Symbols, modes: [usize; 3], r: usize) -> ([usize; 2], f64, f64) {
+    let (j0, j1) = (r / modes[1], r % modes[1]);
+    let (kb, wb) = (
+        sym.k2[0][j0] + sym.k2[1][j1],
+        sym.weight[0][j0] * sym.weight[1][j1],
+    );
+    ([j0, j1], kb, wb)
 }
 
 /// The flat positions `range` among modes of index shape `modes`, each with its index
@@ -723,6 +868,26 @@ pub(super) fn mode_symbols(sym: &Symbols, [i0, i1, i2]: [usize; 3]) -> (f64, f64
         sym.k2[0][i0] + sym.k2[1][i1] + sym.k2[2][i2],
         sym.weight[0][i0] * sym.weight[1][i1] * sym.weight[2][i2],
     )
+}
+
+/// |k_a|² of each component c (axis a = `axes[c]`) at the mode `idx` of |k|² = `k2`: |k|², plus
+/// `top[c]` where j_a = 0 (an odd component's top sine mode, [`Flow::top_k2s`]).
+#[inline]
+fn component_k2s(k2: f64, idx: [usize; 3], axes: &[usize], top: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| match axes.get(c) {
+        Some(&a) if idx[a] == 0 => k2 + top[c],
+        _ => k2,
+    })
+}
+
+/// Σ_a |k_a|² |(û_b)_a + σ(û_σ)_a|² at one mode, over the components whose |k_a|² are `k2s`
+/// (`u` = [û_b, û_σ], û_σ zero at a fixed tension).
+#[inline]
+fn mode_power<T: Coefficient>(k2s: &[f64], [base, per_sigma]: [[T; 3]; 2], sigma: f64) -> f64 {
+    k2s.iter()
+        .zip(base.into_iter().zip(per_sigma))
+        .map(|(&k2, (b, s))| k2 * (b + s * sigma).norm_sqr())
+        .sum()
 }
 
 /// A spectrum's coefficients in flat order, as [`Coefficient`] `T` (a packed spectrum's

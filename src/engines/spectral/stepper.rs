@@ -120,11 +120,14 @@ pub trait Passes {
     /// φ of the current state on the grid.
     fn phi(&self) -> &Array3<f64>;
     /// (A_PP, A_PQ, A_QQ) = Σ_k a (|P̂|², Re P̂Q̂*, |Q̂|²), a = (3/(2√2)) ε |k|² w, of the update
-    /// `u` from the current state and `u.levels()` levels of history; nothing is stored.
+    /// `u` from the current state and `u.levels()` levels of history; nothing is stored. Under
+    /// a Stokes flow split in σ, Q̂ holds the flow's advection per unit σ too
+    /// ([`super::update::ValueFactors`]): σ then acts through the flow as well as through the
+    /// diffusive channel.
     fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure>;
-    /// φ̂^{n+1} = P̂ + σQ̂ of the update `u` into the next state, with the inputs of its
-    /// evaluation's inverse transforms (a copy of φ̂^{n+1} and −|k|²φ̂^{n+1}) written in the same
-    /// pass; returns A(φ̂^{n+1}).
+    /// φ̂^{n+1} = P̂ + σQ̂ of the update `u` (Q̂ as in [`Passes::area_quadratic`]) into the next
+    /// state, with the inputs of its evaluation's inverse transforms (a copy of φ̂^{n+1} and
+    /// −|k|²φ̂^{n+1}) written in the same pass; returns A(φ̂^{n+1}).
     fn write_update(&mut self, u: &Update, sigma: f64) -> Result<f64, DeviceFailure>;
     /// Set the k = 0 coefficient of the written φ̂^{n+1} (and of its copy) to `value`: with the
     /// unnormalised forward transforms X̂₀ = Σφ over the stored points.
@@ -226,10 +229,6 @@ pub struct Stepper<P> {
     c0_ramped: bool,
     /// Whether an imposed flow does work on the membrane (F may then rise legitimately).
     driven: bool,
-    /// Whether the step advects with the Stokes flow, whose part per unit σ (T̂) enters the
-    /// update as σR̂ beside σQ̂ ([`super::flow`]); not at a fixed tension, where the whole
-    /// advection is explicit.
-    tension_flow: bool,
     dt_next: Option<f64>,
     /// Reject steps that raise F_eff (see [`Stepper::check_constraints`]).
     energy_guard: bool,
@@ -258,7 +257,6 @@ impl<P: Passes> Stepper<P> {
             volume_ramp: scene.volume,
             c0_ramped,
             driven: scene.stokes_flow().is_some_and(|f| f.shear_rate.is_some()),
-            tension_flow: scene.stokes_flow().is_some() && scene.area_method() != AreaMethod::Fixed,
             dt_next: None,
             energy_guard: true,
             couple: None,
@@ -309,22 +307,10 @@ impl<P: Passes> Stepper<P> {
             AreaMethod::None => Some(0.0),
             AreaMethod::Lagrangian | AreaMethod::Fixed => Some(self.sigma),
             AreaMethod::Projection => {
-                let [app, apq, aqq] = self.area_quadratic(u)?;
+                let [app, apq, aqq] = self.passes.area_quadratic(u)?;
                 nearest_root(aqq, apq, app - self.area.target, self.sigma)
             }
         })
-    }
-
-    /// (A_PP, A_PQ, A_QQ) of the update `u` as affine in σ: of P̂ + σQ̂, or under the Stokes flow
-    /// of P̂ + σ(Q̂ + R̂) with R̂ the advection per unit σ ([`super::flow`]), A(σ) = A_PP +
-    /// 2σ(A_PQ + A_PR) + σ²(A_QQ + 2A_QR + A_RR): σ then acts through the flow as well as
-    /// through the diffusive channel.
-    fn area_quadratic(&self, u: &Update) -> Result<[f64; 3], DeviceFailure> {
-        if !self.tension_flow {
-            return self.passes.area_quadratic(u);
-        }
-        let [app, apq, aqq, apr, aqr, arr] = self.passes.couple_sums(u)?.area;
-        Ok([app, apq + apr, aqq + 2.0 * aqr + arr])
     }
 
     /// σ and λ of this step's update with the area-difference term `term`, from its sums `s`
@@ -379,7 +365,7 @@ impl<P: Passes> Stepper<P> {
         sigma_after: f64,
     ) -> Result<Result<(), Rejection>, DeviceFailure> {
         let mut area = self.passes.write_update(u, sigma)?;
-        if self.couple.is_some() || self.tension_flow {
+        if self.couple.is_some() {
             area = self.passes.add_couple(u, lambda)?;
         }
         self.set_volume(t_new)?;
@@ -431,9 +417,7 @@ impl<P: Passes> Stepper<P> {
             };
             let sigma_after =
                 control::sigma_after(&self.area, self.sigma, self.current().area, sigma);
-            // Under the Stokes flow the second term's multiplier is σ itself.
-            let lambda = if self.tension_flow { sigma } else { 0.0 };
-            if let Err(r) = self.write_and_finish(&u, (sigma, lambda), t_new, sigma_after)? {
+            if let Err(r) = self.write_and_finish(&u, (sigma, 0.0), t_new, sigma_after)? {
                 return Ok(Err(r));
             }
             return Ok(self

@@ -17,7 +17,8 @@
 //! ```
 //!
 //! The coefficients of each scheme are a row of [`SCHEMES`]. φ̂^{n+1} = P̂ + σ Q̂ is affine in σ,
-//! so the area of the result is a quadratic in σ; see [`super::stepper`].
+//! so the area of the result is a quadratic in σ; see [`super::stepper`]. Under the Stokes flow
+//! the advection per unit σ joins Q̂ ([`ValueFactors`]).
 
 use crate::problem::config::{Scheme, Stabilizer};
 use crate::problem::model::TENSION_FACTOR;
@@ -161,33 +162,39 @@ impl Update {
 /// The update at one wavenumber as real factors per level j of history (k standing for |k|²):
 ///
 /// ```text
-/// P̂ = Σ_j h_j φ̂^{n+1−j} + n_j N̂^{n+1−j},   Q̂ = Σ_j q_j φ̂^{n+1−j},
-/// h_j = (−a_j + Δt b_j S)/D,  n_j = Δt b_j/D,  q_j = −Δt c_σ k⁴ b_j/D,  D = a0 + Δt(2ε⁴k⁶ + S).
+/// P̂ = Σ_j h_j φ̂^{n+1−j} + n_j N̂^{n+1−j},   Q̂ = Σ_j q_j φ̂^{n+1−j} − n_j T̂^{n+1−j},
+/// h_j = (−a_j + Δt b_j S)/D,  n_j = Δt b_j/D,  q_j = −Δt c_σ k⁴ b_j/D,  D = a0 + Δt(2ε⁴k⁶ + S),
 /// ```
+///
+/// where T̂ = FT[u_σ·∇φ] is the Stokes flow's advection per unit σ ([`super::flow`]): under a
+/// flow split in σ the tension acts through the flow as well as through the diffusive channel,
+/// and φ̂^{n+1} = P̂ + σQ̂ stays affine in σ. Without one the T̂ terms are absent.
 pub struct ValueFactors<const L: usize> {
     /// h_j, the factor of φ̂ in P̂.
     pub h: [f64; L],
-    /// n_j, the factor of N̂ in P̂.
+    /// n_j, the factor of N̂ in P̂ (and of −T̂ in Q̂).
     pub n: [f64; L],
     /// q_j, the factor of φ̂ in Q̂.
     pub q: [f64; L],
 }
 
 impl<const L: usize> ValueFactors<L> {
-    /// (P̂, Q̂) at one mode of `W` reals from (φ̂, N̂) of each level, the current step first.
+    /// (P̂, Q̂) at one mode of `W` reals from (φ̂, N̂, T̂) of each level, the current step first;
+    /// T̂ is read only with `FLOW` (a Stokes flow split in σ).
     #[inline(always)]
-    pub fn apply<const W: usize>(&self, levels: [[&[f64; W]; 2]; L]) -> ([f64; W], [f64; W]) {
+    pub fn apply<const W: usize, const FLOW: bool>(
+        &self,
+        levels: [[&[f64; W]; 3]; L],
+    ) -> ([f64; W], [f64; W]) {
         let mut p = [0.0; W];
         let mut q = [0.0; W];
-        let [x, n] = levels[0];
-        for c in 0..W {
-            p[c] = x[c] * self.h[0] + n[c] * self.n[0];
-            q[c] = x[c] * self.q[0];
-        }
-        for (j, [x, n]) in levels.iter().enumerate().skip(1) {
+        for (j, [x, n, t]) in levels.iter().enumerate() {
             for c in 0..W {
                 p[c] += x[c] * self.h[j] + n[c] * self.n[j];
                 q[c] += x[c] * self.q[j];
+                if FLOW {
+                    q[c] -= t[c] * self.n[j];
+                }
             }
         }
         (p, q)
