@@ -1,6 +1,7 @@
 //! The time-step loop allocates nothing (an engine makes its FFT plans and scratch buffers once,
 //! when it is built: docs/src/performance.md, "Memory"): after a warm-up, steps of the spectral
-//! engine (SBDF1 and SBDF2, fixed and adaptive Δt, with the projection and a c0 field), of the
+//! engine (SBDF1 and SBDF2, fixed and adaptive Δt, with the projection and a c0 field; the
+//! Stokes dynamics on the periodic box and on the eighth box, whose spectra are packed), of the
 //! FD engine and of the L-BFGS relaxation make zero heap allocations. On one thread: with several, rayon's work-stealing deques now and then grow
 //! on their own (seen: 2 allocations in 10 steps, once in 15 runs), which is not our code.
 //! One test in its own binary, so no other test allocates meanwhile.
@@ -51,6 +52,10 @@ fn step_loop_allocates_nothing() {
             json!({"method": "spectral", "scheme": "sbdf2", "dt": 0.1, "adaptive": {"dt_max": 5.0}}),
             json!({"method": "fd", "dt": 4e-4}),
             json!({"method": "spectral", "dynamics": "relaxational", "dt": 1.0}),
+            json!({"method": "spectral", "scheme": "sbdf2", "dt": 0.5, "dynamics": "stokes",
+                   "flow": {"viscosity": 1.0, "mobility": 0.01}}),
+            json!({"method": "spectral", "scheme": "sbdf2", "dt": 0.5, "dynamics": "stokes",
+                   "flow": {"viscosity": 1.0, "mobility": 0.01}, "symmetry": ["x", "y", "z"]}),
         ] {
             let mut v = json!({
                 "dim": 3, "n": [24, 24, 24], "max_steps": 1,

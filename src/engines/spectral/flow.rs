@@ -116,6 +116,8 @@ pub struct Flow {
     component: [Array3<f64>; 2],
     /// |u|².
     speed_sq: Array3<f64>,
+    /// The projection's row tables, one per parallel task ([`Flow::project`]).
+    tables: Vec<RowTable>,
     /// The imposed shear flow u_x(y) along the y axis's points (`None`: no imposed flow).
     shear: Option<Vec<f64>>,
     /// Its strain rate u_x'(y) along the y axis's points, with unequal viscosities or the
@@ -215,6 +217,9 @@ impl Flow {
             mu: [zeros(), zeros()],
             component: [zeros(), zeros()],
             speed_sq: zeros(),
+            tables: (0..modes.iter().product::<usize>().div_ceil(task_modes(modes)))
+                .map(|_| RowTable::new(modes[2]))
+                .collect(),
             shear,
             shear_gradient,
             viscosities: spec
@@ -536,24 +541,25 @@ impl Flow {
     /// power the projected flow dissipates at σ, η Σ_k w Σ_a |k_a|² |û_b + σû_σ|²
     /// ([`Flow::dissipation`]), summed in the same sweep.
     fn project<T: Coefficient>(&mut self, sym: &Symbols, sigma: f64) -> f64 {
-        let (axes, kappa, modes, eta) = (&self.axes, &self.kappa, self.modes, self.viscosity);
         let top = self.top_k2s();
+        let Flow {
+            axes,
+            kappa,
+            modes,
+            viscosity: eta,
+            components,
+            tables,
+            ..
+        } = self;
+        let (modes, eta, d) = (*modes, *eta, axes.len());
         let (row, task) = (modes[2], task_modes(modes));
-        // Each task's chunk of every component's coefficients, the parts one after the other.
-        let len = modes.iter().product::<usize>();
-        let mut tasks: Vec<Vec<&mut [T]>> = (0..len.div_ceil(task)).map(|_| Vec::new()).collect();
-        for spectrum in self.components.iter_mut().flatten() {
-            let chunks = coefficients_mut::<T>(spectrum).chunks_mut(task);
-            for (task, chunk) in tasks.iter_mut().zip(chunks) {
-                task.push(chunk);
-            }
+        let parts = components.iter().filter(|p| !p.is_empty()).count();
+        // Every component's coefficients, the parts one after the other (slot part·d + c).
+        let mut slices: [&mut [T]; 6] = Default::default();
+        for (slot, spectrum) in slices.iter_mut().zip(components.iter_mut().flatten()) {
+            *slot = coefficients_mut::<T>(spectrum);
         }
-        let d = axes.len();
-        let partials = tasks.into_par_iter().enumerate().map(|(t, mut chunk)| {
-            let parts = chunk.len() / d;
-            // Along a row: κ_a, |k_a|² and 1/(η|k_a|²) per component (0 at k = 0), 1/|κ|² (0
-            // where κ = 0), s, and each mode's Σ_a |k_a|²|û_b + σû_σ|².
-            let mut table = RowTable::<T>::new(row);
+        let leaf = |t: usize, chunk: &mut [&mut [T]; 6], table: &mut RowTable| {
             let mut power = 0.0;
             for r in 0..chunk[0].len() / row {
                 let ([j0, j1], kb, wb) = row_symbols(sym, modes, t * task / row + r);
@@ -563,14 +569,14 @@ impl Flow {
                     table.project(&mut chunk[part * d..(part + 1) * d], at.clone());
                 }
                 let base = chunk[..d].iter().map(|f| &f[at.clone()]);
-                let per_sigma = chunk[d..].iter().map(|f| &f[at.clone()]);
+                let per_sigma = chunk[d..d * parts].iter().map(|f| &f[at.clone()]);
                 table.add_power(base, per_sigma, sigma);
                 let weights = sym.weight[2].iter().take(row).map(|&wl| wb * wl);
                 power += weights.zip(&table.power).map(|(w, p)| w * p).sum::<f64>();
             }
             power
-        });
-        eta * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
+        };
+        eta * in_tasks(slices, (tables, 0), task, &leaf)
     }
 
     /// Per component c: (π/h)² if it is odd (its top sine mode's share of |k|² where j_a = 0 in
@@ -608,19 +614,48 @@ impl Flow {
     }
 }
 
+/// Run `leaf(t, chunk, table)` on every task t (a chunk of `task` coefficients of each of the
+/// `slices`, an empty slice staying empty) with its own of the `tables` (the first numbered
+/// `first`), halving the tasks and the slices at a task boundary into two [`rayon::join`]ed
+/// halves, with no allocation; returns the leaves' sum, added in that fixed tree (the same bits
+/// on any number of threads).
+fn in_tasks<T: Send>(
+    slices: [&mut [T]; 6],
+    (tables, first): (&mut [RowTable], usize),
+    task: usize,
+    leaf: &(impl Fn(usize, &mut [&mut [T]; 6], &mut RowTable) -> f64 + Sync),
+) -> f64 {
+    if let [table] = tables {
+        let mut chunk = slices;
+        return leaf(first, &mut chunk, table);
+    }
+    let half = tables.len() / 2;
+    let (mut low, mut high): ([&mut [T]; 6], [&mut [T]; 6]) = Default::default();
+    for ((slice, low), high) in slices.into_iter().zip(&mut low).zip(&mut high) {
+        (*low, *high) = slice.split_at_mut((half * task).min(slice.len()));
+    }
+    let (low_tables, high_tables) = tables.split_at_mut(half);
+    let (a, b) = rayon::join(
+        || in_tasks(low, (low_tables, first), task, leaf),
+        || in_tasks(high, (high_tables, first + half), task, leaf),
+    );
+    a + b
+}
+
 /// The per-mode tables of one row of modes for [`Flow::project`], so that its loops run along
 /// the row over plain slices: per component c, κ_a, |k_a|² and 1/(η|k_a|²); 1/|κ|²; and scratch
-/// for s = κ·f̂/|κ|² and each mode's power.
-struct RowTable<T> {
+/// for s = κ·f̂/|κ|² (a row's coefficients, complex or real) and each mode's power. One per
+/// parallel task, made with the flow.
+struct RowTable {
     kappa: [Vec<f64>; 3],
     k2: [Vec<f64>; 3],
     inverse: [Vec<f64>; 3],
     inverse_norm: Vec<f64>,
-    s: Vec<T>,
+    s: Vec<Complex64>,
     power: Vec<f64>,
 }
 
-impl<T: Coefficient> RowTable<T> {
+impl RowTable {
     /// Tables for rows of `len` modes.
     fn new(len: usize) -> Self {
         let zeros = || vec![0.0; len];
@@ -629,7 +664,7 @@ impl<T: Coefficient> RowTable<T> {
             k2: std::array::from_fn(|_| zeros()),
             inverse: std::array::from_fn(|_| zeros()),
             inverse_norm: zeros(),
-            s: vec![T::default(); len],
+            s: vec![Complex64::default(); len],
             power: zeros(),
         }
     }
@@ -664,19 +699,20 @@ impl<T: Coefficient> RowTable<T> {
 
     /// The Oseen projection of one part's force along the row (the modes `at` of each
     /// component's chunk), in place: s = κ·f̂/|κ|², f̂_a ← (f̂_a − κ_a s)/(η|k_a|²).
-    fn project(&mut self, components: &mut [&mut [T]], at: Range<usize>) {
-        self.s.fill(T::default());
+    fn project<T: Coefficient>(&mut self, components: &mut [&mut [T]], at: Range<usize>) {
+        let s = &mut coefficients_of::<T>(&mut self.s)[..at.len()];
+        s.fill(T::default());
         for (f, kappa) in components.iter().zip(&self.kappa) {
-            for ((s, &f), &k) in self.s.iter_mut().zip(&f[at.clone()]).zip(kappa) {
+            for ((s, &f), &k) in s.iter_mut().zip(&f[at.clone()]).zip(kappa) {
                 *s = *s + f * k;
             }
         }
-        for (s, &i) in self.s.iter_mut().zip(&self.inverse_norm) {
+        for (s, &i) in s.iter_mut().zip(&self.inverse_norm) {
             *s = *s * i;
         }
         for ((f, kappa), inverse) in components.iter_mut().zip(&self.kappa).zip(&self.inverse) {
             let f = &mut f[at.clone()];
-            for ((f, &s), (&k, &i)) in f.iter_mut().zip(&self.s).zip(kappa.iter().zip(inverse)) {
+            for ((f, &s), (&k, &i)) in f.iter_mut().zip(&*s).zip(kappa.iter().zip(inverse)) {
                 *f = (*f - s * k) * i;
             }
         }
@@ -684,14 +720,12 @@ impl<T: Coefficient> RowTable<T> {
 
     /// Each mode's Σ_a |k_a|² |(û_b)_a + σ(û_σ)_a|² into `power`, from the row's projected
     /// components (û_σ absent at a fixed tension).
-    fn add_power<'a>(
+    fn add_power<'a, T: Coefficient + 'a>(
         &mut self,
         base: impl Iterator<Item = &'a [T]>,
         per_sigma: impl Iterator<Item = &'a [T]>,
         sigma: f64,
-    ) where
-        T: 'a,
-    {
+    ) {
         self.power.fill(0.0);
         let mut per_sigma = per_sigma.fuse();
         for (b, k2) in base.zip(&self.k2) {
@@ -901,6 +935,12 @@ fn coefficients<T: Coefficient>(a: &Array3<Complex64>) -> &[T] {
 #[inline]
 fn coefficients_mut<T: Coefficient>(a: &mut Array3<Complex64>) -> &mut [T] {
     bytemuck::cast_slice_mut(a.as_slice_mut().expect("standard layout"))
+}
+
+/// Complex scratch as [`Coefficient`] `T` (a complex value each, or two reals).
+#[inline]
+fn coefficients_of<T: Coefficient>(v: &mut [Complex64]) -> &mut [T] {
+    bytemuck::cast_slice_mut(v)
 }
 
 /// The coefficients of each velocity component's spectrum (up to three; the missing ones
