@@ -66,7 +66,7 @@ use crate::problem::config::FlowSpec;
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::TENSION_FACTOR;
 use bytemuck::Pod;
-use ndarray::{Array3, ArrayViewMut3, Axis, Slice, Zip};
+use ndarray::{Array3, Axis, Zip};
 use num_complex::Complex64;
 use rayon::prelude::*;
 use std::ops::{Add, Div, Mul, Neg, Range, Sub};
@@ -503,29 +503,43 @@ impl Flow {
     /// storage and the logical order, in place: the index j ↔ n − j along its axis (n points)
     /// for 1 ≤ j < n, the map its own inverse; j = 0 holds the top sine mode in both, and a
     /// packed row's padding stays. Each value is mapped by `map` (into the picture of
-    /// [`Coefficient`], or back), so that [`Flow::project`] and [`Flow::dissipation`] read every
+    /// [`Coefficient`], or back; nothing to map for real coefficients), so that [`Flow::project`] and [`Flow::dissipation`] read every
     /// component at the mode they compute, with no index map.
-    fn turn<T: Coefficient>(&mut self, part: usize, map: fn(T) -> T) {
+    fn turn<T: Coefficient>(&mut self, part: usize, map: impl Fn(T) -> T + Sync) {
         let modes = self.modes;
         for (c, &a) in self.axes.iter().enumerate() {
             let Some(n) = self.odd[c] else { continue };
             let values = coefficients_mut::<T>(&mut self.components[part][c]);
-            let mut view = ArrayViewMut3::from_shape(modes, values).expect("the modes' shape");
-            // The pairs (j, n − j), j = 1..=half, swapped and mapped; j = 0 and the j = n/2 of
-            // an even n (its own partner) mapped in place.
-            let half = (n - 1) / 2;
-            let (low, high) = view.view_mut().split_at(Axis(a), n - half);
-            let (mut own, low) = low.split_at(Axis(a), 1);
-            let mut low = low.slice_axis_move(Axis(a), Slice::from(0..half));
-            let mut high = high.slice_axis_move(Axis(a), Slice::from(0..half));
-            high.invert_axis(Axis(a));
-            Zip::from(&mut low)
-                .and(&mut high)
-                .par_for_each(|x, y| (*x, *y) = (map(*y), map(*x)));
-            own.map_inplace(|v| *v = map(*v));
-            if n % 2 == 0 {
-                view.index_axis_mut(Axis(a), n / 2)
-                    .map_inplace(|v| *v = map(*v));
+            // An index along axis a is a block of `inner` values; a slab holds the axis's
+            // indices at one index of the axes before it. The blocks 1..n of each slab are
+            // reversed (j ↔ n − j; the j = n/2 of an even n stays).
+            let inner: usize = modes[a + 1..].iter().product();
+            let slab = modes[a] * inner;
+            if a == 0 {
+                let half = (n - 1) / 2;
+                let (low, high) = values[inner..n * inner].split_at_mut(half * inner);
+                let high = &mut high[(n - 1 - 2 * half) * inner..];
+                low.par_chunks_mut(inner)
+                    .zip(high.par_chunks_mut(inner).rev())
+                    .for_each(|(x, y)| x.swap_with_slice(y));
+            } else {
+                values.par_chunks_mut(slab).for_each(|v| {
+                    let blocks = &mut v[inner..n * inner];
+                    if inner == 1 {
+                        blocks.reverse();
+                    } else {
+                        let count = n - 1;
+                        for j in 0..count / 2 {
+                            let (low, high) = blocks.split_at_mut((count - 1 - j) * inner);
+                            low[j * inner..(j + 1) * inner].swap_with_slice(&mut high[..inner]);
+                        }
+                    }
+                });
+            }
+            if !T::REAL {
+                values
+                    .par_chunks_mut(PAR_CHUNK)
+                    .for_each(|v| v.iter_mut().for_each(|v| *v = map(*v)));
             }
         }
     }
@@ -764,6 +778,8 @@ pub(super) trait Coefficient:
     + Mul<f64, Output = Self>
     + Div<f64, Output = Self>
 {
+    /// Whether a coefficient is one real (a packed spectrum's), whose picture is itself.
+    const REAL: bool;
     /// An odd component's stored sine coefficient S in the picture: −iS, or S.
     fn picture(self) -> Self;
     /// The stored coefficient of an odd component whose picture is `self` (the inverse of
@@ -777,6 +793,8 @@ pub(super) trait Coefficient:
 }
 
 impl Coefficient for Complex64 {
+    const REAL: bool = false;
+
     #[inline]
     fn picture(self) -> Self {
         Complex64::new(self.im, -self.re)
@@ -799,6 +817,8 @@ impl Coefficient for Complex64 {
 }
 
 impl Coefficient for f64 {
+    const REAL: bool = true;
+
     #[inline]
     fn picture(self) -> Self {
         self
