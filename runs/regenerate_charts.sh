@@ -28,7 +28,7 @@
 #                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 5 + 10, one thread, loaded), measured
 #                    + onset_bc{,_r32}.json (the bilayer couple's pear transition)  1 112 s + 1 721 s (one thread each, side by side), measured 2026-12-07
 #   heating          study heating heating.json (51 relaxations, 14 references)   220 s (one thread), measured
-#   rates            study rates rates.json + rates3d.json + rates3d_box{,8,10}.json + rates3d_free{,_fine}.json + rates_free.json + rates_fine.json + rates_l6.json + rates3d_tension{,_fine}.json + rates3d_sigma10.json + rates3d_tension_l4.json + rates3d_sigma10_l5.json + rates{,3d}_inextensible.json + rates3d_mobility.json + rates3d_free_m016.json + rates_mobility.json + rates3d_mobility_l3{,_fine}.json   747 s (two cores) + 2 519 s (recorded) + 1 848 s + 248 s + 428 s + 3 389 s + 6 681 s + 182 s + 2 935 s + 753 s + 2 300 s + 4 072 s + 2 114 s + 1 074 s + 1 265 s + 959 s + (see rates3d_inextensible's rates.txt) + 3 207 s + 4 042 s + 553 s + 468 s + 958 s (one thread beside other runs, measured 2026-12-06 and -07)
+#   rates            study rates rates.json + rates3d.json + rates3d_box{,8,10}.json + rates3d_free{,_fine}.json + rates_free.json + rates_fine.json + rates_l6.json + rates3d_tension{,_fine}.json + rates3d_sigma10.json + rates3d_tension_l4.json + rates3d_sigma10_l5.json + rates{,3d}_inextensible.json + rates3d_mobility.json + rates3d_free_m016{,_r24}.json + rates3d_m016_r24.json + rates_mobility.json + rates3d_mobility_l3{,_fine}.json   747 s (two cores) + 2 519 s (recorded) + 1 848 s + 248 s + 428 s + 3 389 s + 6 681 s + 182 s + 2 935 s + 753 s + 2 300 s + 4 072 s + 2 114 s + 1 074 s + 1 265 s + 959 s + (see rates3d_inextensible's rates.txt) + 3 207 s + 4 042 s + 553 s + 468 s + 958 s (one thread beside other runs, measured 2026-12-06 and -07)
 #   shear            study shear shear.json + shear_box.json (2D)   3 036 s + 445 s on one thread beside other runs, measured 2026-12-06
 #   shear3d          study shear shear3d.json + shear3d_box.json + shear3d_length.json (3D)   35 + 12 + 74 min on one thread beside two or three other runs, measured 2026-12-06
 #   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 4 036 s on one thread (the second beside three other runs), measured 2026-12-06
@@ -139,7 +139,7 @@ group_onset() {
     studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40 onset_bc onset_bc_r32
 }
 group_heating() { studies heating heating; }
-group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates3d_free_fine rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_tension_l4 rates3d_sigma10 rates3d_sigma10_l5 rates_inextensible rates3d_inextensible rates3d_mobility rates3d_free_m016 rates_mobility rates3d_mobility_l3 rates3d_mobility_l3_fine; }
+group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates3d_free_fine rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_tension_l4 rates3d_sigma10 rates3d_sigma10_l5 rates_inextensible rates3d_inextensible rates3d_mobility rates3d_free_m016 rates3d_free_m016_r24 rates3d_m016_r24 rates_mobility rates3d_mobility_l3 rates3d_mobility_l3_fine; }
 group_shear() { studies shear shear shear_box; }
 group_shear3d() { studies shear shear3d shear3d_box shear3d_length; }
 group_contrast() {
