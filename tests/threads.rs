@@ -127,17 +127,19 @@ fn spectral_runs_do_not_depend_on_the_thread_count() {
 }
 
 /// The second affine term's sweeps (task by task in parallel, added in a fixed tree): the
-/// Stokes flow with the area held (T̂ through the couple sweeps, on the ellipsoid's full box and
-/// on its half box about z, whose flow keeps a twisted component) and ADE with its multiplier
-/// solved in the step (the ellipsoid's eighth box).
+/// Stokes flow with the area held (T̂ in the update's sweeps, the projection's sums in its
+/// halving tree of tasks; on the ellipsoid's full box, on its half box about z, whose flow
+/// keeps a twisted component, and on its eighth box, whose spectra are packed) and ADE with its
+/// multiplier solved in the step (the ellipsoid's eighth box).
 #[test]
 fn second_term_runs_do_not_depend_on_the_thread_count() {
     let stokes = json!({"scheme": "sbdf2", "dynamics": "stokes", "c0": 0.0,
                         "flow": {"viscosity": 1.0, "mobility": 0.01}});
     assert_thread_independent("stokes, area held", &ellipsoid(stokes.clone(), false), 6);
-    let mut half = ellipsoid(stokes, false);
+    let mut half = ellipsoid(stokes.clone(), false);
     half["symmetry"] = json!(["z"]);
     assert_thread_independent("stokes, area held, half box", &half, 6);
+    assert_thread_independent("stokes, area held, eighth box", &ellipsoid(stokes, true), 6);
     let ade = json!({"scheme": "sbdf2", "c0": 0.0, "ade": {"alpha": 1.0, "da0": 1.1}});
     assert_thread_independent("ade", &ellipsoid(ade, true), 6);
 }
