@@ -121,8 +121,9 @@ impl<'a> Inputs<'a> {
         flow: bool,
     ) -> Self {
         // Without a flow T̂ is not read: φ̂ stands in for it.
-        let second = |h: &'a Array3<Complex64>, t: Option<&'a Array3<Complex64>>| {
-            flat(t.filter(|_| flow).unwrap_or(h))
+        let second = |h: &'a Array3<Complex64>, t: Option<&'a Array3<Complex64>>| match flow {
+            true => flat(t.expect("a flow split in σ keeps T̂ at every level")),
+            false => flat(h),
         };
         Inputs {
             cur: [

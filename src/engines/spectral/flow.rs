@@ -61,7 +61,7 @@ use super::evaluator::Symbols;
 use super::inextensible::Inextensibility;
 use super::transform::Transform;
 use super::viscous::Viscosities;
-use crate::engines::numerics::{sum_in_fixed_tree, PAR_CHUNK};
+use crate::engines::numerics::PAR_CHUNK;
 use crate::problem::config::FlowSpec;
 use crate::problem::grid::{AxisKind, Grid};
 use crate::problem::model::TENSION_FACTOR;
@@ -371,7 +371,7 @@ impl Flow {
         for part in 0..parts {
             self.turn::<T>(part, T::picture);
         }
-        let projected_power = self.project::<T>(sym, sigma);
+        let projected_power = self.project::<T>(sym, sigma, true);
         let mut solve_iterations = 0;
         if let Some(constraint) = self.inextensibility.as_mut() {
             // Periodic axes only: the picture is the storage.
@@ -403,7 +403,7 @@ impl Flow {
                 viscous.dissipation(sym, &self.components, parts, sigma)
             }
             // The constraint's tension flow changed û after the projection.
-            None if self.inextensibility.is_some() => self.dissipation::<T>(sym, sigma),
+            None if self.inextensibility.is_some() => self.project::<T>(sym, sigma, false),
             None => projected_power,
         } + match self.inextensibility.as_mut() {
             Some(constraint) => {
@@ -503,8 +503,8 @@ impl Flow {
     /// storage and the logical order, in place: the index j ↔ n − j along its axis (n points)
     /// for 1 ≤ j < n, the map its own inverse; j = 0 holds the top sine mode in both, and a
     /// packed row's padding stays. Each value is mapped by `map` (into the picture of
-    /// [`Coefficient`], or back; nothing to map for real coefficients), so that [`Flow::project`] and [`Flow::dissipation`] read every
-    /// component at the mode they compute, with no index map.
+    /// [`Coefficient`], or back; nothing to map for real coefficients), so that
+    /// [`Flow::project`] reads every component at the mode it computes, with no index map.
     fn turn<T: Coefficient>(&mut self, part: usize, map: impl Fn(T) -> T + Sync) {
         let modes = self.modes;
         for (c, &a) in self.axes.iter().enumerate() {
@@ -552,9 +552,10 @@ impl Flow {
     /// component is odd and the sine coefficients S_a project as they stand:
     /// (S_a − κ_a s)/(η|k|²) with s = κ·S/|κ|². An odd component's top sine mode sits where
     /// j_a = 0: κ_a = 0 there, so it is not projected, and |k_a|² = |k|² + (π/h)². Returns the
-    /// power the projected flow dissipates at σ, η Σ_k w Σ_a |k_a|² |û_b + σû_σ|²
-    /// ([`Flow::dissipation`]), summed in the same sweep.
-    fn project<T: Coefficient>(&mut self, sym: &Symbols, sigma: f64) -> f64 {
+    /// power the projected flow dissipates at σ, η Σ_k w Σ_a |k_a|² |û_b + σû_σ|², summed in the
+    /// same sweep. Without `project` the spectra are left as they are (velocities already) and
+    /// only that power is summed.
+    fn project<T: Coefficient>(&mut self, sym: &Symbols, sigma: f64, project: bool) -> f64 {
         let top = self.top_k2s();
         let Flow {
             axes,
@@ -579,7 +580,7 @@ impl Flow {
                 let ([j0, j1], kb, wb) = row_symbols(sym, modes, t * task / row + r);
                 table.fill((sym, [j0, j1], kb), (axes, kappa, top), eta);
                 let at = r * row..(r + 1) * row;
-                for part in 0..parts {
+                for part in (0..parts).filter(|_| project) {
                     table.project(&mut chunk[part * d..(part + 1) * d], at.clone());
                 }
                 let base = chunk[..d].iter().map(|f| &f[at.clone()]);
@@ -600,31 +601,6 @@ impl Flow {
             Some(Some(_)) => self.top_k2,
             _ => 0.0,
         })
-    }
-
-    /// η Σ_k w |k|² |û_b + σû_σ|² over the components, in logical order ([`Flow::turn`]): the
-    /// power the fluid dissipates at σ (û_b alone at a fixed tension).
-    fn dissipation<T: Coefficient>(&self, sym: &Symbols, sigma: f64) -> f64 {
-        let [base, per_sigma] = &self.components;
-        let (base, per_sigma, modes) = (slices::<T>(base), slices::<T>(per_sigma), self.modes);
-        let (len, d, top) = (
-            modes.iter().product::<usize>(),
-            self.axes.len(),
-            self.top_k2s(),
-        );
-        let partials = (0..len.div_ceil(PAR_CHUNK)).into_par_iter().map(|t| {
-            indexed(t * PAR_CHUNK..((t + 1) * PAR_CHUNK).min(len), modes)
-                .map(|(i, idx)| {
-                    let (k2, w) = mode_symbols(sym, idx);
-                    let k2s = component_k2s(k2, idx, &self.axes, top);
-                    let u = [base, per_sigma].map(|part| {
-                        std::array::from_fn(|c| part[c].get(i).copied().unwrap_or_default())
-                    });
-                    w * mode_power(&k2s[..d], u, sigma)
-                })
-                .sum::<f64>()
-        });
-        self.viscosity * sum_in_fixed_tree(partials, || 0.0, |x, y| x + y)
     }
 }
 
@@ -934,16 +910,6 @@ fn component_k2s(k2: f64, idx: [usize; 3], axes: &[usize], top: [f64; 3]) -> [f6
     })
 }
 
-/// Σ_a |k_a|² |(û_b)_a + σ(û_σ)_a|² at one mode, over the components whose |k_a|² are `k2s`
-/// (`u` = [û_b, û_σ], û_σ zero at a fixed tension).
-#[inline]
-fn mode_power<T: Coefficient>(k2s: &[f64], [base, per_sigma]: [[T; 3]; 2], sigma: f64) -> f64 {
-    k2s.iter()
-        .zip(base.into_iter().zip(per_sigma))
-        .map(|(&k2, (b, s))| k2 * (b + s * sigma).norm_sqr())
-        .sum()
-}
-
 /// A spectrum's coefficients in flat order, as [`Coefficient`] `T` (a packed spectrum's
 /// reals as `f64`).
 #[inline]
@@ -961,12 +927,6 @@ fn coefficients_mut<T: Coefficient>(a: &mut Array3<Complex64>) -> &mut [T] {
 #[inline]
 fn coefficients_of<T: Coefficient>(v: &mut [Complex64]) -> &mut [T] {
     bytemuck::cast_slice_mut(v)
-}
-
-/// The coefficients of each velocity component's spectrum (up to three; the missing ones
-/// empty), taken once per pass instead of once per mode.
-fn slices<T: Coefficient>(components: &[Array3<Complex64>]) -> [&[T]; 3] {
-    std::array::from_fn(|c| components.get(c).map_or(&[][..], coefficients))
 }
 
 #[cfg(test)]
