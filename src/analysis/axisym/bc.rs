@@ -787,3 +787,48 @@ pub fn bc_solution(branch: Branch, v: f64, da: f64, opts: &Options) -> Result<So
     w.push(c);
     Ok(w.solution())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sign changes of the prolate's up–down test function `μ` along its BC path at `v`
+    /// towards larger `Δa`, while the neck is wider than `neck_min` (`R0`): `(Δa, loses)`, `Δa`
+    /// linear in `μ` between the path's shapes (about 0.012 apart here).
+    fn updown_zeros(v: f64, nodes: usize, neck_min: f64) -> Vec<(f64, bool)> {
+        let opts = Options::with_nodes(nodes);
+        let path = bc_curve(Branch::Prolate, v, (1.15, 1.45), &opts);
+        let mut zeros = Vec::new();
+        let mut last: Option<(f64, f64)> = None;
+        for s in &path.shapes {
+            if s.neck().is_some_and(|r| r < neck_min) {
+                break;
+            }
+            let (mu, _) = updown(s, &opts).expect("μ of a prolate");
+            if let Some((da, m)) = last.filter(|(_, m)| (*m > 0.0) != (mu > 0.0)) {
+                zeros.push((da + (s.da() - da) * m / (m - mu), m > 0.0));
+            }
+            last = Some((s.da(), mu));
+        }
+        zeros
+    }
+
+    /// Near v = 0.70 the BC prolate's pear instability is a window in Δa. At v = 0.70 `μ`
+    /// falls through 0 at Δa = 1.2999 (the pear's bifurcation) and rises through it again at
+    /// 1.3623 (refined by the secant: 1.29987 and 1.36232 at 241 and 481 nodes alike, 1.36107
+    /// at 121), where the neck is 0.24 and 0.11 R0. The window closes between v = 0.697 and
+    /// 0.698 (Δa 1.332–1.338 at 0.698): at v = 0.697 `μ` stays positive while the neck is
+    /// wider than 0.1 R0. The interpolation between the path's shapes is good to about 7e-4.
+    #[test]
+    fn the_bc_prolate_regains_updown_stability_near_v_070() {
+        let zeros = updown_zeros(0.70, 241, 0.1);
+        println!("v = 0.70: {zeros:?}");
+        assert_eq!(zeros.len(), 2, "{zeros:?}");
+        let [(lost, loses), (regained, regains)] = [zeros[0], zeros[1]];
+        assert!(loses && !regains, "{zeros:?}");
+        assert!((lost - 1.2999).abs() < 2e-3, "lost at {lost}");
+        assert!((regained - 1.3623).abs() < 2e-3, "regained at {regained}");
+        let below = updown_zeros(0.697, 241, 0.1);
+        assert!(below.is_empty(), "v = 0.697: {below:?}");
+    }
+}
