@@ -580,8 +580,10 @@ impl Flow {
                 let ([j0, j1], kb, wb) = row_symbols(sym, modes, t * task / row + r);
                 table.fill((sym, [j0, j1], kb), (axes, kappa, top), eta);
                 let at = r * row..(r + 1) * row;
-                for part in (0..parts).filter(|_| project) {
-                    table.project(&mut chunk[part * d..(part + 1) * d], at.clone());
+                if project {
+                    for part in 0..parts {
+                        table.project(&mut chunk[part * d..(part + 1) * d], at.clone());
+                    }
                 }
                 let base = chunk[..d].iter().map(|f| &f[at.clone()]);
                 let per_sigma = chunk[d..d * parts].iter().map(|f| &f[at.clone()]);
