@@ -6,7 +6,7 @@
 use std::f64::consts::{PI, SQRT_2};
 use vesicle::analysis::axisym::{
     self, ade_phase, ade_solution, bc_solution, inner_spheres_da, l_pear, l_pear_at, l_sto_at,
-    limit_line, Branch, Limit, LimitShape, Model, Options,
+    limit_line, outer_buds_da, Branch, Limit, LimitShape, Model, Options,
 };
 
 /// 121 nodes (K = 40): the ADE/BC checks below are identities between solves of one
@@ -127,6 +127,17 @@ fn limit_lines_end_points() {
     }
     assert!(inner_spheres_da(1.0, 1).is_none());
     assert!(l_pear_at(0.7).is_none());
+    // A sphere with one bud outside is L_pear; with two (R1² + 2R2² = 1, v = R1³ + 2R2³) Δa is
+    // larger: at v = 0.9, R2 = 0.19828 and Δa = 1.35643 (solved by hand), down to three equal
+    // spheres at v = 1/√3.
+    for v in [0.75, 0.9, 0.99] {
+        let one = outer_buds_da(v, 1).unwrap();
+        let two = outer_buds_da(v, 2).unwrap();
+        assert!((one - l_pear_at(v).unwrap().da).abs() < 1e-12, "v = {v}");
+        assert!(two > one, "v = {v}: {two} against {one}");
+    }
+    assert!((outer_buds_da(0.9, 2).unwrap() - 1.35643).abs() < 1e-5);
+    assert!(outer_buds_da(0.57, 2).is_none() && outer_buds_da(0.58, 2).is_some());
 }
 
 /// Convergence in modes: the ADE shape at v = 0.75, Δa0 = 1.45 (a prolate with a waist,
@@ -286,6 +297,7 @@ fn the_ade_pear_converges_to_a_narrow_neck() {
 /// closes the neck to 0.005 R0 (`Options::neck_min`) within 0.005 of it (0.0022 measured,
 /// e = 1.9926); its neck is below 0.1 R0 only within 0.08 of L_sto. The oblate invaginated at both poles at v = 0.96 ran to
 /// Δa = 0.705 as well, past the sphere with two spheres inside (Δa = 0.764); now it stops there.
+/// The prolate's limit is the sphere budded at both poles (below).
 #[test]
 fn bc_paths_end_at_their_limit_shapes() {
     let v = 0.92;
@@ -312,6 +324,30 @@ fn bc_paths_end_at_their_limit_shapes() {
     let end = lowest(&o);
     println!("two inner spheres Δa = {two:.5}, lowest Δa of the oblate {end:.5}");
     assert!(end >= two && end < two + 0.02, "oblate to Δa = {end}");
+    // The prolate at v = 0.90 ends at the sphere budded at both poles (Δa = 1.35643, e = 3):
+    // with uniform modes it ran on past it to the window's Δa = 1.39 (e = 3.81) with its necks
+    // held at 0.02–0.03 R0; with the mirrored map its necks close to 0.005 R0 at Δa = 1.3517,
+    // e = 2.977.
+    let buds = outer_buds_da(0.90, 2).unwrap();
+    let p = axisym::bc_curve(Branch::Prolate, 0.90, (1.0, 1.40), &opts());
+    let last = p
+        .shapes
+        .iter()
+        .max_by(|a, b| a.da().total_cmp(&b.da()))
+        .unwrap();
+    println!(
+        "two buds Δa = {buds:.5}, the prolate's last Δa {:.5}, e {:.4}, neck {:?}",
+        last.da(),
+        last.e,
+        last.neck()
+    );
+    assert!(
+        last.da() < buds && last.da() > buds - 0.01,
+        "Δa = {}",
+        last.da()
+    );
+    assert!((last.e - 3.0).abs() < 0.05, "e = {}", last.e);
+    assert!(last.neck().unwrap() < 0.006);
 }
 
 /// A walk ends outside the Δa window only on the side it set out towards: at v = 0.70 the BC
@@ -384,6 +420,38 @@ fn the_stomatocyte_is_solved_at_a_neck_of_six_thousandths() {
         coarse.e
     );
     assert!(fine.e < 2.0, "e = {} above L_sto's 2", fine.e);
+}
+
+/// The up–down symmetric branches close their necks with the modes stretched at both necks
+/// (the mirrored map, `axisym::map`). The BC prolate at v = 0.90, Δa = 1.33 is a sphere
+/// budding at both poles, necks 0.026 R0; the oblate at v = 0.96, Δa = 0.78 is invaginated at
+/// both poles, necks 0.015 R0. With modes uniform in the contour, e at the prolate point was
+/// 2.958 at 121 nodes and 2.889 at 241 (7e-2 apart, converged neither); stretched, e is
+/// 2.865949, 2.864818, 2.864735 and 2.864729 at 121, 181, 241 and 361 nodes, and the oblate's
+/// 2.901106, 2.900712, 2.900710 and 2.900710: within 1.3e-3 of the finest at 121 nodes and
+/// 1e-4 at 181 (bounds 2e-3 and 2e-4 here).
+#[test]
+fn the_symmetric_branches_converge_at_narrow_necks() {
+    for (branch, v, da, neck_max) in [
+        (Branch::Prolate, 0.90, 1.33, 0.03),
+        (Branch::Oblate, 0.96, 0.78, 0.02),
+    ] {
+        let e_at = |nodes: usize| {
+            let s = bc_solution(branch, v, da, &Options::with_nodes(nodes)).unwrap();
+            assert!((s.da() - da).abs() < 1e-10);
+            assert!(
+                s.map.mirrored,
+                "{}: the modes are not stretched",
+                branch.name()
+            );
+            assert!(s.neck().unwrap() < neck_max, "neck {:?}", s.neck());
+            s.e
+        };
+        let (e121, e181, e241) = (e_at(121), e_at(181), e_at(241));
+        println!("{}: e = {e121:.6}, {e181:.6}, {e241:.6}", branch.name());
+        assert!((e121 - e241).abs() < 2e-3, "{e121} against {e241}");
+        assert!((e181 - e241).abs() < 2e-4, "{e181} against {e241}");
+    }
 }
 
 /// Every v of the BC chart's grid has a stomatocyte path. At v = 0.66 its SC start (c̄0 = 0,

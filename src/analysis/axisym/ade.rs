@@ -126,7 +126,7 @@ pub fn ade_solution(
         })?;
     let (i, f, _) = best;
     let (s0, s1) = (&curve.shapes[i], &curve.shapes[i + 1]);
-    // Both in the coordinates of s0's map (a pear's map changes as its neck narrows).
+    // Both in the coordinates of s0's map (a map changes as a neck narrows).
     let a1 = reproject(&s1.coefficients, &s1.map, &s0.map, &s1.modes);
     let a0: Vec<f64> = s0
         .coefficients
@@ -140,8 +140,9 @@ pub fn ade_solution(
             .with_c0(opts.c0)
             .with_model(model)
     } else {
-        full_basis(&opts.with_model(model)).with_map(s0.map)
-    };
+        full_basis(&opts.with_model(model))
+    }
+    .with_map(s0.map);
     let set = NewtonSettings {
         tol: opts.tol,
         max_iter: opts.max_iter,

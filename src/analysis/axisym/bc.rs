@@ -147,10 +147,10 @@ impl Walker {
         solution(self.branch, &self.basis, self.current())
     }
 
-    /// For the pear and the stomatocyte, once the neck of `s` (the state `cur`) calls for a
-    /// new map ([`new_map`]: below 0.1 R0, or narrowed or moved since the last one; or, on a
-    /// stretched basis, moved at any width, [`moved_map`]): the basis
-    /// stretched at the neck, `prev` and `cur` re-projected onto it ([`reproject`]) and each
+    /// Once the neck of `s` (the state `cur`) calls for a new map ([`new_map`]: below 0.1 R0,
+    /// or narrowed or moved since the last one; or, on a stretched basis, moved at any width,
+    /// [`moved_map`]; mirrored on the up–down symmetric branches): the basis stretched at the
+    /// neck, `prev` and `cur` re-projected onto it ([`reproject`]) and each
     /// solved again at its own `Δa` (`prev` kept re-projected if its solve fails), so that
     /// the secant `cur − prev` that sets the next step runs along the path and not along the
     /// change of resolution. (The stomatocyte's start at v = 0.88, neck 0.058 R0, gains 0.007
@@ -163,9 +163,6 @@ impl Walker {
         prev: &Converged,
         cur: &Converged,
     ) -> Option<(Converged, Converged)> {
-        if !matches!(self.branch, Branch::Pear | Branch::Stomatocyte) {
-            return None;
-        }
         let (map, neck) =
             new_map(s, &self.basis.map, self.mapped).or_else(|| moved_map(s, &self.basis.map))?;
         let old = self.basis.map;
@@ -590,7 +587,7 @@ pub fn bc_curve(branch: Branch, v: f64, window: (f64, f64), opts: &Options) -> B
 /// eigenvector (full basis): the odd block of the Hessian of the BC Lagrangian is that of the
 /// SC Lagrangian at `c̄0,eff`.
 fn updown(s: &Solution, opts: &Options) -> Option<(f64, Vec<f64>)> {
-    let full = full_basis(&opts.with_model(Model::Sc).with_c0(s.c0_eff));
+    let full = full_basis(&opts.with_model(Model::Sc).with_c0(s.c0_eff)).with_map(s.map);
     odd_stability(&full, &to_full(s, full.modes.len()), s.lambda_v)
 }
 
@@ -646,7 +643,9 @@ fn prolate_bifurcation(v: f64, opts: &Options) -> Option<(Solution, Vec<Solution
     let (sa, mut fa, sb, mut fb) = bracket?;
     // Secant (Illinois) on μ(Δa) with BC solves from the nearer bracketing shape.
     let (mut xa, mut xb) = (sa.da(), sb.da());
-    let (mut ca, mut cb) = (sa.coefficients.clone(), sb.coefficients.clone());
+    // Both in the walker's current map (the path may have stretched its modes between them).
+    let to_walker = |s: &Solution| reproject(&s.coefficients, &s.map, &w.basis.map, &s.modes);
+    let (mut ca, mut cb) = (to_walker(&sa), to_walker(&sb));
     // Prolates on the unstable side (μ < 0), nearest the bifurcation last.
     let mut unstable: Vec<Solution> = [(&sa, fa), (&sb, fb)]
         .iter()
@@ -715,7 +714,7 @@ fn pear_path(
         let Some((_, phi)) = updown(prol, opts) else {
             continue;
         };
-        let full = full_basis(&opts.with_model(Model::Bc { da: prol.da() }));
+        let full = full_basis(&opts.with_model(Model::Bc { da: prol.da() })).with_map(prol.map);
         let a0 = to_full(prol, full.modes.len());
         let pw = Walker::new(Branch::Pear, v, full, true, opts);
         for kick in PEAR_KICKS {
@@ -770,11 +769,7 @@ pub fn bc_solution(branch: Branch, v: f64, da: f64, opts: &Options) -> Result<So
                 ),
             )
         })?;
-    let basis = if branch.up_down_symmetric() {
-        basis_of(branch, opts)
-    } else {
-        full_basis(opts).with_map(near.map)
-    };
+    let basis = basis_of(branch, opts).with_map(near.map);
     let mut w = Walker::new(branch, v, basis, !branch.up_down_symmetric(), opts);
     // Straight to Δa first; where Newton leaves its basin, in steps from the shape itself.
     let c = w
@@ -830,5 +825,20 @@ mod tests {
         assert!((regained - 1.3623).abs() < 2e-3, "regained at {regained}");
         let below = updown_zeros(0.697, 241, 0.1);
         assert!(below.is_empty(), "v = 0.697: {below:?}");
+    }
+
+    /// With its modes stretched at both necks (the mirrored map) the prolate's `μ` is resolved
+    /// where the prolate buds at both poles. At v = 0.86, past its loss of stability at
+    /// Δa = 1.0774 (below this window), `μ` rises through 0 once, at Δa = 1.36249 (241
+    /// nodes) and 1.36251 (481), where the necks are about 0.055 R0: the prolate regains
+    /// up–down stability before its necks close. With uniform modes the crossing moved with the
+    /// nodes (1.326, 1.350, 1.362 at 121, 241, 481) and extra ones came and went.
+    #[test]
+    fn the_budding_prolate_regains_updown_stability_at_v_086() {
+        let zeros = updown_zeros(0.86, 241, 0.005);
+        println!("v = 0.86: {zeros:?}");
+        assert_eq!(zeros.len(), 1, "{zeros:?}");
+        let (regained, loses) = zeros[0];
+        assert!(!loses && (regained - 1.3625).abs() < 2e-3, "{zeros:?}");
     }
 }

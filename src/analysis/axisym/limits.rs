@@ -107,19 +107,34 @@ pub fn l_sto_at(v: f64) -> Option<LimitShape> {
 
 /// `Δa` of a sphere holding `n ≥ 1` equal spheres inside it, each joined to it by an
 /// infinitesimal neck, at reduced volume `v ∈ (0, 1)` (radii `R1`, `R2`: `R1² + n R2² = 1`,
-/// `v = R1³ − n R2³`, `Δa = R1 − n R2`; bisection in `R2`, along which `v` falls): for `n = 1`
-/// `L_sto`, for `n = 2` the up–down symmetric shape invaginated at both poles. `None` for
-/// `v` outside `(0, 1)`.
+/// `v = R1³ − n R2³`, `Δa = R1 − n R2`): for `n = 1` `L_sto`, for `n = 2` the up–down
+/// symmetric shape invaginated at both poles. `None` for `v` outside `(0, 1)`.
 pub fn inner_spheres_da(v: f64, n: u32) -> Option<f64> {
+    satellites_da(v, n, -1.0)
+}
+
+/// `Δa` of a sphere carrying `n ≥ 1` equal buds outside it, each joined to it by an
+/// infinitesimal neck, at reduced volume `v` (`R1² + n R2² = 1`, `v = R1³ + n R2³`,
+/// `Δa = R1 + n R2`, `e = n + 1` at `c̄0 = 0`): for `n = 1` `L_pear`, for `n = 2` the up–down
+/// symmetric shape budded at both poles, where the BC prolate's path ends at `v ≳ 0.86`. `None`
+/// for `v` outside `((n + 1)^(−1/2), 1)` (the buds as large as the sphere at its lower end).
+pub fn outer_buds_da(v: f64, n: u32) -> Option<f64> {
+    satellites_da(v, n, 1.0)
+}
+
+/// `Δa = R1 + s n R2` of a sphere with `n` equal spheres joined to it, outside (`s = 1`) or
+/// inside (`s = −1`), at reduced volume `v = R1³ + s n R2³` (`R1² + n R2² = 1`; bisection in
+/// `R2 ∈ [0, (n + 1)^(−1/2)]`, along which `v` falls); `None` where no `R2` gives `v`.
+fn satellites_da(v: f64, n: u32, s: f64) -> Option<f64> {
     let n = f64::from(n.max(1));
     let of = |r2: f64| {
         let r1 = (1.0 - n * r2 * r2).sqrt();
-        (r1.powi(3) - n * r2.powi(3), r1 - n * r2)
+        (r1.powi(3) + s * n * r2.powi(3), r1 + s * n * r2)
     };
-    if !(v > 0.0 && v < 1.0) {
+    let (mut lo, mut hi) = (0.0, (1.0 / (n + 1.0)).sqrt());
+    if !(v > of(hi).0.max(0.0) && v < 1.0) {
         return None;
     }
-    let (mut lo, mut hi) = (0.0, (1.0 / (n + 1.0)).sqrt());
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
         if of(mid).0 > v {

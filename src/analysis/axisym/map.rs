@@ -16,6 +16,17 @@
 //! both poles, and a smooth surface of revolution keeps `ψ(τ) − πτ` odd about both poles: the
 //! sine series still converges exponentially, now with a share `(1 − α)/2` of the modes on the
 //! Lorentzian of half-width `(1 − β)/π` in `t` around the neck. `α = 1` is the identity.
+//!
+//! An up–down symmetric shape (`ψ(1 − t) = π − ψ(t)`) with a neck at `t_n` has its mirror
+//! image at `1 − t_n`. The **mirrored** map puts the same kernels at both and halves each pair:
+//!
+//! ```text
+//! dτ/dt = α + (1 − α) [P_β(π(t − t_n)) + P_β(π(t + t_n)) + P_β(π(t − 1 + t_n)) + P_β(π(t + 1 − t_n))] / 4
+//! ```
+//!
+//! which is also even about the equator, `τ(1 − t) = 1 − τ(t)`: `ψ(τ) − πτ` stays odd about
+//! `τ = 1/2`, so the symmetric branches keep their even modes (and their automatic closure) in
+//! it. At `t_n = 1/2` (one neck on the equator) it is the map above.
 
 use super::Solution;
 use std::f64::consts::PI;
@@ -29,6 +40,9 @@ pub struct NeckMap {
     pub beta: f64,
     /// Background weight `α ∈ (0, 1]` (1: no clustering).
     pub alpha: f64,
+    /// Whether the kernels are repeated at the mirror image `1 − t_n` of the neck (the map of
+    /// an up–down symmetric shape, even about `t = 1/2`).
+    pub mirrored: bool,
 }
 
 /// Default background weight of [`NeckMap::at_neck`]: half the modes stay uniform.
@@ -43,6 +57,7 @@ impl NeckMap {
         centre: 0.5,
         beta: 0.0,
         alpha: 1.0,
+        mirrored: false,
     };
 
     /// A map for a neck of radius `neck` at arclength `s_n` on a contour of length `length`:
@@ -54,6 +69,53 @@ impl NeckMap {
             centre: (s_n / length).clamp(0.01, 0.99),
             beta: 1.0 - PI * hw,
             alpha: ALPHA,
+            mirrored: false,
+        }
+    }
+
+    /// The mirrored map (module docs) for an up–down symmetric shape with a neck of radius
+    /// `neck` at arclength `s_n` (and its image at `L − s_n`): as [`NeckMap::at_neck`], with the
+    /// centre taken on the lower half, `t_n = min(s_n, L − s_n)/L`.
+    pub fn at_symmetric_necks(s_n: f64, neck: f64, length: f64) -> Self {
+        NeckMap {
+            mirrored: true,
+            ..NeckMap::at_neck(s_n.min(length - s_n), neck, length)
+        }
+    }
+
+    /// The map for a neck of radius `neck` at `s_n` on a contour of length `length`:
+    /// [`NeckMap::at_symmetric_necks`] if `symmetric`, else [`NeckMap::at_neck`].
+    pub fn for_neck(s_n: f64, neck: f64, length: f64, symmetric: bool) -> Self {
+        if symmetric {
+            NeckMap::at_symmetric_necks(s_n, neck, length)
+        } else {
+            NeckMap::at_neck(s_n, neck, length)
+        }
+    }
+
+    /// Distance in `t` from `t` to the nearest neck the map is centred on (`t_n`, and
+    /// `1 − t_n` when mirrored).
+    pub fn offset(&self, t: f64) -> f64 {
+        let d = (t - self.centre).abs();
+        if self.mirrored {
+            d.min((t - (1.0 - self.centre)).abs())
+        } else {
+            d
+        }
+    }
+
+    /// The necks the kernel pairs are centred on: `t_n`, and `1 − t_n` when mirrored.
+    fn centres(&self) -> impl Iterator<Item = f64> {
+        let c = self.centre;
+        std::iter::once(c).chain(self.mirrored.then_some(1.0 - c))
+    }
+
+    /// The number of kernel pairs (2 when mirrored, else 1).
+    fn pairs(&self) -> f64 {
+        if self.mirrored {
+            2.0
+        } else {
+            1.0
         }
     }
 
@@ -81,25 +143,31 @@ impl NeckMap {
         2.0 * (k * (0.5 * th).tan()).atan() + 2.0 * PI * n
     }
 
-    /// Node density `dτ/dt = α + (1 − α)[P_β(π(t − t_n)) + P_β(π(t + t_n))]/2`.
+    /// Node density `dτ/dt = α + (1 − α)[P_β(π(t − t_n)) + P_β(π(t + t_n))]/2`, the bracket
+    /// averaged over `t_n` and `1 − t_n` when mirrored.
     pub fn density(&self, t: f64) -> f64 {
         if self.is_identity() {
             return 1.0;
         }
-        let c = self.centre;
-        let bump = 0.5 * (self.kernel(PI * (t - c)) + self.kernel(PI * (t + c)));
-        self.alpha + (1.0 - self.alpha) * bump
+        let bump: f64 = self
+            .centres()
+            .map(|c| 0.5 * (self.kernel(PI * (t - c)) + self.kernel(PI * (t + c))))
+            .sum();
+        self.alpha + (1.0 - self.alpha) * bump / self.pairs()
     }
 
-    /// `τ(t) = α t + (1 − α)/(2π)[F(π(t − t_n)) − F(−π t_n) + F(π(t + t_n)) − F(π t_n)]`.
+    /// `τ(t) = α t + (1 − α)/(2π)[F(π(t − t_n)) − F(−π t_n) + F(π(t + t_n)) − F(π t_n)]`, the
+    /// bracket averaged over `t_n` and `1 − t_n` when mirrored.
     pub fn tau(&self, t: f64) -> f64 {
         if self.is_identity() {
             return t;
         }
-        let c = self.centre;
         let f = |x: f64| self.kernel_integral(x);
-        let bump = f(PI * (t - c)) - f(-PI * c) + f(PI * (t + c)) - f(PI * c);
-        self.alpha * t + (1.0 - self.alpha) / (2.0 * PI) * bump
+        let bump: f64 = self
+            .centres()
+            .map(|c| f(PI * (t - c)) - f(-PI * c) + f(PI * (t + c)) - f(PI * c))
+            .sum();
+        self.alpha * t + (1.0 - self.alpha) / (2.0 * PI) * bump / self.pairs()
     }
 
     /// The inverse `t(τ)` of [`NeckMap::tau`] (Newton's method safeguarded by bisection, to
@@ -149,16 +217,19 @@ const REMAP_SHRINK: f64 = 0.7;
 
 /// The map for `s` if its neck calls for a new one: a neck below [`MAP_NECK`] and no map yet,
 /// or narrowed below [`REMAP_SHRINK`] of `mapped` (the neck the current map `map` was made
-/// for), or moved by more than half the kernel's half-width. Returns the new map and its neck.
+/// for), or moved by more than half the kernel's half-width; mirrored
+/// ([`NeckMap::at_symmetric_necks`]) on the up–down symmetric branches. Returns the new map and
+/// its neck.
 pub(super) fn new_map(s: &Solution, map: &NeckMap, mapped: Option<f64>) -> Option<(NeckMap, f64)> {
     let (s_n, b) = s.neck_at()?;
     if b > MAP_NECK {
         return None;
     }
     let l = s.length();
-    let moved = (s_n / l - map.centre).abs() > 0.5 * map.half_width();
+    let moved = map.offset(s_n / l) > 0.5 * map.half_width();
     let narrowed = mapped.is_none_or(|m| b < REMAP_SHRINK * m);
-    (narrowed || moved).then(|| (NeckMap::at_neck(s_n, b, l), b))
+    let symmetric = s.branch.up_down_symmetric();
+    (narrowed || moved).then(|| (NeckMap::for_neck(s_n, b, l, symmetric), b))
 }
 
 /// On a stretched map `map`, the map `s` calls for whatever the width of its neck: the map at
@@ -175,8 +246,9 @@ pub(super) fn moved_map(s: &Solution, map: &NeckMap) -> Option<(NeckMap, f64)> {
         return Some((NeckMap::IDENTITY, f64::INFINITY));
     };
     let l = s.length();
-    ((s_n / l - map.centre).abs() > 0.5 * map.half_width())
-        .then(|| (NeckMap::at_neck(s_n, b, l), b))
+    let symmetric = s.branch.up_down_symmetric();
+    (map.offset(s_n / l) > 0.5 * map.half_width())
+        .then(|| (NeckMap::for_neck(s_n, b, l, symmetric), b))
 }
 
 /// Points of the midpoint rule of [`mirror_asymmetry`] in a neck map: it integrates the
@@ -272,6 +344,42 @@ mod tests {
         let t = 0.6;
         let d = (m.tau(t + 1e-7) - m.tau(t - 1e-7)) / 2e-7;
         assert!((d - m.density(t)).abs() < 1e-5 * d);
+    }
+
+    /// The mirrored map of a symmetric shape is even about the equator, `τ(1 − t) = 1 − τ(t)`,
+    /// so an up–down symmetric contour (even modes only) moved into it keeps every odd
+    /// coefficient at round-off (1e-12 against a_2 = 0.3): the symmetric branches keep their
+    /// even-mode basis. The unmirrored map at the same neck is not even (its odd coefficients
+    /// exceed 1e-3). At `t_n = 1/2` the two maps coincide.
+    #[test]
+    fn the_mirrored_map_keeps_up_down_symmetry() {
+        let m = NeckMap::at_symmetric_necks(0.7, 0.02, 4.5);
+        assert!((m.centre - 0.7 / 4.5).abs() < 1e-15 && m.mirrored);
+        for i in 0..=20 {
+            let t = i as f64 / 20.0;
+            assert!((m.tau(1.0 - t) - (1.0 - m.tau(t))).abs() < 1e-13, "t = {t}");
+            assert!((m.tau(m.t(t)) - t).abs() < 1e-13);
+        }
+        let d = (m.tau(0.3 + 1e-7) - m.tau(0.3 - 1e-7)) / 2e-7;
+        assert!((d - m.density(0.3)).abs() < 1e-5 * d);
+        // The other neck, at L − s_n, gives the same map.
+        let other = NeckMap::at_symmetric_necks(4.5 - 0.7, 0.02, 4.5);
+        assert!((other.centre - m.centre).abs() < 1e-15 && other.beta == m.beta);
+        let modes: Vec<usize> = (1..=80).collect();
+        let mut symmetric = vec![0.0; 80];
+        (symmetric[1], symmetric[3]) = (0.3, -0.05);
+        let odd = |a: &[f64]| a.iter().step_by(2).fold(0.0f64, |m, x| m.max(x.abs()));
+        let moved = reproject(&symmetric, &NeckMap::IDENTITY, &m, &modes);
+        assert!(odd(&moved) < 1e-12, "mirrored: {}", odd(&moved));
+        let one_sided = NeckMap::at_neck(0.7, 0.02, 4.5);
+        let moved = reproject(&symmetric, &NeckMap::IDENTITY, &one_sided, &modes);
+        assert!(odd(&moved) > 1e-3, "one-sided: {}", odd(&moved));
+        let equator = NeckMap::at_symmetric_necks(2.25, 0.02, 4.5);
+        for i in 0..=20 {
+            let t = i as f64 / 20.0;
+            let plain = NeckMap::at_neck(2.25, 0.02, 4.5).tau(t);
+            assert!((equator.tau(t) - plain).abs() < 1e-14);
+        }
     }
 
     /// The mirror asymmetry does not depend on the parameter: an up–down symmetric contour

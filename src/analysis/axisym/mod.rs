@@ -64,7 +64,9 @@ pub(crate) mod solver;
 pub use ade::{ade_image, ade_solution, AdePoint};
 pub use bc::{bc_bifurcation, bc_curve, bc_solution, BcCurve};
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
-pub use limits::{inner_spheres_da, l_pear_at, l_sto_at, limit_line, Limit, LimitShape};
+pub use limits::{
+    inner_spheres_da, l_pear_at, l_sto_at, limit_line, outer_buds_da, Limit, LimitShape,
+};
 pub use model::{ade_c0_eff, ade_da0, Model};
 pub use pear::{
     follow_pear, l_pear, l_pear_radii, neck_limit, pear_at, pear_bifurcation, prolate_updown,
