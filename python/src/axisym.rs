@@ -5,7 +5,7 @@ use crate::errors::check;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vesicle::analysis::axisym::{self, Branch, Options, Solution};
+use vesicle::analysis::axisym::{self, map::NeckMap, Branch, Options, Solution};
 use vesicle::error::Error;
 
 fn branch(py: Python<'_>, name: &str) -> PyResult<Branch> {
@@ -59,7 +59,24 @@ fn solution<'py>(py: Python<'py>, s: &Solution) -> PyResult<Bound<'py, PyDict>> 
     let modes: Vec<i64> = s.modes.iter().map(|&k| k as i64).collect();
     d.set_item("modes", PyArray1::from_vec(py, modes))?;
     d.set_item("coefficients", PyArray1::from_slice(py, &s.coefficients))?;
+    d.set_item("neck_map", neck_map(py, &s.map)?)?;
     Ok(d)
+}
+
+/// The stretching of the contour parameter the coefficients are in: `None` for the identity
+/// (`τ = s/L`), else a dict `centre` (the neck's arclength fraction `t_n`), `half_width` (the
+/// kernel's, in `t`), `background` (`α`, the uniform share of the node density) and
+/// `mirrored` (kernels at `1 − t_n` too).
+fn neck_map<'py>(py: Python<'py>, m: &NeckMap) -> PyResult<Option<Bound<'py, PyDict>>> {
+    if m.is_identity() {
+        return Ok(None);
+    }
+    let d = PyDict::new(py);
+    d.set_item("centre", m.centre)?;
+    d.set_item("half_width", m.half_width())?;
+    d.set_item("background", m.alpha)?;
+    d.set_item("mirrored", m.mirrored)?;
+    Ok(Some(d))
 }
 
 /// The options of `nodes` nodes (at least 9) at the reduced spontaneous curvature `c0`

@@ -46,7 +46,12 @@ def solve(
     model's energy: e, or w for ADE), ``c0_eff``, ``sigma``, ``pressure``, ``length`` (contour
     length L), ``self_intersecting``, ``residual`` (Newton's final KKT residual), and NumPy
     arrays ``s``, ``r``, ``z``, ``psi`` (the contour at ``nodes`` Chebyshev–Lobatto samples,
-    pole to pole), ``modes`` and ``coefficients`` (the a_k).
+    pole to pole), ``modes`` and ``coefficients`` (the a_k of ψ = πτ + Σ a_k sin kπτ), and
+    ``neck_map``: None where τ = s/L, else the stretching of τ that clusters the modes at a
+    narrow neck (below 0.1 R0), a dict ``centre`` (the neck's arclength fraction t_n),
+    ``half_width`` (of the node-density kernel, in s/L), ``background`` (the uniform share of
+    the node density) and ``mirrored`` (True on the up–down symmetric branches: the same kernel
+    at 1 − t_n).
 
     Raises InvalidInput (field ``v``) if v is not in (0, 1] or the branch does not reach it,
     (field ``nodes``) for fewer than 9 nodes, (field ``c0``) for a c0 that is not finite,
