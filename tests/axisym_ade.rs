@@ -454,6 +454,24 @@ fn the_symmetric_branches_converge_at_narrow_necks() {
     }
 }
 
+/// `ade_solution` returns the lowest stable ADE shape, as the diagram does, where the ADE image
+/// of a path leaves Δa0 and covers it again. At v = 0.86, Δa0 = 1.88 (α = 1.4) the prolate's
+/// image passes 1.88 near the pear bifurcation (Δa = 1.077, a smooth shape with w = 4.0995) and
+/// again where the prolate buds at both poles (Δa ≈ 1.40, necks 0.02–0.03 R0); the committed
+/// 241-node chart has w = 3.918710 there. The walk used to stop once the image left
+/// Δa0 ± 0.1 and returned the smooth shape; it now follows the whole path: w = 3.92075 at 121
+/// nodes and 3.918710 at 241.
+#[test]
+fn the_ade_solution_is_the_lowest_stable_shape_of_the_whole_path() {
+    let (v, alpha, da0) = (0.86, 1.4, 1.88);
+    let s = ade_solution(Branch::Prolate, v, alpha, da0, &opts()).unwrap();
+    println!("w = {:.6}, Δa = {:.5}, neck {:?}", s.w, s.da(), s.neck());
+    assert!((s.w - 3.918710).abs() < 3e-3, "w = {}", s.w);
+    assert!(s.neck().is_some_and(|r| r < 0.05), "neck {:?}", s.neck());
+    let c0_eff = 2.0 * PI * alpha * (da0 - s.da());
+    assert!((s.c0_eff - c0_eff).abs() < 1e-9);
+}
+
 /// Every v of the BC chart's grid has a stomatocyte path. At v = 0.66 its SC start (c̄0 = 0,
 /// Δa = 0.637) lies 0.001 below the SC branch's turning point in v (0.661), and the second
 /// start state, the SC shape at c̄0 + 0.1, did not exist; it is now taken at c̄0 − 0.1 there.

@@ -10,7 +10,7 @@
 //! `w(Δa)` where it folds back. Where the image folds, two stable shapes of one branch coexist
 //! at the same `Δa0` (a discontinuous transition within the branch).
 
-use super::bc::bc_curve_until;
+use super::bc::bc_curve;
 use super::functional::Basis;
 use super::map::reproject;
 use super::pear::full_basis;
@@ -66,10 +66,17 @@ pub fn ade_image(shapes: &[Solution], alpha: f64) -> Vec<AdePoint> {
         .collect()
 }
 
+/// The `Δa` window over which the BC branches are followed for their ADE image (by
+/// [`ade_solution`] and the ADE diagram): wide enough that the image, `Δa0 − Δa =
+/// (c̄0,eff − c̄0)/2πα`, covers the diagrams' `Δa0`.
+pub const ADE_WINDOW: (f64, f64) = (0.0, 2.5);
+
 /// The stationary ADE shape of `branch` at reduced volume `v`, `α = alpha`, preferred area
-/// difference `da0` and spontaneous curvature `opts.c0`: the BC branch at `v` is followed in
-/// `Δa` until its ADE image covers `da0`; of the stable pieces that do, the one of lowest `w`
-/// gives the start (interpolated between its two BC shapes), from which Newton solves the ADE
+/// difference `da0` and spontaneous curvature `opts.c0`: the BC branch at `v` is followed over
+/// [`ADE_WINDOW`] (the whole path, as the ADE diagram follows it: the image folds, and a path
+/// that leaves `da0` can cover it again further on, as the prolate budding at both poles does
+/// at v = 0.86–0.90 near Δa0 = 1.9); of the stable pieces that cover `da0`, the one of lowest
+/// `w` gives the start (interpolated between its two BC shapes), from which Newton solves the ADE
 /// functional (at fixed `v`, closure held for the asymmetric branches). The result has
 /// [`Solution::model`] `Ade`, `w`, `e`, `Δa` ([`Solution::da`]) and `c̄0,eff`.
 ///
@@ -96,15 +103,7 @@ pub fn ade_solution(
         return Err(Error::config("da0", format!("must be finite, got {da0}")));
     }
     let bc = opts.with_model(Model::Sc);
-    let image_of = |s: &Solution| ade_da0(s.c0, alpha, s.da(), s.c0_eff);
-    let curve = bc_curve_until(branch, v, (-1.0, 3.0), &bc, |s, up| {
-        let x = image_of(s);
-        if up {
-            x > da0 + 0.1
-        } else {
-            x < da0 - 0.1
-        }
-    });
+    let curve = bc_curve(branch, v, ADE_WINDOW, &bc);
     let img = ade_image(&curve.shapes, alpha);
     let best = img
         .windows(2)

@@ -457,7 +457,8 @@ fn arc_follow(
 
 /// The branch at `v` from the BC shape `first` both ways along the path (towards larger and
 /// smaller `Δa` at the start, judged by `second`, which lies on one side), as one list in
-/// path order, `first` included; `stop(shape, up)` as in [`bc_curve_until`].
+/// path order, `first` included; `stop(shape, up)` ends the walk in the direction of increasing
+/// (`up`) or decreasing `Δa` after `shape`.
 fn both_ways(
     w: &mut Walker,
     first: Converged,
@@ -480,25 +481,17 @@ fn both_ways(
 
 /// Follow `branch` at reduced volume `v` by pseudo-arclength in the coefficients with `Δa`
 /// free, from its SC shape at `v` both ways (the pear from its bifurcation off the prolate),
-/// keeping the shapes with `Δa` in `[lo, hi]`, in path order. `stop(shape, up)` ends the
-/// walk in the direction of increasing (`up`) or decreasing `Δa` after `shape` (e.g. when the
-/// ADE image leaves its window); a walk also ends outside `[lo, hi]` (widened by 0.05) on the
+/// keeping the shapes with `Δa` in `[lo, hi]`, in path order. A walk ends outside `[lo, hi]`
+/// (widened by 0.05) on the
 /// side it set out towards (a start below the window, as the stomatocyte's at v ≤ 0.78 for
 /// `[0.70, 1.40]`, walks up into it), where the oblate first touches itself, where the
 /// stomatocyte passes its limit shape `L_sto` or the oblate invaginated at both poles its own
 /// (`past_limit`), at a neck below [`Options::neck_min`], or where `|c̄0,eff| > 150`. A branch
 /// without a start shape gives an empty curve.
-pub fn bc_curve_until(
-    branch: Branch,
-    v: f64,
-    (lo, hi): (f64, f64),
-    opts: &Options,
-    mut stop: impl FnMut(&Solution, bool) -> bool,
-) -> BcCurve {
+pub fn bc_curve(branch: Branch, v: f64, (lo, hi): (f64, f64), opts: &Options) -> BcCurve {
     let neck_min = opts.neck_min;
     let mut ends = move |s: &Solution, up: bool| {
-        stop(s, up)
-            || (!up && s.da() < lo - 0.05)
+        (!up && s.da() < lo - 0.05)
             || (up && s.da() > hi + 0.05)
             || s.neck().is_some_and(|r| r < neck_min)
             || (s.branch == Branch::Oblate && s.self_intersecting())
@@ -576,11 +569,6 @@ fn start_pair(branch: Branch, v: f64, opts: &Options) -> Option<(Walker, Converg
         .iter()
         .find_map(|d| w.solve_at(first.eval.j + d, &first.a))?;
     Some((w, first, second))
-}
-
-/// [`bc_curve_until`] without a stop condition.
-pub fn bc_curve(branch: Branch, v: f64, window: (f64, f64), opts: &Options) -> BcCurve {
-    bc_curve_until(branch, v, window, opts, |_, _| false)
 }
 
 /// The up–down test function `μ` of a prolate BC shape (see [`super::prolate_updown`]) and its

@@ -6,6 +6,7 @@
 //! `phase.svg`).
 
 use super::{io_err, AxisymArgs};
+use crate::analysis::axisym::ade::ADE_WINDOW;
 use crate::analysis::axisym::ade_phase::{ade_lowest, bc_lowest, v_slice, VSlice};
 use crate::analysis::axisym::lowest::Lowest;
 use crate::analysis::axisym::{
@@ -98,10 +99,9 @@ pub fn run(args: &AxisymArgs, which: Which, xs: &[f64], vs: &[f64]) -> Result<()
         Which::Ade { c0, .. } => c0,
     };
     let opts = Options::with_nodes(args.nodes).with_c0(c0);
-    // BC shapes over a window wide enough for the ADE image (Δa0 − Δa = (c̄0,eff − c̄0)/2πα).
     let window = match which {
         Which::Bc => (xs[0], xs[xs.len() - 1]),
-        Which::Ade { .. } => (0.0, 2.5),
+        Which::Ade { .. } => ADE_WINDOW,
     };
     let slices: Vec<VSlice> = vs.iter().map(|&v| v_slice(v, window, &opts)).collect();
     let lows: Vec<Lowest> = slices
