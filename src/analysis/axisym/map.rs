@@ -96,27 +96,15 @@ impl NeckMap {
     /// Distance in `t` from `t` to the nearest neck the map is centred on (`t_n`, and
     /// `1 − t_n` when mirrored).
     pub fn offset(&self, t: f64) -> f64 {
-        let d = (t - self.centre).abs();
-        if self.mirrored {
-            d.min((t - (1.0 - self.centre)).abs())
-        } else {
-            d
-        }
+        self.centres()
+            .map(|c| (t - c).abs())
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The necks the kernel pairs are centred on: `t_n`, and `1 − t_n` when mirrored.
     fn centres(&self) -> impl Iterator<Item = f64> {
         let c = self.centre;
         std::iter::once(c).chain(self.mirrored.then_some(1.0 - c))
-    }
-
-    /// The number of kernel pairs (2 when mirrored, else 1).
-    fn pairs(&self) -> f64 {
-        if self.mirrored {
-            2.0
-        } else {
-            1.0
-        }
     }
 
     /// Whether this is the identity.
@@ -153,7 +141,7 @@ impl NeckMap {
             .centres()
             .map(|c| 0.5 * (self.kernel(PI * (t - c)) + self.kernel(PI * (t + c))))
             .sum();
-        self.alpha + (1.0 - self.alpha) * bump / self.pairs()
+        self.alpha + (1.0 - self.alpha) * bump / self.centres().count() as f64
     }
 
     /// `τ(t) = α t + (1 − α)/(2π)[F(π(t − t_n)) − F(−π t_n) + F(π(t + t_n)) − F(π t_n)]`, the
@@ -167,7 +155,7 @@ impl NeckMap {
             .centres()
             .map(|c| f(PI * (t - c)) - f(-PI * c) + f(PI * (t + c)) - f(PI * c))
             .sum();
-        self.alpha * t + (1.0 - self.alpha) / (2.0 * PI) * bump / self.pairs()
+        self.alpha * t + (1.0 - self.alpha) / (2.0 * PI) * bump / self.centres().count() as f64
     }
 
     /// The inverse `t(τ)` of [`NeckMap::tau`] (Newton's method safeguarded by bisection, to
