@@ -10,10 +10,8 @@
 //! `w(Δa)` where it folds back. Where the image folds, two stable shapes of one branch coexist
 //! at the same `Δa0` (a discontinuous transition within the branch).
 
-use super::bc::bc_curve;
-use super::functional::Basis;
+use super::bc::{basis_of, bc_curve};
 use super::map::reproject;
-use super::pear::full_basis;
 use super::solver::{newton, NewtonSettings};
 use super::{ade_da0, solution, Branch, Model, Options, Solution};
 use crate::error::{Error, Result};
@@ -134,14 +132,7 @@ pub fn ade_solution(
         .map(|(x, y)| x + f * (y - x))
         .collect();
     let model = Model::Ade { alpha, da0 };
-    let basis = if branch.up_down_symmetric() {
-        Basis::new(opts.nodes - 1, s0.modes.clone())
-            .with_c0(opts.c0)
-            .with_model(model)
-    } else {
-        full_basis(&opts.with_model(model))
-    }
-    .with_map(s0.map);
+    let basis = basis_of(branch, &opts.with_model(model)).with_map(s0.map);
     let set = NewtonSettings {
         tol: opts.tol,
         max_iter: opts.max_iter,

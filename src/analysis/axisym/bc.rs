@@ -186,7 +186,7 @@ impl Walker {
 }
 
 /// The modes of `branch` (even only for the up–down symmetric branches).
-fn basis_of(branch: Branch, opts: &Options) -> Basis {
+pub(super) fn basis_of(branch: Branch, opts: &Options) -> Basis {
     if branch.up_down_symmetric() {
         Basis::new(opts.nodes - 1, (2..=opts.modes).step_by(2).collect())
             .with_c0(opts.c0)
@@ -482,8 +482,8 @@ fn both_ways(
 /// Follow `branch` at reduced volume `v` by pseudo-arclength in the coefficients with `Δa`
 /// free, from its SC shape at `v` both ways (the pear from its bifurcation off the prolate),
 /// keeping the shapes with `Δa` in `[lo, hi]`, in path order. A walk ends outside `[lo, hi]`
-/// (widened by 0.05) on the
-/// side it set out towards (a start below the window, as the stomatocyte's at v ≤ 0.78 for
+/// (widened by 0.05) on the side it set out towards (a start below the window, as the
+/// stomatocyte's at v ≤ 0.78 for
 /// `[0.70, 1.40]`, walks up into it), where the oblate first touches itself, where the
 /// stomatocyte passes its limit shape `L_sto` or the oblate invaginated at both poles its own
 /// (`past_limit`), at a neck below [`Options::neck_min`], or where `|c̄0,eff| > 150`. A branch
