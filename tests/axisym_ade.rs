@@ -208,8 +208,10 @@ fn cli_rejects_bad_alpha() {
     assert!(!dir.exists());
 }
 
-/// `vesicle axisym --bc --da LIST` end to end on two volumes (61 nodes): the files, and the
-/// L_pear row at v = 0.9 with the two-sphere Δa = R1 + R2 of `l_pear_at`.
+/// `vesicle axisym --bc --da LIST` end to end on two volumes (61 nodes): the files, the
+/// L_pear row at v = 0.9 with the two-sphere Δa = R1 + R2 of `l_pear_at`, and the prolate's
+/// first loss of up–down stability there at the pear's bifurcation (two computations: the
+/// pear's walk to its first zero of `μ`, and `μ` along the prolate's own curve).
 #[test]
 fn cli_writes_the_bc_diagram() {
     let dir = std::env::temp_dir().join(format!("axisym_bc_cli_{}", std::process::id()));
@@ -251,6 +253,18 @@ fn cli_writes_the_bc_diagram() {
     let summary = std::fs::read_to_string(dir.join("summary.csv")).unwrap();
     let want = format!("0.900000,L_pear,{:.6},", l_pear_at(0.9).unwrap().da);
     assert!(summary.lines().any(|l| l.starts_with(&want)), "{summary}");
+    let da_of = |event: &str| {
+        let row = format!("0.900000,{event},");
+        let line = summary.lines().find(|l| l.starts_with(&row));
+        line.map(|l| l.split(',').nth(2).unwrap().to_string())
+    };
+    let bifurcation = da_of("pear bifurcation");
+    assert!(bifurcation.is_some(), "{summary}");
+    assert_eq!(
+        bifurcation,
+        da_of("prolate loses up-down stability"),
+        "{summary}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -6,7 +6,7 @@
 //! `--ade ALPHA --da0 LIST` write them and draw the phase charts).
 
 use super::ade::ade_image;
-use super::bc::{bc_curve, BcCurve};
+use super::bc::{bc_curve, updown_changes, BcCurve, UpdownChange};
 use super::lowest::{lowest, monotone_pieces, Lowest};
 use super::{Branch, Options};
 use rayon::prelude::*;
@@ -18,15 +18,22 @@ pub struct VSlice {
     pub v: f64,
     /// One curve per branch of [`Branch::WITH_PEAR`], in that order.
     pub curves: Vec<BcCurve>,
+    /// Where the prolate's up–down stability changes along its curve ([`updown_changes`]).
+    pub updown: Vec<UpdownChange>,
 }
 
-/// Follow the four BC branches at `v` over the `Δa` window (in parallel).
+/// Follow the four BC branches at `v` over the `Δa` window (in parallel), and the prolate's
+/// up–down stability along its curve.
 pub fn v_slice(v: f64, window: (f64, f64), opts: &Options) -> VSlice {
-    let curves = Branch::WITH_PEAR
+    let curves: Vec<BcCurve> = Branch::WITH_PEAR
         .par_iter()
         .map(|&b| bc_curve(b, v, window, opts))
         .collect();
-    VSlice { v, curves }
+    let updown = curves
+        .iter()
+        .flat_map(|c| updown_changes(c, opts))
+        .collect();
+    VSlice { v, curves, updown }
 }
 
 /// The BC diagram at one `v`: the lowest bending energy `e` among the branches at each `Δa`

@@ -43,6 +43,13 @@ const APPROACH_SOLVES: usize = 40;
 /// Step in `Δa` below which [`Walker::approach`] gives up.
 const APPROACH_MIN_STEP: f64 = 1e-7;
 
+/// Narrowest neck (`R0`) at which [`updown_changes`] evaluates `μ`. Below it the zeros at 241
+/// nodes are not those at 481: along the chart's v grid (0.60–0.98) 241 nodes put extra pairs of
+/// zeros at necks of 0.005–0.012 R0 (v = 0.60, 0.62, 0.64, 0.86) that 481 nodes do not have,
+/// while every zero at a neck of 0.019 R0 or wider agrees to 8e-4 in `Δa` (to 7e-5 above
+/// 0.028 R0).
+const UPDOWN_NECK_MIN: f64 = 0.015;
+
 /// Amplitudes of the unstable eigenvector added to the prolate to start the pear, in order.
 const PEAR_KICKS: [f64; 3] = [0.05, 0.2, 0.5];
 
@@ -628,14 +635,25 @@ fn prolate_bifurcation(v: f64, opts: &Options) -> Option<(Solution, Vec<Solution
     if let Some(((sa, ma), (sb, mb))) = pending {
         bracket = Some((sa, ma, sb, mb));
     }
-    let (sa, mut fa, sb, mut fb) = bracket?;
-    // Secant (Illinois) on μ(Δa) with BC solves from the nearer bracketing shape.
+    let (sa, fa, sb, fb) = bracket?;
+    Some(refine_updown(&mut w, (&sa, fa), (&sb, fb), opts))
+}
+
+/// The zero of `μ` between two prolates `sa` and `sb` of one BC path where `μ` has the
+/// opposite signs `fa` and `fb`: the secant method (Illinois) on `μ(Δa)`, each BC solve started
+/// from the bracket's coefficients interpolated (in the walker's map; the path may have
+/// stretched its modes between them). Returns the last shape solved (`sb` if none) and the
+/// prolates met with `μ < 0`, the last solved last.
+fn refine_updown(
+    w: &mut Walker,
+    (sa, mut fa): (&Solution, f64),
+    (sb, mut fb): (&Solution, f64),
+    opts: &Options,
+) -> (Solution, Vec<Solution>) {
     let (mut xa, mut xb) = (sa.da(), sb.da());
-    // Both in the walker's current map (the path may have stretched its modes between them).
     let to_walker = |s: &Solution| reproject(&s.coefficients, &s.map, &w.basis.map, &s.modes);
-    let (mut ca, mut cb) = (to_walker(&sa), to_walker(&sb));
-    // Prolates on the unstable side (μ < 0), nearest the bifurcation last.
-    let mut unstable: Vec<Solution> = [(&sa, fa), (&sb, fb)]
+    let (mut ca, mut cb) = (to_walker(sa), to_walker(sb));
+    let mut unstable: Vec<Solution> = [(sa, fa), (sb, fb)]
         .iter()
         .filter(|(_, f)| *f < 0.0)
         .map(|(s, _)| (*s).clone())
@@ -673,7 +691,56 @@ fn prolate_bifurcation(v: f64, opts: &Options) -> Option<(Solution, Vec<Solution
         cb = s.coefficients.clone();
         best = s;
     }
-    Some((best, unstable))
+    (best, unstable)
+}
+
+/// Where the prolate's up–down stability changes along its BC path: a zero of its test
+/// function `μ`.
+#[derive(Clone, Debug)]
+pub struct UpdownChange {
+    /// The prolate at the zero.
+    pub shape: Solution,
+    /// Whether the prolate loses its stability there (`μ` falls through zero walking the path
+    /// from its end of smaller `Δa`); `false` where it regains it.
+    pub loses: bool,
+}
+
+/// Every zero of the up–down test function `μ` along a prolate BC curve, walked from its end
+/// of smaller `Δa` while its neck is wider than [`UPDOWN_NECK_MIN`], each refined by the secant method in `Δa` ([`refine_updown`]): the first
+/// loss is where the pear leaves the prolate ([`bc_bifurcation`]); after it the prolate,
+/// budding at both poles, can regain its stability before its necks close (v = 0.86:
+/// Δa = 1.3625) and near v = 0.70 lose it again (1.4078). Empty for another branch. Zeros
+/// between shapes where `μ` cannot be evaluated are skipped.
+pub fn updown_changes(curve: &BcCurve, opts: &Options) -> Vec<UpdownChange> {
+    if curve.branch != Branch::Prolate || curve.shapes.is_empty() {
+        return Vec::new();
+    }
+    let mut path: Vec<&Solution> = curve.shapes.iter().collect();
+    if path[0].da() > path[path.len() - 1].da() {
+        path.reverse();
+    }
+    let mut changes = Vec::new();
+    let mut last: Option<(&Solution, f64)> = None;
+    for s in path {
+        if s.neck().is_some_and(|r| r < UPDOWN_NECK_MIN) {
+            break;
+        }
+        let Some((mu, _)) = updown(s, opts) else {
+            last = None;
+            continue;
+        };
+        if let Some((sa, fa)) = last.filter(|(_, fa)| (*fa > 0.0) != (mu > 0.0)) {
+            let basis = basis_of(Branch::Prolate, opts).with_map(s.map);
+            let mut w = Walker::new(Branch::Prolate, curve.v, basis, false, opts);
+            let (shape, _) = refine_updown(&mut w, (sa, fa), (s, mu), opts);
+            changes.push(UpdownChange {
+                shape,
+                loses: fa > 0.0,
+            });
+        }
+        last = Some((s, mu));
+    }
+    changes
 }
 
 /// Where the BC prolate at reduced volume `v` loses up–down stability (the BC pear's
@@ -816,17 +883,35 @@ mod tests {
     }
 
     /// With its modes stretched at both necks (the mirrored map) the prolate's `μ` is resolved
-    /// where the prolate buds at both poles. At v = 0.86, past its loss of stability at
-    /// Δa = 1.0774 (below this window), `μ` rises through 0 once, at Δa = 1.36249 (241
-    /// nodes) and 1.36251 (481), where the necks are about 0.055 R0: the prolate regains
-    /// up–down stability before its necks close. With uniform modes the crossing moved with the
-    /// nodes (1.326, 1.350, 1.362 at 121, 241, 481) and extra ones came and went.
+    /// where the prolate buds at both poles. At v = 0.86 [`updown_changes`] finds two zeros:
+    /// the loss at Δa = 1.077385, which is the pear's bifurcation ([`bc_bifurcation`], the same
+    /// secant), and the regain at 1.361905 (241 nodes) and 1.361916 (481), where the necks are
+    /// about 0.055 R0: the prolate regains up–down stability before its necks close. (241
+    /// nodes also put a loss at 1.41495, neck 0.0056 R0, that 481 do not: below
+    /// [`UPDOWN_NECK_MIN`].) 1e-4
+    /// allows ten times the change from 241 to 481 nodes. (With uniform modes the regain moved
+    /// with the nodes: 1.326, 1.350, 1.362 at 121, 241, 481.)
     #[test]
     fn the_budding_prolate_regains_updown_stability_at_v_086() {
-        let zeros = updown_zeros(0.86, 241, 0.005);
-        println!("v = 0.86: {zeros:?}");
-        assert_eq!(zeros.len(), 1, "{zeros:?}");
-        let (regained, loses) = zeros[0];
-        assert!(!loses && (regained - 1.3625).abs() < 2e-3, "{zeros:?}");
+        let opts = Options::with_nodes(241);
+        let curve = bc_curve(Branch::Prolate, 0.86, (1.0, 1.45), &opts);
+        let changes: Vec<(f64, bool)> = updown_changes(&curve, &opts)
+            .iter()
+            .map(|c| (c.shape.da(), c.loses))
+            .collect();
+        println!("v = 0.86: {changes:?}");
+        assert_eq!(changes.len(), 2, "{changes:?}");
+        let [(lost, loses), (regained, regains)] = [changes[0], changes[1]];
+        let bifurcation = bc_bifurcation(0.86, &opts)
+            .expect("the pear bifurcation")
+            .da();
+        assert!(
+            loses && (lost - bifurcation).abs() < 1e-8,
+            "{lost} against {bifurcation}"
+        );
+        assert!(
+            !regains && (regained - 1.361916).abs() < 1e-4,
+            "{changes:?}"
+        );
     }
 }

@@ -62,7 +62,7 @@ pub mod quadrature;
 pub(crate) mod solver;
 
 pub use ade::{ade_image, ade_solution, AdePoint};
-pub use bc::{bc_bifurcation, bc_curve, bc_solution, BcCurve};
+pub use bc::{bc_bifurcation, bc_curve, bc_solution, updown_changes, BcCurve, UpdownChange};
 pub use branches::{branch_curve, branch_end, crossings, follow, solve, Followed};
 pub use limits::{
     inner_spheres_da, l_pear_at, l_sto_at, limit_line, outer_buds_da, Limit, LimitShape,

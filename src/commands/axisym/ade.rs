@@ -11,6 +11,7 @@ use crate::analysis::axisym::ade_phase::{ade_lowest, bc_lowest, v_slice, VSlice}
 use crate::analysis::axisym::lowest::Lowest;
 use crate::analysis::axisym::{
     ade_da0, ade_image, l_pear_at, l_sto_at, limit_line, Branch, Limit, LimitShape, Options,
+    Solution,
 };
 use crate::error::{Error, Result};
 use crate::output::chart::{colour, Axis, Corner, Figure, Mark, Series, Shape};
@@ -39,6 +40,14 @@ impl Which {
         match self {
             Which::Bc => "da",
             Which::Ade { .. } => "da0",
+        }
+    }
+
+    /// Where a BC shape lies on the grid's axis: its `Δa`, or the `Δa0` of its ADE image.
+    fn x_of_shape(&self, s: &Solution) -> f64 {
+        match *self {
+            Which::Bc => s.da(),
+            Which::Ade { alpha, c0 } => ade_da0(c0, alpha, s.da(), s.c0_eff),
         }
     }
 
@@ -194,8 +203,10 @@ fn write_lowest(path: &Path, slices: &[VSlice], lows: &[Lowest], which: Which) -
 
 /// `summary.csv`: per `v`, `v,event,x,detail`: the changes of the lowest branch (`lowest branch
 /// changes` where the energies cross, the transitions; `branch ends` where the lowest changes
-/// only because a branch ends or begins inside a grid interval), the pear bifurcation, the
-/// limit shapes at this `v`.
+/// only because a branch ends or begins inside a grid interval), the pear bifurcation, every
+/// change of the prolate's up–down stability along its path (`prolate loses` / `prolate
+/// regains up-down stability`: the first loss is the pear bifurcation again), the limit shapes
+/// at this `v`.
 fn write_summary(path: &Path, slices: &[VSlice], lows: &[Lowest], which: Which) -> Result<()> {
     let mut f = create_file(path)?;
     let err = io_err(path);
@@ -223,6 +234,25 @@ fn write_summary(path: &Path, slices: &[VSlice], lows: &[Lowest], which: Which) 
         if let Some(b) = pear_bifurcation_x(s, which) {
             writeln!(f, "{:.6},pear bifurcation,{b:.6},leaves the prolate", s.v).map_err(&err)?;
         }
+        for c in &s.updown {
+            let (event, sign) = if c.loses {
+                ("prolate loses up-down stability", "falls")
+            } else {
+                ("prolate regains up-down stability", "rises")
+            };
+            let neck = c
+                .shape
+                .neck()
+                .map_or("no neck".to_string(), |r| format!("neck {r:.4} R0"));
+            writeln!(
+                f,
+                "{:.6},{event},{:.6},mu {sign} through 0 ({neck}; c0_eff = {:.4})",
+                s.v,
+                which.x_of_shape(&c.shape),
+                c.shape.c0_eff
+            )
+            .map_err(&err)?;
+        }
         for (name, l) in [("L_pear", l_pear_at(s.v)), ("L_sto", l_sto_at(s.v))] {
             if let Some(l) = l {
                 writeln!(
@@ -245,10 +275,7 @@ fn write_summary(path: &Path, slices: &[VSlice], lows: &[Lowest], which: Which) 
 fn pear_bifurcation_x(s: &VSlice, which: Which) -> Option<f64> {
     let i = Branch::WITH_PEAR.iter().position(|b| *b == Branch::Pear)?;
     let b = s.curves[i].bifurcation.as_ref()?;
-    Some(match which {
-        Which::Bc => b.da(),
-        Which::Ade { alpha, c0 } => ade_da0(c0, alpha, b.da(), b.c0_eff),
-    })
+    Some(which.x_of_shape(b))
 }
 
 /// `limits.csv`: the limit lines `L_pear` and `L_sto` (`kind,r1,r2,v,da,c0_neck` and `da0`
@@ -355,6 +382,26 @@ fn figure(slices: &[VSlice], lows: &[Lowest], which: Which, xs: &[f64]) -> Figur
             Mark::LinePoints(Shape::Cross),
         ));
     }
+    // The prolate's later stability changes: where it regains up–down stability (and near
+    // v = 0.70 loses it again).
+    let later: Vec<(f64, f64)> = slices
+        .iter()
+        .flat_map(|s| {
+            s.updown
+                .iter()
+                .skip_while(|c| c.loses)
+                .map(move |c| (s.v, which.x_of_shape(&c.shape)))
+        })
+        .filter(|(_, x)| *x >= lo && *x <= hi)
+        .collect();
+    if !later.is_empty() {
+        fig.push(Series::new(
+            "prolate regains up–down stability (or loses it again)",
+            later,
+            colour(5),
+            Mark::Points(Shape::Diamond),
+        ));
+    }
     for (name, kind, c) in [
         ("L_pear (two spheres)", Limit::Pear, 6),
         ("L_sto (sphere in sphere)", Limit::Stomatocyte, 7),
@@ -406,5 +453,13 @@ fn print_slice(s: &VSlice, l: &Lowest, which: Which) {
     }
     if let Some(b) = pear_bifurcation_x(s, which) {
         println!("  pear bifurcation at {} = {b:.5}", which.x_name());
+    }
+    for c in &s.updown {
+        println!(
+            "  prolate {} up-down stability at {} = {:.5}",
+            if c.loses { "loses" } else { "regains" },
+            which.x_name(),
+            which.x_of_shape(&c.shape)
+        );
     }
 }
