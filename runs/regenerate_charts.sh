@@ -33,8 +33,8 @@
 #   shear3d          study shear shear3d.json + shear3d_box.json + shear3d_length.json (3D)   35 + 12 + 74 min on one thread beside two or three other runs, measured 2026-12-06
 #   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 4 036 s on one thread (the second beside three other runs), measured 2026-12-06
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 667 s wall (720 s CPU, one thread, beside three other runs), measured 2026-12-06
-#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 241        993 s (471 s CPU, one thread beside two other runs), measured
-#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 241 942 s (519 s CPU, one thread beside two other runs), measured
+#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 241        690 s (466 s CPU, one thread beside one or two other runs), measured
+#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 241 604 s (514 s CPU, one thread beside one or two other runs), measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)

@@ -167,3 +167,35 @@ pub fn axisym_follow<'py>(
     d.set_item("shapes", shapes)?;
     Ok(d)
 }
+
+/// Where the bilayer-couple prolate at reduced volume `v` loses or regains up–down stability
+/// along its path in Δa (see vesicle.axisym.updown).
+#[pyfunction]
+#[pyo3(signature = (v, nodes=241))]
+pub fn axisym_updown<'py>(
+    py: Python<'py>,
+    v: f64,
+    nodes: usize,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    if !(v > 0.0 && v < 1.0) {
+        let e = Error::config("v", format!("need 0 < v < 1, got {v}"));
+        return Err(crate::errors::to_py(py, e, None));
+    }
+    let opts = options(py, nodes, 0.0)?;
+    let changes = py.detach(|| {
+        let curve = axisym::bc_curve(Branch::Prolate, v, axisym::ade::ADE_WINDOW, &opts);
+        axisym::updown_changes(&curve, &opts)
+    });
+    changes
+        .iter()
+        .map(|c| {
+            let d = PyDict::new(py);
+            d.set_item("da", c.shape.da())?;
+            d.set_item("loses", c.loses)?;
+            d.set_item("c0_eff", c.shape.c0_eff)?;
+            d.set_item("neck", c.shape.neck())?;
+            d.set_item("shape", solution(py, &c.shape)?)?;
+            Ok(d)
+        })
+        .collect()
+}

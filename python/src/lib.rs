@@ -28,6 +28,7 @@ fn _vesicle(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DeviceError", py.get_type::<errors::DeviceError>())?;
     m.add_function(wrap_pyfunction!(axisym::axisym_solve, m)?)?;
     m.add_function(wrap_pyfunction!(axisym::axisym_follow, m)?)?;
+    m.add_function(wrap_pyfunction!(axisym::axisym_updown, m)?)?;
     m.add_function(wrap_pyfunction!(commands::cli, m)?)?;
     m.add_function(wrap_pyfunction!(commands::studies, m)?)?;
     m.add_function(wrap_pyfunction!(commands::study, m)?)?;

@@ -49,3 +49,21 @@ def test_bad_model_arguments_are_refused():
         vesicle.axisym.solve("prolate", 0.85, nodes=121, ade=(1.4, 1.2), bc=1.1)
     with pytest.raises(vesicle.InvalidInput):
         vesicle.axisym.solve("pear", 0.85, nodes=121)
+    with pytest.raises(vesicle.InvalidInput):
+        vesicle.axisym.updown(1.0)
+
+
+def test_the_budding_prolate_regains_updown_stability():
+    # At v = 0.86 the bilayer-couple prolate loses up–down stability where the pear leaves it
+    # (Δa = 1.077385, the same at 241 and 481 nodes) and regains it at 1.361905 (241 nodes;
+    # 1.361916 at 481), where it buds at both poles with necks of 0.055 R0. Each zero is a
+    # shape of the path at its Δa; 1e-4 allows ten times the change from 241 to 481 nodes.
+    changes = vesicle.axisym.updown(0.86)
+    assert [c["loses"] for c in changes] == [True, False]
+    lost, regained = changes[0]["da"], changes[1]["da"]
+    assert lost == pytest.approx(1.077385, abs=1e-5)
+    assert regained == pytest.approx(1.361916, abs=1e-4)
+    assert 0.04 < changes[1]["neck"] < 0.07
+    for c in changes:
+        assert c["shape"]["branch"] == "prolate" and c["shape"]["model"] == "bc"
+        assert c["shape"]["da"] == pytest.approx(c["da"], abs=1e-10)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any, Sequence
 
-from ._vesicle import axisym_follow, axisym_solve
+from ._vesicle import axisym_follow, axisym_solve, axisym_updown
 
 BRANCHES = ("prolate", "oblate", "stomatocyte")
 
@@ -75,4 +75,24 @@ def follow(branch: str, vs: Sequence[float], nodes: int = 241, c0: float = 0.0) 
     return axisym_follow(branch, list(vs), nodes, c0)
 
 
-__all__ = ["BRANCHES", "solve", "follow"]
+def updown(v: float, nodes: int = 241) -> list[dict[str, Any]]:
+    """Where the bilayer-couple prolate at reduced volume ``v`` (c0 = 0) loses or regains
+    up–down stability: the zeros of its up–down test function μ (the lowest eigenvalue of the
+    second variation on up–down odd perturbations) along its path in Δa from 0 to 2.5, walked
+    from small Δa while its neck is wider than 0.015 R0, each refined by the secant method in
+    Δa. The first loss is where the pear leaves the prolate; at v ≥ 0.86 the prolate budding at
+    both poles regains its stability before its necks close. By the same argument the ADE
+    prolate of the same shape changes its stability there (an odd perturbation moves neither Δa
+    nor v at first order); its Δa0 is ``da + c0_eff / (2π α)``.
+
+    Returns a list, in path order, of dicts: ``da``, ``loses`` (True where μ falls through 0,
+    False where it rises), ``c0_eff``, ``neck`` (the narrowest waist, in R0, or None) and
+    ``shape`` (the solve() dict of the prolate at the zero).
+
+    Raises InvalidInput (field ``v``) if v is not in (0, 1), (field ``nodes``) for fewer than 9
+    nodes.
+    """
+    return axisym_updown(v, nodes)
+
+
+__all__ = ["BRANCHES", "solve", "follow", "updown"]
