@@ -26,15 +26,15 @@
 #   budding          study budding budding.json (41 relaxations, h = 2ε/3)   ~32 min (8.5 min CPU), measured
 #   onset            study onset onset.json + onset_seeds.json (R0 20-28ε)   ~58 min (32 + 25.5, one thread), measured
 #                    + onset_hessian{,_h1,_h05,_h05_r40}.json (seed-free, h/ε = 2/3, 1, 1/2)  ~45 min (21 + 3 + 5 + 10, one thread, loaded), measured
-#                    + onset_bc{,_r32}.json (the bilayer couple's pear transition)  1 112 s + 1 721 s (one thread each, side by side), measured 2026-12-07
+#                    + onset_bc{,_r32,_r40}.json (the bilayer couple's pear transition)  1 112 s + 1 721 s + 4 725 s (one thread each, beside other runs), measured 2026-12-07
 #   heating          study heating heating.json (51 relaxations, 14 references)   220 s (one thread), measured
 #   rates            study rates rates.json + rates3d.json + rates3d_box{,8,10}.json + rates3d_free{,_fine}.json + rates_free.json + rates_fine.json + rates_l6.json + rates3d_tension{,_fine}.json + rates3d_sigma10.json + rates3d_tension_l4.json + rates3d_sigma10_l5.json + rates{,3d}_inextensible.json + rates3d_mobility.json + rates3d_free_m016{,_r24}.json + rates3d_m016_r{24,28,28_s0,32}.json + rates3d_tension_l6{,_r72}.json + rates3d_tension_l2_m016{,_r48}.json + rates_mobility.json + rates3d_mobility_l3{,_fine}.json   747 s (two cores) + 2 519 s (recorded) + 1 848 s + 248 s + 428 s + 3 389 s + 6 681 s + 182 s + 2 935 s + 753 s + 2 300 s + 4 072 s + 2 114 s + 1 074 s + 1 265 s + 959 s + (see rates3d_inextensible's rates.txt) + 3 207 s + 4 042 s + 2 337 s + 1 458 s + 1 908 s + 5 083 s + 4 459 s + 1 663 s + 2 476 s + 2 422 s + 5 894 s + 553 s + 468 s + 958 s (one thread beside other runs, measured 2026-12-06 and -07)
 #   shear            study shear shear.json + shear_box.json (2D)   3 036 s + 445 s on one thread beside other runs, measured 2026-12-06
 #   shear3d          study shear shear3d.json + shear3d_box.json + shear3d_length.json (3D)   35 + 12 + 74 min on one thread beside two or three other runs, measured 2026-12-06
 #   contrast         study rates rates_contrast.json + study shear shear_contrast.json (unequal viscosities)   2 123 s + 4 036 s on one thread (the second beside three other runs), measured 2026-12-06
 #   axisym_c0        axisym --c0=-1,...,4 --nodes 481    1 667 s wall (720 s CPU, one thread, beside three other runs), measured 2026-12-06
-#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 241        690 s (466 s CPU, one thread beside one or two other runs), measured
-#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 241 604 s (514 s CPU, one thread beside one or two other runs), measured
+#   axisym_bc        axisym --bc --da=0.70,...,1.40 --nodes 241        625 s (478 s CPU, one thread beside two or three other runs), measured
+#   axisym_ade       axisym --ade 1.4 --da0=0.80,...,1.90 --nodes 241 680 s (530 s CPU, one thread beside two or three other runs), measured
 #   diagram          diagram diagram.json, 84 cases, --jobs 2                     234 s, measured
 #   diagram_fine     diagram diagram_fine.json, 81 cases           ~9-18 min (cases: 1 037 s)
 #   diagram_c0       diagram diagram_c0.json, 165 cases           ~30-60 min (cases: 3 368 s)
@@ -136,7 +136,7 @@ group_budding() {
     for c in budding_neck_eps budding_neck_r0 budding_skewness; do keep "$out/$c.png" "budding/$c.png"; done
 }
 group_onset() {
-    studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40 onset_bc onset_bc_r32
+    studies onset onset onset_seeds onset_hessian onset_hessian_h1 onset_hessian_h05 onset_hessian_h05_r40 onset_bc onset_bc_r32 onset_bc_r40
 }
 group_heating() { studies heating heating; }
 group_rates() { studies rates rates rates3d rates3d_box rates3d_box8 rates3d_box10 rates3d_free rates3d_free_fine rates_free rates_fine rates_l6 rates3d_tension rates3d_tension_fine rates3d_tension_l4 rates3d_sigma10 rates3d_sigma10_l5 rates_inextensible rates3d_inextensible rates3d_mobility rates3d_free_m016 rates3d_free_m016_r24 rates3d_m016_r24 rates3d_m016_r28 rates3d_m016_r28_s0 rates3d_m016_r32 rates3d_tension_l6 rates3d_tension_l6_r72 rates3d_tension_l2_m016 rates3d_tension_l2_m016_r48 rates_mobility rates3d_mobility_l3 rates3d_mobility_l3_fine; }

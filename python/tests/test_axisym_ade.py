@@ -55,7 +55,7 @@ def test_bad_model_arguments_are_refused():
 
 def test_the_budding_prolate_regains_updown_stability():
     # At v = 0.86 the bilayer-couple prolate loses up–down stability where the pear leaves it
-    # (Δa = 1.077385, the same at 241 and 481 nodes) and regains it at 1.361905 (241 nodes;
+    # (Δa = 1.077385, the same at 241 and 481 nodes) and regains it at 1.361915 (241 nodes;
     # 1.361916 at 481), where it buds at both poles with necks of 0.055 R0. Each zero is a
     # shape of the path at its Δa; 1e-4 allows ten times the change from 241 to 481 nodes.
     changes = vesicle.axisym.updown(0.86)

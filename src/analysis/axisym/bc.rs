@@ -46,8 +46,7 @@ const APPROACH_MIN_STEP: f64 = 1e-7;
 /// Narrowest neck (`R0`) at which [`updown_changes`] evaluates `μ`. Below it the zeros at 241
 /// nodes are not those at 481: along the chart's v grid (0.60–0.98) 241 nodes put extra pairs of
 /// zeros at necks of 0.005–0.012 R0 (v = 0.60, 0.62, 0.64, 0.86) that 481 nodes do not have,
-/// while every zero at a neck of 0.019 R0 or wider agrees to 8e-4 in `Δa` (to 7e-5 above
-/// 0.028 R0).
+/// while every zero at a neck of 0.02 R0 or wider agrees to 1e-5 in `Δa`.
 const UPDOWN_NECK_MIN: f64 = 0.015;
 
 /// Amplitudes of the unstable eigenvector added to the prolate to start the pear, in order.
@@ -643,13 +642,20 @@ fn prolate_bifurcation(v: f64, opts: &Options) -> Option<(Solution, Vec<Solution
 /// opposite signs `fa` and `fb`: the secant method (Illinois) on `μ(Δa)`, each BC solve started
 /// from the bracket's coefficients interpolated (in the walker's map; the path may have
 /// stretched its modes between them). Returns the last shape solved (`sb` if none) and the
-/// prolates met with `μ < 0`, the last solved last.
+/// prolates met with `μ < 0`, in the order met.
 fn refine_updown(
     w: &mut Walker,
     (sa, mut fa): (&Solution, f64),
     (sb, mut fb): (&Solution, f64),
     opts: &Options,
 ) -> (Solution, Vec<Solution>) {
+    // Stretched at `sb`'s neck where it calls for a map: a walk stopped by its bracket has not
+    // remapped at its last shape (at v = 0.68, neck 0.082 R0, uniform modes put the zero 1.1e-4
+    // high at 241 nodes).
+    if let Some((map, neck)) = new_map(sb, &w.basis.map, w.mapped) {
+        w.basis = w.basis.clone().with_map(map);
+        w.mapped = Some(neck);
+    }
     let (mut xa, mut xb) = (sa.da(), sb.da());
     let to_walker = |s: &Solution| reproject(&s.coefficients, &s.map, &w.basis.map, &s.modes);
     let (mut ca, mut cb) = (to_walker(sa), to_walker(sb));
@@ -706,11 +712,12 @@ pub struct UpdownChange {
 }
 
 /// Every zero of the up–down test function `μ` along a prolate BC curve, walked from its end
-/// of smaller `Δa` while its neck is wider than [`UPDOWN_NECK_MIN`], each refined by the secant method in `Δa` ([`refine_updown`]): the first
-/// loss is where the pear leaves the prolate ([`bc_bifurcation`]); after it the prolate,
-/// budding at both poles, can regain its stability before its necks close (v = 0.86:
-/// Δa = 1.3625) and near v = 0.70 lose it again (1.4078). Empty for another branch. Zeros
-/// between shapes where `μ` cannot be evaluated are skipped.
+/// of smaller `Δa` while its neck is wider than [`UPDOWN_NECK_MIN`], each refined by the secant
+/// method in `Δa` ([`refine_updown`]). The first loss is where the pear leaves the prolate
+/// ([`bc_bifurcation`]); after it the prolate, budding at both poles, can regain its stability
+/// before its necks close (v = 0.86: Δa = 1.3619) and near v = 0.70 lose it again (1.4077).
+/// Empty for another branch. A sign change across a shape where `μ` cannot be evaluated is
+/// skipped.
 pub fn updown_changes(curve: &BcCurve, opts: &Options) -> Vec<UpdownChange> {
     if curve.branch != Branch::Prolate || curve.shapes.is_empty() {
         return Vec::new();
@@ -882,15 +889,27 @@ mod tests {
         assert!(below.is_empty(), "v = 0.697: {below:?}");
     }
 
+    /// At v = 0.68 the prolate loses up–down stability near its waist, at a neck of 0.082 R0
+    /// (below 0.1 R0, where the modes are stretched): the pear's walk and the prolate's curve
+    /// both put the zero at Δa = 1.4035337 at 241 nodes, as 481 nodes do in either basis (the
+    /// walk's unstretched modes put it at 1.4036463 at 241 nodes). 1e-6 is a tenth of that
+    /// error.
+    #[test]
+    fn the_bifurcation_near_a_narrow_waist_is_solved_in_the_stretched_basis() {
+        let opts = Options::with_nodes(241);
+        let b = bc_bifurcation(0.68, &opts).expect("the pear bifurcation");
+        assert!((b.da() - 1.4035337).abs() < 1e-6, "{}", b.da());
+        assert!(!b.map.is_identity());
+    }
+
     /// With its modes stretched at both necks (the mirrored map) the prolate's `μ` is resolved
     /// where the prolate buds at both poles. At v = 0.86 [`updown_changes`] finds two zeros:
     /// the loss at Δa = 1.077385, which is the pear's bifurcation ([`bc_bifurcation`], the same
-    /// secant), and the regain at 1.361905 (241 nodes) and 1.361916 (481), where the necks are
+    /// secant), and the regain at 1.361915 (241 nodes) and 1.361916 (481), where the necks are
     /// about 0.055 R0: the prolate regains up–down stability before its necks close. (241
-    /// nodes also put a loss at 1.41495, neck 0.0056 R0, that 481 do not: below
-    /// [`UPDOWN_NECK_MIN`].) 1e-4
-    /// allows ten times the change from 241 to 481 nodes. (With uniform modes the regain moved
-    /// with the nodes: 1.326, 1.350, 1.362 at 121, 241, 481.)
+    /// nodes also put a loss at 1.41495, at a neck of 0.0056 R0, that 481 do not: below
+    /// [`UPDOWN_NECK_MIN`].) 1e-4 allows ten times the change from 241 to 481 nodes. (With
+    /// uniform modes the regain moved with the nodes: 1.326, 1.350, 1.362 at 121, 241, 481.)
     #[test]
     fn the_budding_prolate_regains_updown_stability_at_v_086() {
         let opts = Options::with_nodes(241);
