@@ -892,7 +892,7 @@ mod tests {
     /// At v = 0.68 the prolate loses up–down stability near its waist, at a neck of 0.082 R0
     /// (below 0.1 R0, where the modes are stretched): the pear's walk and the prolate's curve
     /// both put the zero at Δa = 1.4035337 at 241 nodes, as 481 nodes do in either basis (the
-    /// walk's unstretched modes put it at 1.4036463 at 241 nodes). 1e-6 is a tenth of that
+    /// walk's unstretched modes put it at 1.4036463 at 241 nodes). 1e-6 is a hundredth of that
     /// error.
     #[test]
     fn the_bifurcation_near_a_narrow_waist_is_solved_in_the_stretched_basis() {
